@@ -1,0 +1,12 @@
+//! The platform-free core of uTile: no registers, no interrupts, no `unsafe`.
+//!
+//! It compiles for the AVR (inside the firmware) and for the host (tests, the `utile` tool,
+//! simulations). Everything the core needs from the outside world goes through [`Board`].
+
+pub mod board;
+pub mod engine;
+pub mod opcodes;
+pub mod ticker;
+
+pub use board::Board;
+pub use engine::Engine;

@@ -1,0 +1,310 @@
+//! The opcode table: one byte per User File line.
+//!
+//! These numbers are part of the stored-image format (EEPROM slots, WRITE/READ files, `utile`
+//! listings). Never renumber an opcode; give a new command a new number from the reserved
+//! ranges and bump the image format version. `docs/OPCODES.md` is generated from this table
+//! by `cargo utile opcodes` and checked by a test.
+//!
+//! Layout, chosen so that families share one handler in the interpreter:
+//!
+//! | range       | family                                    | operand            |
+//! |-------------|-------------------------------------------|--------------------|
+//! | `0x00-0x1E` | single commands (`NOP`, `END`, `AND`, ...) | none               |
+//! | `0x20-0x7F` | push a bit: `An.` `ALn.` `ATn.` `ADn.` `Yn.` `Un.` `Vn.` `Qm.` `TQm.` | low 3 or 4 bits |
+//! | `0x80-0xD7` | pop a bit: `.Yn` `.Un` `.Vn` `.Sm` `.Rm` `.TKm` `.TRm` | low 3 or 4 bits |
+//! | `0xFF`      | blank (never programmed) line, shown as `.....`, runs as NOP | |
+//!
+//! Every other byte is unassigned: it is shown as `.....` and runs as NOP.
+
+/// No operation.
+pub const NOP: u8 = 0x00;
+/// End of scan: flip-flops update, outputs reach the pins, the next scan starts at line 0.
+pub const END: u8 = 0x01;
+/// Break-out: a received `/` stops the program.
+pub const KEY: u8 = 0x02;
+/// Pop two, push their AND.
+pub const AND: u8 = 0x03;
+/// Pop two, push their OR.
+pub const OR: u8 = 0x04;
+/// Pop two, push their XOR.
+pub const XOR: u8 = 0x05;
+/// Complement TOS in place (`!`).
+pub const NOT: u8 = 0x06;
+/// Complement all 8 bits of the bit stack (`!!`).
+pub const NOT_ALL: u8 = 0x07;
+/// Push 1.
+pub const SET: u8 = 0x08;
+/// Push 0.
+pub const CLR: u8 = 0x09;
+/// Push a copy of TOS.
+pub const DUP: u8 = 0x0A;
+/// Pop and discard.
+pub const DROP: u8 = 0x0B;
+/// Exchange TOS and TOS+1.
+pub const SWAP: u8 = 0x0C;
+/// Push TOS+1, then TOS.
+pub const DUP2: u8 = 0x0D;
+/// Fill the bit stack with ones (`F.`).
+pub const FILL_ONES: u8 = 0x0E;
+/// Fill the bit stack with zeros (`Z.`).
+pub const FILL_ZEROS: u8 = 0x0F;
+/// Bit stack := PA (inputs; bits 6-7 read 0).
+pub const LOAD_PA: u8 = 0x10;
+/// Bit stack := PY (output image).
+pub const LOAD_PY: u8 = 0x11;
+/// Bit stack := PU.
+pub const LOAD_PU: u8 = 0x12;
+/// Bit stack := PV.
+pub const LOAD_PV: u8 = 0x13;
+/// PY := bit stack (no pop).
+pub const STORE_PY: u8 = 0x14;
+/// PU := bit stack (no pop).
+pub const STORE_PU: u8 = 0x15;
+/// PV := bit stack (no pop).
+pub const STORE_PV: u8 = 0x16;
+/// Show PA in the Port Byte display.
+pub const PPA: u8 = 0x17;
+/// Show PY in the Port Byte display.
+pub const PPY: u8 = 0x18;
+/// Show PU in the Port Byte display.
+pub const PPU: u8 = 0x19;
+/// Show PV in the Port Byte display.
+pub const PPV: u8 = 0x1A;
+/// Show the bit stack in the Bit Stack display.
+pub const PBS: u8 = 0x1B;
+/// Push clock A (period 0.4 s).
+pub const CLKA: u8 = 0x1C;
+/// Push clock B (period 1.2 s).
+pub const CLKB: u8 = 0x1D;
+/// Push clock C (period 3.6 s).
+pub const CLKC: u8 = 0x1E;
+
+/// `An.` base: push debounced input n (n = 0..5).
+pub const PUSH_A: u8 = 0x20;
+/// `ALn.` base: push and clear the leading-edge (0→1) bit of input n.
+pub const PUSH_AL: u8 = 0x28;
+/// `ATn.` base: push and clear the trailing-edge (1→0) bit of input n.
+pub const PUSH_AT: u8 = 0x30;
+/// `ADn.` base: push the double-action (toggle) bit of input n.
+pub const PUSH_AD: u8 = 0x38;
+/// `Yn.` base: push output image bit n (n = 0..7).
+pub const PUSH_Y: u8 = 0x40;
+/// `Un.` base: push virtual bit Un.
+pub const PUSH_U: u8 = 0x48;
+/// `Vn.` base: push virtual bit Vn.
+pub const PUSH_V: u8 = 0x50;
+/// `Qm.` base: push flip-flop output m (m = 0..F).
+pub const PUSH_Q: u8 = 0x58;
+/// `TQm.` base: push timer output m (m = 0..F).
+pub const PUSH_TQ: u8 = 0x68;
+/// `.Yn` base: pop into output image bit n.
+pub const POP_Y: u8 = 0x80;
+/// `.Un` base: pop into virtual bit Un.
+pub const POP_U: u8 = 0x88;
+/// `.Vn` base: pop into virtual bit Vn.
+pub const POP_V: u8 = 0x90;
+/// `.Sm` base: pop into the set latch of flip-flop m.
+pub const POP_S: u8 = 0x98;
+/// `.Rm` base: pop into the reset latch of flip-flop m.
+pub const POP_R: u8 = 0xA8;
+/// `.TKm` base: pop the trigger of timer m.
+pub const POP_TK: u8 = 0xB8;
+/// `.TRm` base: pop the reset of timer m.
+pub const POP_TR: u8 = 0xC8;
+/// A never-programmed line (and erased EEPROM): shown as `.....`, runs as NOP.
+pub const BLANK: u8 = 0xFF;
+
+/// Names of the single commands `0x00..=0x1E`, indexed by opcode.
+const SINGLES: [&str; 31] = [
+    "NOP", "END", "KEY", "AND", "OR", "XOR", "!", "!!", "SET", "CLR", "DUP", "DROP", "SWAP",
+    "2DUP", "F.", "Z.", "PA.", "PY.", "PU.", "PV.", ".PY", ".PU", ".PV", "PPA", "PPY", "PPU",
+    "PPV", "PBS", "CLKA.", "CLKB.", "CLKC.",
+];
+
+/// A family of commands that differ only by a bit or unit number.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Family {
+    /// Opcode of number 0.
+    pub base: u8,
+    /// How many numbers exist (6 inputs, 8 port bits or 16 flip-flops / timers).
+    pub count: u8,
+    /// Name text before the number.
+    pub prefix: &'static str,
+    /// Name text after the number.
+    pub suffix: &'static str,
+}
+
+/// Every numbered family, in opcode order.
+pub const FAMILIES: [Family; 16] = [
+    Family { base: PUSH_A, count: 6, prefix: "A", suffix: "." },
+    Family { base: PUSH_AL, count: 6, prefix: "AL", suffix: "." },
+    Family { base: PUSH_AT, count: 6, prefix: "AT", suffix: "." },
+    Family { base: PUSH_AD, count: 6, prefix: "AD", suffix: "." },
+    Family { base: PUSH_Y, count: 8, prefix: "Y", suffix: "." },
+    Family { base: PUSH_U, count: 8, prefix: "U", suffix: "." },
+    Family { base: PUSH_V, count: 8, prefix: "V", suffix: "." },
+    Family { base: PUSH_Q, count: 16, prefix: "Q", suffix: "." },
+    Family { base: PUSH_TQ, count: 16, prefix: "TQ", suffix: "." },
+    Family { base: POP_Y, count: 8, prefix: ".Y", suffix: "" },
+    Family { base: POP_U, count: 8, prefix: ".U", suffix: "" },
+    Family { base: POP_V, count: 8, prefix: ".V", suffix: "" },
+    Family { base: POP_S, count: 16, prefix: ".S", suffix: "" },
+    Family { base: POP_R, count: 16, prefix: ".R", suffix: "" },
+    Family { base: POP_TK, count: 16, prefix: ".TK", suffix: "" },
+    Family { base: POP_TR, count: 16, prefix: ".TR", suffix: "" },
+];
+
+/// Longest command name (`CLKA.`, `.TK0`): 5 characters.
+pub const MAX_NAME: usize = 5;
+
+/// A command name, spelled into a small fixed buffer (no heap, no RAM tables).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Name {
+    buf: [u8; MAX_NAME],
+    len: u8,
+}
+
+impl Name {
+    fn push_str(&mut self, s: &str) {
+        for &b in s.as_bytes() {
+            if let Some(slot) = self.buf.get_mut(usize::from(self.len)) {
+                *slot = b;
+                self.len += 1;
+            }
+        }
+    }
+
+    /// The name's bytes (upper-case ASCII).
+    pub fn as_bytes(&self) -> &[u8] {
+        self.buf.get(..usize::from(self.len)).unwrap_or(&[])
+    }
+
+    /// The name as text.
+    pub fn as_str(&self) -> &str {
+        core::str::from_utf8(self.as_bytes()).unwrap_or("")
+    }
+}
+
+/// Upper-case hex digit for a unit number 0..15.
+fn hex_digit(n: u8) -> u8 {
+    if n < 10 {
+        b'0' + n
+    } else {
+        b'A' + (n - 10)
+    }
+}
+
+/// The family an opcode belongs to, with its number.
+pub fn family_of(op: u8) -> Option<(&'static Family, u8)> {
+    FAMILIES
+        .iter()
+        .find(|f| op >= f.base && op - f.base < f.count)
+        .map(|f| (f, op - f.base))
+}
+
+/// The command name of an opcode, or `None` for a blank or unassigned byte (shown `.....`).
+pub fn name(op: u8) -> Option<Name> {
+    let mut n = Name { buf: [0; MAX_NAME], len: 0 };
+    if let Some(s) = SINGLES.get(usize::from(op)) {
+        n.push_str(s);
+        return Some(n);
+    }
+    let (fam, num) = family_of(op)?;
+    n.push_str(fam.prefix);
+    if let Some(slot) = n.buf.get_mut(usize::from(n.len)) {
+        *slot = hex_digit(num);
+        n.len += 1;
+    }
+    n.push_str(fam.suffix);
+    Some(n)
+}
+
+/// True if the byte is an assigned opcode (not blank, not reserved).
+pub fn is_valid(op: u8) -> bool {
+    usize::from(op) < SINGLES.len() || family_of(op).is_some()
+}
+
+/// Value of one hex digit, either case.
+fn hex_value(c: u8) -> Option<u8> {
+    match c {
+        b'0'..=b'9' => Some(c - b'0'),
+        b'a'..=b'f' => Some(c - b'a' + 10),
+        b'A'..=b'F' => Some(c - b'A' + 10),
+        _ => None,
+    }
+}
+
+/// Case-insensitive equality of ASCII bytes.
+fn eq_fold(a: &[u8], b: &[u8]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.eq_ignore_ascii_case(y))
+}
+
+/// The opcode of an executable command name (any case), or `None`.
+pub fn lookup(word: &[u8]) -> Option<u8> {
+    if let Some(i) = SINGLES.iter().position(|s| eq_fold(s.as_bytes(), word)) {
+        return u8::try_from(i).ok();
+    }
+    FAMILIES.iter().find_map(|f| {
+        let (p, s) = (f.prefix.as_bytes(), f.suffix.as_bytes());
+        if word.len() != p.len() + 1 + s.len() {
+            return None;
+        }
+        let (head, rest) = word.split_at(p.len());
+        let (digit, tail) = rest.split_at(1);
+        if !eq_fold(head, p) || !eq_fold(tail, s) {
+            return None;
+        }
+        let n = hex_value(*digit.first()?)?;
+        (n < f.count).then_some(f.base + n)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_valid_opcode_round_trips_through_its_name() {
+        let mut count = 0;
+        for op in 0..=255u8 {
+            match name(op) {
+                Some(n) => {
+                    count += 1;
+                    assert!(is_valid(op));
+                    assert_eq!(lookup(n.as_bytes()), Some(op), "{}", n.as_str());
+                    assert_eq!(lookup(n.as_str().to_ascii_lowercase().as_bytes()), Some(op));
+                }
+                None => assert!(!is_valid(op), "{op:#04x}"),
+            }
+        }
+        // 31 singles + 4*6 input + 3*8 bit + 2*16 push + 3*8 + 4*16 pop
+        assert_eq!(count, 31 + 24 + 24 + 32 + 24 + 64);
+    }
+
+    #[test]
+    fn numbering_is_frozen() {
+        // Part of the stored-image format: a change here breaks every saved program.
+        let fixed: &[(&str, u8)] = &[
+            ("NOP", 0x00), ("END", 0x01), ("KEY", 0x02), ("AND", 0x03), ("!!", 0x07),
+            ("2DUP", 0x0D), ("PBS", 0x1B), ("CLKC.", 0x1E), ("A0.", 0x20), ("A5.", 0x25),
+            ("AL0.", 0x28), ("AT3.", 0x33), ("AD5.", 0x3D), ("Y7.", 0x47), ("U0.", 0x48),
+            ("V7.", 0x57), ("QF.", 0x67), ("TQ0.", 0x68), ("TQF.", 0x77), (".Y0", 0x80),
+            (".U7", 0x8F), (".V0", 0x90), (".S0", 0x98), (".RF", 0xB7), (".TK0", 0xB8),
+            (".TKF", 0xC7), (".TR0", 0xC8), (".TRF", 0xD7),
+        ];
+        for &(n, op) in fixed {
+            assert_eq!(lookup(n.as_bytes()), Some(op), "{n}");
+        }
+    }
+
+    #[test]
+    fn near_misses_are_rejected() {
+        for w in ["A6.", "A0", "AL6.", ".Y8", "Q0", "QG.", ".TK", "TQ10.", "", "NOPE", "A.", "Y0..", ".S"] {
+            assert_eq!(lookup(w.as_bytes()), None, "{w}");
+        }
+        assert_eq!(name(BLANK), None);
+        assert_eq!(name(0x1F), None);
+        assert_eq!(name(0x26), None);
+        assert_eq!(name(0xD8), None);
+    }
+}

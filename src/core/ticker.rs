@@ -1,0 +1,213 @@
+//! What the 1 ms timer interrupt does, without the interrupt: the time base, the input
+//! debouncer with its edge and toggle bits, and the clock square waves.
+//!
+//! The firmware calls [`Ticker::tick`] from its timer interrupt with the raw pin levels; a
+//! simulation calls it once per simulated millisecond. Both get exactly the same behaviour.
+
+/// Consecutive 1 ms samples a new level must hold before the debounced input takes it.
+///
+/// A glitch shorter than 4 ms covers at most 4 sample instants, so it never gets through;
+/// a level held 10 ms always does (after 5 ms). The worst press-to-input delay is 5 ms.
+pub const DEBOUNCE_SAMPLES: u8 = 5;
+
+/// Number of inputs A0..A5.
+pub const INPUTS: usize = 6;
+
+/// Mask of the input bits in a port byte.
+pub const INPUT_MASK: u8 = 0x3F;
+
+/// Half-periods of CLKA, CLKB and CLKC in milliseconds.
+pub const CLOCK_HALF_MS: [u16; 3] = [200, 600, 1800];
+
+/// Debounced inputs with sticky edge bits and toggle bits.
+#[derive(Clone, Debug, Default)]
+pub struct Debouncer {
+    level: u8,
+    count: [u8; INPUTS],
+    leading: u8,
+    trailing: u8,
+    toggles: u8,
+}
+
+impl Debouncer {
+    /// A debouncer that takes `raw` as the settled level, with no edges.
+    pub fn new(raw: u8) -> Self {
+        let mut d = Self::default();
+        d.resync(raw);
+        d
+    }
+
+    /// Take one sample of the raw pin levels (bits 0..5).
+    pub fn sample(&mut self, raw: u8) {
+        let differs = (raw ^ self.level) & INPUT_MASK;
+        let mut bit = 1u8;
+        for count in self.count.iter_mut() {
+            if differs & bit == 0 {
+                *count = 0;
+            } else {
+                *count += 1;
+                if *count >= DEBOUNCE_SAMPLES {
+                    *count = 0;
+                    self.level ^= bit;
+                    if self.level & bit != 0 {
+                        self.leading |= bit;
+                        self.toggles ^= bit;
+                    } else {
+                        self.trailing |= bit;
+                    }
+                }
+            }
+            bit <<= 1;
+        }
+    }
+
+    /// Take `raw` as the settled level and forget all edges and toggles (reset, EX0).
+    pub fn resync(&mut self, raw: u8) {
+        self.level = raw & INPUT_MASK;
+        self.count = [0; INPUTS];
+        self.leading = 0;
+        self.trailing = 0;
+        self.toggles = 0;
+    }
+
+    /// Debounced levels.
+    pub fn level(&self) -> u8 {
+        self.level
+    }
+
+    /// Read and clear the leading-edge bits in `mask`.
+    pub fn take_leading(&mut self, mask: u8) -> bool {
+        let hit = self.leading & mask != 0;
+        self.leading &= !mask;
+        hit
+    }
+
+    /// Read and clear the trailing-edge bits in `mask`.
+    pub fn take_trailing(&mut self, mask: u8) -> bool {
+        let hit = self.trailing & mask != 0;
+        self.trailing &= !mask;
+        hit
+    }
+
+    /// Toggle (double action) bits.
+    pub fn toggles(&self) -> u8 {
+        self.toggles
+    }
+}
+
+/// Everything the 1 ms tick keeps: time, inputs, clocks.
+#[derive(Clone, Debug)]
+pub struct Ticker {
+    ms: u32,
+    /// The input pre-processor.
+    pub inputs: Debouncer,
+    clocks: u8,
+    clock_left: [u16; 3],
+}
+
+impl Ticker {
+    /// State at reset, with the inputs settled at `raw`.
+    pub fn new(raw: u8) -> Self {
+        Self { ms: 0, inputs: Debouncer::new(raw), clocks: 0, clock_left: CLOCK_HALF_MS }
+    }
+
+    /// One millisecond has passed; `raw` is the present pin level of A0..A5.
+    pub fn tick(&mut self, raw: u8) {
+        self.ms = self.ms.wrapping_add(1);
+        self.inputs.sample(raw);
+        let mut bit = 1u8;
+        for (left, half) in self.clock_left.iter_mut().zip(CLOCK_HALF_MS) {
+            *left -= 1;
+            if *left == 0 {
+                *left = half;
+                self.clocks ^= bit;
+            }
+            bit <<= 1;
+        }
+    }
+
+    /// Milliseconds since reset.
+    pub fn now_ms(&self) -> u32 {
+        self.ms
+    }
+
+    /// Clock bits: bit 0 CLKA, bit 1 CLKB, bit 2 CLKC.
+    pub fn clocks(&self) -> u8 {
+        self.clocks
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(d: &mut Debouncer, raw: u8, ms: u32) {
+        for _ in 0..ms {
+            d.sample(raw);
+        }
+    }
+
+    #[test]
+    fn glitches_under_4ms_never_pass_and_10ms_levels_always_do() {
+        let mut d = Debouncer::new(0x3F);
+        for _ in 0..50 {
+            run(&mut d, 0x3E, 4);
+            run(&mut d, 0x3F, 1);
+        }
+        assert_eq!(d.level(), 0x3F);
+        assert!(!d.take_trailing(1));
+        run(&mut d, 0x3E, 10);
+        assert_eq!(d.level(), 0x3E);
+        assert!(d.take_trailing(1));
+        assert!(!d.take_trailing(1), "edge bits clear when read");
+    }
+
+    #[test]
+    fn a_bouncing_press_gives_one_edge_and_one_toggle() {
+        let mut d = Debouncer::new(0x01);
+        // contact bounce: 1 ms closed / 1 ms open for 6 ms, then closed; then release bounce
+        for _ in 0..3 {
+            run(&mut d, 0, 1);
+            run(&mut d, 1, 1);
+        }
+        run(&mut d, 0, 20);
+        for _ in 0..3 {
+            run(&mut d, 1, 1);
+            run(&mut d, 0, 1);
+        }
+        run(&mut d, 1, 20);
+        assert!(d.take_trailing(1));
+        assert!(d.take_leading(1));
+        assert_eq!(d.toggles() & 1, 1);
+        assert!(!d.take_trailing(1) && !d.take_leading(1));
+    }
+
+    #[test]
+    fn no_phantom_edges_after_resync() {
+        let mut d = Debouncer::new(0x3F);
+        run(&mut d, 0x3F, 30);
+        assert!(!d.take_leading(0x3F) && !d.take_trailing(0x3F));
+        assert_eq!(d.toggles(), 0);
+    }
+
+    #[test]
+    fn clocks_have_exact_half_periods() {
+        let mut t = Ticker::new(0);
+        let mut last = t.clocks();
+        let mut changes: [Vec<u32>; 3] = Default::default();
+        for _ in 0..7200 {
+            t.tick(0);
+            let c = t.clocks();
+            for (i, ch) in changes.iter_mut().enumerate() {
+                if (c ^ last) & (1 << i) != 0 {
+                    ch.push(t.now_ms());
+                }
+            }
+            last = c;
+        }
+        assert_eq!(changes[0].first(), Some(&200));
+        assert!(changes[0].windows(2).all(|w| w[1] - w[0] == 200));
+        assert!(changes[1].windows(2).all(|w| w[1] - w[0] == 600));
+        assert_eq!(changes[2], vec![1800, 3600, 5400, 7200]);
+    }
+}

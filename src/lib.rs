@@ -1,0 +1,13 @@
+//! uTile: a programmable logic controller for the ATmega328P of an Arduino Nano.
+//!
+//! [`core`] holds everything that is not hardware: the engine, the editor, the image
+//! formats. It builds for the AVR (linked into the firmware by `src/main.rs`) and for the
+//! host, where `cargo test` and the `utile` tool use it. [`hal`] is the thin hardware layer
+//! and exists only on the AVR.
+#![cfg_attr(not(test), no_std)]
+#![deny(unsafe_code)]
+
+#[cfg(not(target_arch = "avr"))]
+extern crate std;
+
+pub mod core;
