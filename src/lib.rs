@@ -11,3 +11,10 @@
 extern crate std;
 
 pub mod core;
+
+#[cfg(target_arch = "avr")]
+#[allow(unsafe_code)]
+pub mod hal;
+
+#[cfg(not(target_arch = "avr"))]
+pub mod sim;

@@ -4,9 +4,14 @@
 //! simulations). Everything the core needs from the outside world goes through [`Board`].
 
 pub mod board;
+pub mod editor;
 pub mod engine;
+pub mod ihex;
+pub mod image;
 pub mod opcodes;
+pub mod stats;
+pub mod store;
 pub mod ticker;
 
 pub use board::Board;
-pub use engine::Engine;
+pub use engine::{Engine, Flow, Program};

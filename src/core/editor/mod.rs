@@ -1,0 +1,1 @@
+//! The VT100 screen editor. (Owner: editor work, issue 4.)

@@ -1,0 +1,59 @@
+//! Scan-time statistics for STAT, fed by the board's hardware timer.
+
+/// Length of one statistics tick in nanoseconds (Timer1 at 16 MHz / 8 = 0.5 µs).
+pub const TICK_NS: u32 = 500;
+
+/// Minimum, maximum and mean scan time of the current (or last) run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ScanStats {
+    /// Shortest scan, in ticks.
+    pub min: u16,
+    /// Longest scan, in ticks.
+    pub max: u16,
+    /// Sum of all recorded scans, in ticks.
+    pub total: u32,
+    /// Number of recorded scans.
+    pub count: u32,
+    /// Milliseconds the run has lasted (set by the board when the run stops or on STAT).
+    pub run_ms: u32,
+}
+
+impl Default for ScanStats {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl ScanStats {
+    /// No scans yet.
+    pub const fn new() -> Self {
+        Self { min: u16::MAX, max: 0, total: 0, count: 0, run_ms: 0 }
+    }
+
+    /// Record one scan of `ticks` timer ticks.
+    #[inline]
+    pub fn record(&mut self, ticks: u16) {
+        if ticks < self.min {
+            self.min = ticks;
+        }
+        if ticks > self.max {
+            self.max = ticks;
+        }
+        self.total = self.total.wrapping_add(u32::from(ticks));
+        self.count = self.count.wrapping_add(1);
+    }
+
+    /// Mean scan in ticks (0 with no scans).
+    pub fn mean(&self) -> u32 {
+        if self.count == 0 {
+            0
+        } else {
+            self.total / self.count
+        }
+    }
+
+    /// Convert ticks to whole microseconds.
+    pub fn ticks_to_us(ticks: u32) -> u32 {
+        ticks * TICK_NS / 1000
+    }
+}

@@ -1,0 +1,1 @@
+//! The hardware layer (AVR only): pins, USART, timers, EEPROM, watchdog.

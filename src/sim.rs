@@ -1,0 +1,162 @@
+//! A simulated board for the host: the same [`Ticker`] as the firmware's 1 ms interrupt,
+//! pins you set by hand, a terminal you read as bytes, and a 1 KiB EEPROM.
+//!
+//! Tests, `utile sim` and scenario checks drive it with simulated time:
+//! `board.advance_ms(n)` runs the 1 ms tick n times, `run_for(engine, ms)` also scans.
+
+use std::collections::VecDeque;
+use std::vec::Vec;
+
+use crate::core::board::Board;
+use crate::core::engine::{Engine, Flow};
+use crate::core::ticker::Ticker;
+
+/// Size of the simulated EEPROM.
+pub const EEPROM_SIZE: usize = 1024;
+
+/// A host board with simulated time.
+#[derive(Clone, Debug)]
+pub struct SimBoard {
+    /// The 1 ms tick state (time, debouncer, clocks), exactly as on the chip.
+    pub ticker: Ticker,
+    /// Raw levels on A0..A5 (1 = open / high, as with the pull-ups).
+    pub raw_inputs: u8,
+    /// Output image last written to the pins (before out_sense).
+    pub outputs: u8,
+    /// Every change of the output pins: (ms, new image).
+    pub output_log: Vec<(u32, u8)>,
+    /// Bytes waiting to be received by the firmware.
+    pub rx_queue: VecDeque<u8>,
+    /// Everything sent to the terminal.
+    pub tx_log: Vec<u8>,
+    /// Free room reported by `tx_room` (the real buffer drains at 19200 baud).
+    pub tx_room_value: u8,
+    /// EEPROM contents (erased = 0xFF).
+    pub eeprom: Vec<u8>,
+    /// Count of EEPROM bytes actually written (wear).
+    pub eeprom_writes: u32,
+}
+
+impl Default for SimBoard {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl SimBoard {
+    /// All inputs open (high), outputs off, erased EEPROM, time 0.
+    pub fn new() -> Self {
+        Self {
+            ticker: Ticker::new(0x3F),
+            raw_inputs: 0x3F,
+            outputs: 0,
+            output_log: Vec::new(),
+            rx_queue: VecDeque::new(),
+            tx_log: Vec::new(),
+            tx_room_value: 255,
+            eeprom: std::vec![0xFF; EEPROM_SIZE],
+            eeprom_writes: 0,
+        }
+    }
+
+    /// Let `ms` milliseconds pass without scanning.
+    pub fn advance_ms(&mut self, ms: u32) {
+        for _ in 0..ms {
+            self.ticker.tick(self.raw_inputs);
+        }
+    }
+
+    /// Set the raw level of input `n` (true = high/open, false = pressed to ground).
+    pub fn set_input(&mut self, n: u8, high: bool) {
+        if high {
+            self.raw_inputs |= 1 << n;
+        } else {
+            self.raw_inputs &= !(1 << n);
+        }
+    }
+
+    /// Press a normally-open push-button on input n (pulls it low).
+    pub fn press(&mut self, n: u8) {
+        self.set_input(n, false);
+    }
+
+    /// Release the push-button on input n.
+    pub fn release(&mut self, n: u8) {
+        self.set_input(n, true);
+    }
+
+    /// Queue bytes as if typed on the terminal.
+    pub fn type_bytes(&mut self, bytes: &[u8]) {
+        self.rx_queue.extend(bytes.iter().copied());
+    }
+
+    /// Run the program for `ms` milliseconds, `scans_per_ms` scans each millisecond.
+    /// Returns `Flow::Break` early if KEY saw `/`.
+    pub fn run_for(&mut self, engine: &mut Engine, ms: u32, scans_per_ms: u32) -> Flow {
+        for _ in 0..ms {
+            for _ in 0..scans_per_ms {
+                if engine.scan(self) == Flow::Break {
+                    return Flow::Break;
+                }
+            }
+            self.ticker.tick(self.raw_inputs);
+        }
+        Flow::End
+    }
+
+    /// Output bit n as last written to the pins.
+    pub fn output(&self, n: u8) -> bool {
+        self.outputs & (1 << n) != 0
+    }
+}
+
+impl Board for SimBoard {
+    fn inputs(&mut self) -> u8 {
+        self.ticker.inputs.level()
+    }
+    fn take_leading(&mut self, mask: u8) -> bool {
+        self.ticker.inputs.take_leading(mask)
+    }
+    fn take_trailing(&mut self, mask: u8) -> bool {
+        self.ticker.inputs.take_trailing(mask)
+    }
+    fn toggles(&mut self) -> u8 {
+        self.ticker.inputs.toggles()
+    }
+    fn resync_inputs(&mut self) {
+        let raw = self.raw_inputs;
+        self.ticker.inputs.resync(raw);
+    }
+    fn clocks(&mut self) -> u8 {
+        self.ticker.clocks()
+    }
+    fn now_ms(&mut self) -> u32 {
+        self.ticker.now_ms()
+    }
+    fn write_outputs(&mut self, py: u8) {
+        if py != self.outputs || self.output_log.is_empty() {
+            self.output_log.push((self.ticker.now_ms(), py));
+        }
+        self.outputs = py;
+    }
+    fn rx(&mut self) -> Option<u8> {
+        self.rx_queue.pop_front()
+    }
+    fn tx(&mut self, byte: u8) {
+        self.tx_log.push(byte);
+    }
+    fn tx_room(&mut self) -> u8 {
+        self.tx_room_value
+    }
+    fn eeprom_read(&mut self, addr: u16) -> u8 {
+        self.eeprom.get(usize::from(addr)).copied().unwrap_or(0xFF)
+    }
+    fn eeprom_update(&mut self, addr: u16, value: u8) {
+        if let Some(cell) = self.eeprom.get_mut(usize::from(addr)) {
+            if *cell != value {
+                *cell = value;
+                self.eeprom_writes += 1;
+            }
+        }
+    }
+}
