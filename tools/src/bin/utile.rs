@@ -1,0 +1,209 @@
+//! `utile`: uTile programs as text on the PC.
+//!
+//! ```text
+//! utile asm prog.utl [-o prog.hex]      listing -> hex image, exactly as WRITE sends it
+//! utile dis prog.hex [-o prog.utl]      hex image -> canonical listing
+//! utile fmt prog.utl                    canonical listing of a listing
+//! utile sim prog.utl --inputs t.timeline [--until 120s] [--scans 4]
+//!           [--signals A0,Y0,TQ0] [--svg out.svg] [--vcd out.vcd]
+//! ```
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use utile_tools::{diagram, listing, simulate};
+
+const USAGE: &str = "usage:
+  utile asm PROG.utl [-o PROG.hex]     listing -> Intel HEX image (as WRITE sends it)
+  utile dis PROG.hex [-o PROG.utl]     Intel HEX image -> canonical listing
+  utile fmt PROG.utl                   print the canonical listing of a listing
+  utile sim PROG.utl --inputs TIMELINE [--until 120s] [--scans 4]
+            [--signals A0,Y0,TQ0,...] [--svg OUT.svg] [--vcd OUT.vcd]
+                                       simulate and print the output changes";
+
+/// A failure: the message printed before exiting with status 1.
+type Failure = String;
+
+fn read_text(path: &Path) -> Result<String, Failure> {
+    std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+fn write_file(path: &Path, bytes: &[u8]) -> Result<(), Failure> {
+    std::fs::write(path, bytes).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+fn load_listing(path: &Path) -> Result<utile::core::Program, Failure> {
+    let text = read_text(path)?;
+    listing::parse(&path.display().to_string(), &text).map_err(|e| e.to_string())
+}
+
+/// Command-line words after the sub-command: positional arguments and `--flag value` pairs.
+struct Args {
+    positional: Vec<String>,
+    flags: Vec<(String, String)>,
+}
+
+impl Args {
+    fn parse(words: &[String], known: &[&str]) -> Result<Args, Failure> {
+        let mut args = Args {
+            positional: Vec::new(),
+            flags: Vec::new(),
+        };
+        let mut it = words.iter();
+        while let Some(w) = it.next() {
+            if w.starts_with('-') && w.len() > 1 {
+                if !known.contains(&w.as_str()) {
+                    return Err(format!("unknown option '{w}'\n{USAGE}"));
+                }
+                let v = it
+                    .next()
+                    .ok_or_else(|| format!("option '{w}' needs a value"))?;
+                args.flags.push((w.clone(), v.clone()));
+            } else {
+                args.positional.push(w.clone());
+            }
+        }
+        Ok(args)
+    }
+
+    fn flag(&self, name: &str) -> Option<&str> {
+        self.flags
+            .iter()
+            .rev()
+            .find(|(k, _)| k == name)
+            .map(|(_, v)| v.as_str())
+    }
+
+    fn one_input(&self) -> Result<PathBuf, Failure> {
+        match self.positional.as_slice() {
+            [p] => Ok(PathBuf::from(p)),
+            [] => Err(format!("no input file\n{USAGE}")),
+            [_, extra, ..] => Err(format!("unexpected argument '{extra}'\n{USAGE}")),
+        }
+    }
+}
+
+fn asm(words: &[String]) -> Result<(), Failure> {
+    let args = Args::parse(words, &["-o"])?;
+    let input = args.one_input()?;
+    let prog = load_listing(&input)?;
+    let out = args
+        .flag("-o")
+        .map_or_else(|| input.with_extension("hex"), PathBuf::from);
+    write_file(&out, &listing::to_hex(&prog))
+}
+
+fn dis(words: &[String]) -> Result<(), Failure> {
+    let args = Args::parse(words, &["-o"])?;
+    let input = args.one_input()?;
+    let bytes = std::fs::read(&input).map_err(|e| format!("{}: {e}", input.display()))?;
+    let prog = listing::from_hex(&bytes).map_err(|e| format!("{}: {e}", input.display()))?;
+    let text = listing::print(&prog);
+    match args.flag("-o") {
+        Some(out) => write_file(Path::new(out), text.as_bytes()),
+        None => {
+            print!("{text}");
+            Ok(())
+        }
+    }
+}
+
+fn fmt(words: &[String]) -> Result<(), Failure> {
+    let args = Args::parse(words, &[])?;
+    let prog = load_listing(&args.one_input()?)?;
+    print!("{}", listing::print(&prog));
+    Ok(())
+}
+
+fn sim(words: &[String]) -> Result<(), Failure> {
+    let args = Args::parse(
+        words,
+        &[
+            "--inputs",
+            "--until",
+            "--scans",
+            "--signals",
+            "--svg",
+            "--vcd",
+        ],
+    )?;
+    let input = args.one_input()?;
+    let prog = load_listing(&input)?;
+    let timeline = match args.flag("--inputs") {
+        Some(t) => {
+            simulate::parse_timeline(t, &read_text(Path::new(t))?).map_err(|e| e.to_string())?
+        }
+        None => simulate::Timeline::default(),
+    };
+    let until_ms = match args.flag("--until") {
+        Some(t) => simulate::parse_time(t).map_err(|e| format!("--until: {e}"))?,
+        None => timeline.until_ms.unwrap_or_else(|| {
+            timeline
+                .events
+                .last()
+                .map_or(0, |e| e.ms)
+                .saturating_add(5_000)
+        }),
+    };
+    if until_ms == 0 {
+        return Err("--until: the simulation must last at least 1 ms".into());
+    }
+    let scans = match args.flag("--scans") {
+        Some(s) => s
+            .parse::<u32>()
+            .ok()
+            .filter(|n| (1..=1000).contains(n))
+            .ok_or_else(|| format!("--scans: '{s}' is not a number of scans per ms (1..1000)"))?,
+        None => 4,
+    };
+    let signals = match args.flag("--signals") {
+        Some(list) => simulate::parse_signals(list).map_err(|e| format!("--signals: {e}"))?,
+        None => timeline
+            .signals
+            .clone()
+            .unwrap_or_else(|| simulate::default_signals(&prog, &timeline.events)),
+    };
+    let result = simulate::simulate(&prog, &timeline.events, until_ms, scans, &signals);
+    print!("{}", simulate::output_table(&result.output_log));
+    let name = input
+        .file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+    if let Some(svg) = args.flag("--svg") {
+        let title = format!(
+            "{name}: {} scans/ms, {}",
+            scans,
+            simulate::format_time(until_ms)
+        );
+        write_file(Path::new(svg), diagram::svg(&result, &title).as_bytes())?;
+    }
+    if let Some(vcd) = args.flag("--vcd") {
+        write_file(Path::new(vcd), simulate::vcd(&result, &name).as_bytes())?;
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let words: Vec<String> = std::env::args().skip(1).collect();
+    let Some((cmd, rest)) = words.split_first() else {
+        eprintln!("{USAGE}");
+        return ExitCode::from(2);
+    };
+    let result = match cmd.as_str() {
+        "asm" => asm(rest),
+        "dis" => dis(rest),
+        "fmt" => fmt(rest),
+        "sim" => sim(rest),
+        "-h" | "--help" | "help" => {
+            println!("{USAGE}");
+            Ok(())
+        }
+        other => Err(format!("unknown command '{other}'\n{USAGE}")),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("{e}");
+            ExitCode::FAILURE
+        }
+    }
+}
