@@ -27,7 +27,10 @@ pub struct Program {
 impl Program {
     /// A cold-start program: every line blank, presets 0.
     pub const fn blank() -> Self {
-        Self { uf: [BLANK; LINES], presets: [0; UNITS] }
+        Self {
+            uf: [BLANK; LINES],
+            presets: [0; UNITS],
+        }
     }
 }
 
@@ -108,10 +111,31 @@ impl Engine {
     /// Clear the runtime state (EX0): bit stack, ports, flip-flops, timers, edges, toggles,
     /// pending displays. The program and presets stay. Outputs are driven off.
     pub fn clear_runtime<B: Board>(&mut self, b: &mut B) {
-        let prog = core::mem::replace(&mut self.prog, Program::blank());
-        *self = Self::new(prog);
+        // Field by field: rebuilding the whole Engine would put two copies of the 272-byte
+        // Program on the AVR stack.
+        self.bs = 0;
+        self.py = 0;
+        self.pu = 0;
+        self.pv = 0;
+        self.set = 0;
+        self.reset = 0;
+        self.q = 0;
+        self.tq = 0;
+        self.deadline = [0; UNITS];
+        self.sweep = 0;
+        self.port_view = None;
+        self.bs_view = None;
         b.resync_inputs();
         b.write_outputs(0);
+    }
+
+    /// Retire every timer whose time has passed. END does this for one timer per scan; the
+    /// editor calls it while idle so that a timer nobody reads cannot come back to life when
+    /// the ms clock wraps (after 49.7 days).
+    pub fn retire_timers<B: Board>(&mut self, b: &mut B) {
+        for m in 0..UNITS as u8 {
+            self.timer_output(m, b);
+        }
     }
 
     #[inline(always)]
@@ -285,7 +309,8 @@ impl Engine {
                 self.trigger(op - POP_TK, v, b);
             }
             0xC8..=0xD7 => {
-                if self.pop() {
+                let v = self.pop();
+                if v {
                     self.tq &= !(1u16 << (op - POP_TR));
                 }
             }

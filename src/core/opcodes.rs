@@ -2,8 +2,8 @@
 //!
 //! These numbers are part of the stored-image format (EEPROM slots, WRITE/READ files, `utile`
 //! listings). Never renumber an opcode; give a new command a new number from the reserved
-//! ranges and bump the image format version. `docs/OPCODES.md` is generated from this table
-//! by `cargo utile opcodes` and checked by a test.
+//! ranges and bump the image format version. `docs/OPCODES.md` is rendered from this table;
+//! `tests/engine_opcodes_doc.rs` fails when it is out of date.
 //!
 //! Layout, chosen so that families share one handler in the interpreter:
 //!

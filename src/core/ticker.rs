@@ -23,6 +23,8 @@ pub const CLOCK_HALF_MS: [u16; 3] = [200, 600, 1800];
 #[derive(Clone, Debug, Default)]
 pub struct Debouncer {
     level: u8,
+    /// Inputs whose `count` is not 0 (lets a quiet tick return at once).
+    counting: u8,
     count: [u8; INPUTS],
     leading: u8,
     trailing: u8,
@@ -40,6 +42,11 @@ impl Debouncer {
     /// Take one sample of the raw pin levels (bits 0..5).
     pub fn sample(&mut self, raw: u8) {
         let differs = (raw ^ self.level) & INPUT_MASK;
+        if differs | self.counting == 0 {
+            // Settled inputs: the usual case, kept short for the 1 ms interrupt.
+            return;
+        }
+        self.counting = differs;
         let mut bit = 1u8;
         for count in self.count.iter_mut() {
             if differs & bit == 0 {
@@ -48,6 +55,7 @@ impl Debouncer {
                 *count += 1;
                 if *count >= DEBOUNCE_SAMPLES {
                     *count = 0;
+                    self.counting &= !bit;
                     self.level ^= bit;
                     if self.level & bit != 0 {
                         self.leading |= bit;
@@ -65,6 +73,7 @@ impl Debouncer {
     pub fn resync(&mut self, raw: u8) {
         self.level = raw & INPUT_MASK;
         self.count = [0; INPUTS];
+        self.counting = 0;
         self.leading = 0;
         self.trailing = 0;
         self.toggles = 0;
@@ -108,7 +117,18 @@ pub struct Ticker {
 impl Ticker {
     /// State at reset, with the inputs settled at `raw`.
     pub fn new(raw: u8) -> Self {
-        Self { ms: 0, inputs: Debouncer::new(raw), clocks: 0, clock_left: CLOCK_HALF_MS }
+        Self::with_time(raw, 0)
+    }
+
+    /// State at reset with the ms clock starting at `ms` instead of 0 (tests of the 49.7-day
+    /// wrap of the clock use a start just below `u32::MAX`).
+    pub fn with_time(raw: u8, ms: u32) -> Self {
+        Self {
+            ms,
+            inputs: Debouncer::new(raw),
+            clocks: 0,
+            clock_left: CLOCK_HALF_MS,
+        }
     }
 
     /// One millisecond has passed; `raw` is the present pin level of A0..A5.
@@ -117,7 +137,7 @@ impl Ticker {
         self.inputs.sample(raw);
         let mut bit = 1u8;
         for (left, half) in self.clock_left.iter_mut().zip(CLOCK_HALF_MS) {
-            *left -= 1;
+            *left = left.saturating_sub(1);
             if *left == 0 {
                 *left = half;
                 self.clocks ^= bit;
