@@ -1,22 +1,33 @@
 //! Intel HEX text for images: the writer used by WRITE and a streaming reader for READ.
-//! (Owner: storage work, issue 5. Signatures are fixed; bodies to be completed.)
+//!
+//! The reader accepts exactly what `docs/FORMAT.md` describes: data records (type 00) that
+//! cover the image from address 0 in order, with no gap and no overlap, then one
+//! end-of-file record (type 01, no data). Hex digits may be upper or lower case; CR, LF,
+//! blanks and other control characters between records are ignored, and so is anything
+//! before the first `:` (a captured file may start with screen output).
 
 use super::image::IMAGE_LEN;
+
+/// Data bytes per record written by [`write_hex`].
+pub const RECORD_LEN: usize = 16;
 
 /// Why a hex file was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum HexError {
-    /// A character that is not a hex digit inside a record.
+    /// A character that is not a hex digit inside a record, or a printable non-hex
+    /// character between records.
     BadChar,
     /// A record's checksum does not match.
     Checksum,
-    /// A record's address is outside the image, or records leave a gap.
+    /// A record's address is outside the image, or records leave a gap or overlap
+    /// (data records must follow each other in address order).
     Address,
-    /// A record type other than data (00) or end-of-file (01).
+    /// A record type other than data (00) or end-of-file (01), or an end-of-file record
+    /// that carries data.
     RecordType,
     /// End-of-file record before the whole image was received.
     Short,
-    /// A record longer than a line may be.
+    /// More hex digits on a line than its record's byte count allows.
     TooLong,
 }
 
@@ -31,16 +42,99 @@ pub enum HexEvent {
     Error(HexError),
 }
 
+/// The upper-case hex digit of the low nibble of `n`.
+fn hex_digit(n: u8) -> u8 {
+    let n = n & 0x0F;
+    if n < 10 {
+        b'0' + n
+    } else {
+        b'A' + (n - 10)
+    }
+}
+
+/// The value of a hex digit in either case.
+fn hex_value(c: u8) -> Option<u8> {
+    match c {
+        b'0'..=b'9' => Some(c - b'0'),
+        b'A'..=b'F' => Some(c - b'A' + 10),
+        b'a'..=b'f' => Some(c - b'a' + 10),
+        _ => None,
+    }
+}
+
 /// Send `image` as Intel HEX: data records of 16 bytes from address 0, upper-case, CR LF
-/// line ends, then the end-of-file record `:00000001FF` CR LF.
+/// line ends, then the end-of-file record `:00000001FF` CR LF. The last data record is
+/// shorter when the length is not a multiple of 16 (278 = 17 × 16 + 6).
 pub fn write_hex(image: &[u8], out: &mut impl FnMut(u8)) {
-    let _ = (image, out);
+    let mut addr: u16 = 0;
+    for chunk in image.chunks(RECORD_LEN) {
+        // A chunk holds at most 16 bytes, so its length fits a u8.
+        let count = chunk.len() as u8;
+        let [hi, lo] = addr.to_be_bytes();
+        let mut sum = count.wrapping_add(hi).wrapping_add(lo);
+        out(b':');
+        let mut byte = |b: u8| {
+            out(hex_digit(b >> 4));
+            out(hex_digit(b));
+        };
+        byte(count);
+        byte(hi);
+        byte(lo);
+        byte(0x00);
+        for &b in chunk {
+            sum = sum.wrapping_add(b);
+            byte(b);
+        }
+        byte(sum.wrapping_neg());
+        out(b'\r');
+        out(b'\n');
+        addr = addr.wrapping_add(u16::from(count));
+    }
+    for &c in b":00000001FF\r\n" {
+        out(c);
+    }
+}
+
+/// Where the reader is in the text.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum State {
+    /// Before the first `:`: everything is ignored.
+    Start,
+    /// Between records: blanks and control characters are ignored.
+    Between,
+    /// Inside a record, after the `:`.
+    Record,
+    /// A record's checksum has been read; only the line end (or the next `:`) may follow.
+    AfterRecord,
+    /// Finished: the end-of-file record arrived.
+    Done,
+    /// Refused; the error is latched.
+    Failed(HexError),
 }
 
 /// Streaming Intel HEX reader into a fixed staging buffer.
+///
+/// Feed it one byte at a time; it never stores a line, only the image bytes, so its RAM is
+/// the 278-byte staging buffer plus a few counters. Once it says `Done` or `Error`, every
+/// further byte gets the same answer.
 #[derive(Clone, Debug)]
 pub struct HexReader {
     buf: [u8; IMAGE_LEN],
+    state: State,
+    /// Bytes of the image received so far = the address the next data record must start at.
+    next: u16,
+    /// Complete bytes of the current record (count, address, type, data, checksum).
+    index: u16,
+    /// The high nibble of the byte being read, if one is pending.
+    high: Option<u8>,
+    /// Data byte count of the current record.
+    count: u8,
+    /// Load address of the current record.
+    addr: u16,
+    /// Record type of the current record.
+    kind: u8,
+    /// Sum of the current record's bytes (a good record sums to 0).
+    sum: u8,
 }
 
 impl Default for HexReader {
@@ -52,13 +146,111 @@ impl Default for HexReader {
 impl HexReader {
     /// An empty reader.
     pub const fn new() -> Self {
-        Self { buf: [0; IMAGE_LEN] }
+        Self {
+            buf: [0; IMAGE_LEN],
+            state: State::Start,
+            next: 0,
+            index: 0,
+            high: None,
+            count: 0,
+            addr: 0,
+            kind: 0,
+            sum: 0,
+        }
     }
 
     /// Feed one received byte. Bytes between records (CR, LF, blanks) are ignored.
     pub fn feed(&mut self, byte: u8) -> HexEvent {
-        let _ = byte;
+        match self.state {
+            State::Done => HexEvent::Done { len: self.next },
+            State::Failed(e) => HexEvent::Error(e),
+            State::Start | State::Between | State::AfterRecord if byte == b':' => {
+                self.state = State::Record;
+                self.index = 0;
+                self.high = None;
+                self.sum = 0;
+                HexEvent::More
+            }
+            State::Start => HexEvent::More,
+            State::Between | State::AfterRecord if byte <= b' ' || byte == 0x7F => {
+                self.state = State::Between;
+                HexEvent::More
+            }
+            State::AfterRecord if hex_value(byte).is_some() => self.fail(HexError::TooLong),
+            State::Between | State::AfterRecord => self.fail(HexError::BadChar),
+            State::Record => match hex_value(byte) {
+                None => self.fail(HexError::BadChar),
+                Some(v) => match self.high.take() {
+                    None => {
+                        self.high = Some(v);
+                        HexEvent::More
+                    }
+                    Some(h) => self.record_byte((h << 4) | v),
+                },
+            },
+        }
+    }
+
+    /// One complete byte of the record in progress.
+    fn record_byte(&mut self, b: u8) -> HexEvent {
+        self.sum = self.sum.wrapping_add(b);
+        let i = self.index;
+        self.index = i.wrapping_add(1);
+        match i {
+            0 => self.count = b,
+            1 => self.addr = u16::from(b) << 8,
+            2 => self.addr |= u16::from(b),
+            3 => self.kind = b,
+            _ => {
+                let data_index = i.wrapping_sub(4);
+                if data_index < u16::from(self.count) {
+                    // Stage only data that lands inside the image; the address is judged
+                    // after the checksum so line noise reports as a checksum error.
+                    let pos = usize::from(self.addr).wrapping_add(usize::from(data_index));
+                    if self.kind == 0x00 {
+                        if let Some(cell) = self.buf.get_mut(pos) {
+                            *cell = b;
+                        }
+                    }
+                } else {
+                    return self.end_record();
+                }
+            }
+        }
         HexEvent::More
+    }
+
+    /// The checksum byte has arrived: judge the whole record.
+    fn end_record(&mut self) -> HexEvent {
+        if self.sum != 0 {
+            return self.fail(HexError::Checksum);
+        }
+        match self.kind {
+            0x00 => {
+                let end = u32::from(self.addr) + u32::from(self.count);
+                if self.addr != self.next || end > IMAGE_LEN as u32 {
+                    return self.fail(HexError::Address);
+                }
+                // end ≤ IMAGE_LEN, so it fits a u16.
+                self.next = end as u16;
+                self.state = State::AfterRecord;
+                HexEvent::More
+            }
+            0x01 if self.count == 0 => {
+                if usize::from(self.next) != IMAGE_LEN {
+                    return self.fail(HexError::Short);
+                }
+                self.state = State::Done;
+                HexEvent::Done { len: self.next }
+            }
+            _ => self.fail(HexError::RecordType),
+        }
+    }
+
+    /// Latch an error.
+    fn fail(&mut self, e: HexError) -> HexEvent {
+        self.state = State::Failed(e);
+        HexEvent::Error(e)
     }
 
     /// The staged bytes (valid after `Done`).

@@ -1,7 +1,17 @@
 //! The stored-image format: what STORE keeps in EEPROM, WRITE sends and READ accepts.
-//! (Owner: storage work, issue 5. Signatures are fixed; bodies to be completed.)
+//!
+//! Layout (format version 1, 278 bytes, documented in `docs/FORMAT.md`):
+//!
+//! | offset | len | content                                              |
+//! |--------|-----|------------------------------------------------------|
+//! | 0      | 2   | magic `uT` (0x75 0x54)                               |
+//! | 2      | 1   | format version (1)                                   |
+//! | 3      | 1   | reserved, written 0, ignored by version-1 readers    |
+//! | 4      | 256 | UF0, one opcode per line, line 0 first               |
+//! | 260    | 16  | timer presets T0..TF                                 |
+//! | 276    | 2   | CRC-16/CCITT-FALSE of bytes 0..276, high byte first  |
 
-use super::engine::Program;
+use super::engine::{Program, LINES, UNITS};
 
 /// Image magic, bytes 0..2.
 pub const MAGIC: [u8; 2] = *b"uT";
@@ -9,6 +19,20 @@ pub const MAGIC: [u8; 2] = *b"uT";
 pub const VERSION: u8 = 1;
 /// Total image length: magic 2 + version 1 + reserved 1 + UF 256 + presets 16 + CRC 2.
 pub const IMAGE_LEN: usize = 278;
+
+/// Offset of the format version byte.
+pub const VERSION_OFFSET: usize = 2;
+/// Offset of the reserved byte (written 0).
+pub const RESERVED_OFFSET: usize = 3;
+/// Offset of UF0 line 0.
+pub const UF_OFFSET: usize = 4;
+/// Offset of preset T0.
+pub const PRESETS_OFFSET: usize = UF_OFFSET + LINES;
+/// Offset of the CRC (high byte first); the CRC covers every byte before it.
+pub const CRC_OFFSET: usize = PRESETS_OFFSET + UNITS;
+
+// The layout adds up.
+const _: () = assert!(CRC_OFFSET + 2 == IMAGE_LEN);
 
 /// Why bytes are not a valid image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -23,26 +47,97 @@ pub enum ImageError {
     Crc,
 }
 
-/// CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF).
-pub fn crc16(bytes: &[u8]) -> u16 {
-    let mut crc: u16 = 0xFFFF;
-    for &b in bytes {
-        crc ^= u16::from(b) << 8;
-        for _ in 0..8 {
-            crc = if crc & 0x8000 != 0 { (crc << 1) ^ 0x1021 } else { crc << 1 };
-        }
+/// One byte of CRC-16/CCITT-FALSE: feed bytes one at a time starting from 0xFFFF
+/// (lets STORE/LOAD check an EEPROM slot without copying it to RAM).
+pub const fn crc16_update(crc: u16, byte: u8) -> u16 {
+    let mut crc = crc ^ ((byte as u16) << 8);
+    let mut bit = 0;
+    while bit < 8 {
+        crc = if crc & 0x8000 != 0 {
+            (crc << 1) ^ 0x1021
+        } else {
+            crc << 1
+        };
+        bit += 1;
     }
     crc
 }
 
-/// The image bytes of a program.
-pub fn encode(prog: &Program) -> [u8; IMAGE_LEN] {
-    let _ = prog;
-    [0; IMAGE_LEN]
+/// CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF).
+pub fn crc16(bytes: &[u8]) -> u16 {
+    bytes.iter().fold(0xFFFF, |crc, &b| crc16_update(crc, b))
 }
 
-/// Check and decode an image.
+/// The image bytes of a program.
+pub fn encode(prog: &Program) -> [u8; IMAGE_LEN] {
+    let mut out = [0u8; IMAGE_LEN];
+    out[0] = MAGIC[0];
+    out[1] = MAGIC[1];
+    out[VERSION_OFFSET] = VERSION;
+    out[RESERVED_OFFSET] = 0;
+    for (dst, &src) in out[UF_OFFSET..PRESETS_OFFSET]
+        .iter_mut()
+        .zip(prog.uf.iter())
+    {
+        *dst = src;
+    }
+    for (dst, &src) in out[PRESETS_OFFSET..CRC_OFFSET]
+        .iter_mut()
+        .zip(prog.presets.iter())
+    {
+        *dst = src;
+    }
+    let crc = crc16(&out[..CRC_OFFSET]).to_be_bytes();
+    out[CRC_OFFSET] = crc[0];
+    out[CRC_OFFSET + 1] = crc[1];
+    out
+}
+
+/// Check the header (magic, version) of an image; `Ok` says nothing about the CRC.
+pub fn check_header(magic: [u8; 2], version: u8) -> Result<(), ImageError> {
+    if magic != MAGIC {
+        Err(ImageError::Magic)
+    } else if version != VERSION {
+        Err(ImageError::Version(version))
+    } else {
+        Ok(())
+    }
+}
+
+/// Check and decode an image: length, magic, version, then CRC. Any opcode byte is
+/// accepted (unassigned opcodes run as NOP), and so is any preset 0..255.
 pub fn decode(bytes: &[u8]) -> Result<Program, ImageError> {
-    let _ = bytes;
-    Err(ImageError::Length)
+    let img: &[u8; IMAGE_LEN] = bytes.try_into().map_err(|_| ImageError::Length)?;
+    check_header([img[0], img[1]], img[VERSION_OFFSET])?;
+    let stored = u16::from_be_bytes([img[CRC_OFFSET], img[CRC_OFFSET + 1]]);
+    if crc16(&img[..CRC_OFFSET]) != stored {
+        return Err(ImageError::Crc);
+    }
+    let mut prog = Program::blank();
+    for (dst, &src) in prog
+        .uf
+        .iter_mut()
+        .zip(img[UF_OFFSET..PRESETS_OFFSET].iter())
+    {
+        *dst = src;
+    }
+    for (dst, &src) in prog
+        .presets
+        .iter_mut()
+        .zip(img[PRESETS_OFFSET..CRC_OFFSET].iter())
+    {
+        *dst = src;
+    }
+    Ok(prog)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn crc16_check_value() {
+        // The catalogue check value of CRC-16/CCITT-FALSE.
+        assert_eq!(crc16(b"123456789"), 0x29B1);
+    }
 }

@@ -1,11 +1,29 @@
 //! Two-slot EEPROM storage of the program image with sequence numbers and CRC.
-//! (Owner: storage work, issue 5. Signatures are fixed; bodies to be completed.)
+//!
+//! Each slot is `[sequence number, u16 little-endian][image, 278 bytes]` (`docs/FORMAT.md`).
+//! STORE writes the older (or an invalid) slot, so the newest good program is never touched;
+//! LOAD takes the newest slot whose image is valid. Write order inside the slot makes a
+//! reset at any moment harmless:
+//!
+//! 1. if the image body is about to change, the first magic byte is cleared, so the slot
+//!    is invalid (not merely "probably invalid by CRC") while it is half written;
+//! 2. image bytes 1..278 are written (only those that differ);
+//! 3. the first magic byte is restored: the slot now holds a complete, valid image;
+//! 4. the sequence number is written last, making the slot the newest.
+//!
+//! A reset before step 3 leaves an invalid slot (the other slot is used); a reset after it
+//! leaves two valid images, and either is a program the user stored.
 
 use super::board::Board;
 use super::engine::Program;
+use super::image::{self, crc16_update, CRC_OFFSET, IMAGE_LEN, PRESETS_OFFSET, UF_OFFSET};
 
 /// EEPROM address of each slot.
 pub const SLOT_ADDR: [u16; 2] = [0x000, 0x200];
+/// Bytes of the sequence number at the start of a slot.
+pub const SEQ_LEN: u16 = 2;
+/// Bytes a slot occupies: sequence number + image.
+pub const SLOT_LEN: u16 = SEQ_LEN + IMAGE_LEN as u16;
 
 /// STORE failed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -21,14 +39,113 @@ pub enum LoadError {
     NoValidImage,
 }
 
+/// Whether sequence number `a` is newer than `b` (serial-number arithmetic, so the
+/// counter may wrap from 0xFFFF to 0).
+pub fn seq_newer(a: u16, b: u16) -> bool {
+    (a.wrapping_sub(b) as i16) > 0
+}
+
+/// EEPROM address of image byte `i` in `slot`.
+fn image_addr(slot: u16, i: usize) -> u16 {
+    // i < IMAGE_LEN, so the sum stays inside the 1 KiB EEPROM.
+    slot.wrapping_add(SEQ_LEN).wrapping_add(i as u16)
+}
+
+/// The sequence number of `slot` if it holds a valid image (header and CRC checked
+/// straight from EEPROM, with no RAM copy).
+pub fn slot_seq<B: Board>(b: &mut B, slot: u16) -> Option<u16> {
+    let magic = [
+        b.eeprom_read(image_addr(slot, 0)),
+        b.eeprom_read(image_addr(slot, 1)),
+    ];
+    let version = b.eeprom_read(image_addr(slot, image::VERSION_OFFSET));
+    image::check_header(magic, version).ok()?;
+    let mut crc: u16 = 0xFFFF;
+    for i in 0..CRC_OFFSET {
+        crc = crc16_update(crc, b.eeprom_read(image_addr(slot, i)));
+    }
+    let stored = u16::from_be_bytes([
+        b.eeprom_read(image_addr(slot, CRC_OFFSET)),
+        b.eeprom_read(image_addr(slot, CRC_OFFSET + 1)),
+    ]);
+    if crc != stored {
+        return None;
+    }
+    Some(u16::from_le_bytes([
+        b.eeprom_read(slot),
+        b.eeprom_read(slot.wrapping_add(1)),
+    ]))
+}
+
+/// The newest valid slot: (its address from [`SLOT_ADDR`], its sequence number). With
+/// equal (or exactly opposite) sequence numbers slot 0 wins.
+pub fn newest_slot<B: Board>(b: &mut B) -> Option<(u16, u16)> {
+    let [a0, a1] = SLOT_ADDR;
+    match (slot_seq(b, a0), slot_seq(b, a1)) {
+        (Some(s0), Some(s1)) if seq_newer(s1, s0) => Some((a1, s1)),
+        (Some(s0), _) => Some((a0, s0)),
+        (None, Some(s1)) => Some((a1, s1)),
+        (None, None) => None,
+    }
+}
+
 /// Write `prog` into the older slot (only bytes that differ), then verify it.
 pub fn store<B: Board>(prog: &Program, b: &mut B) -> Result<(), StoreError> {
-    let _ = (prog, b);
-    Err(StoreError::Verify)
+    let img = image::encode(prog);
+    let [a0, a1] = SLOT_ADDR;
+    let (target, seq) = match newest_slot(b) {
+        Some((newest, s)) => (if newest == a0 { a1 } else { a0 }, s.wrapping_add(1)),
+        None => (a0, 1),
+    };
+
+    // 1. Invalidate for certain while the body changes.
+    let body_changes = img
+        .iter()
+        .enumerate()
+        .skip(1)
+        .any(|(i, &v)| b.eeprom_read(image_addr(target, i)) != v);
+    if body_changes && b.eeprom_read(image_addr(target, 0)) == image::MAGIC[0] {
+        b.eeprom_update(image_addr(target, 0), 0x00);
+        b.feed_watchdog();
+    }
+    // 2. The body (eeprom_update skips bytes that are already right).
+    for (i, &v) in img.iter().enumerate().skip(1) {
+        b.eeprom_update(image_addr(target, i), v);
+        b.feed_watchdog();
+    }
+    // 3. The image is complete: make it valid.
+    b.eeprom_update(image_addr(target, 0), image::MAGIC[0]);
+    b.feed_watchdog();
+    // 4. Make it the newest.
+    let [lo, hi] = seq.to_le_bytes();
+    b.eeprom_update(target, lo);
+    b.feed_watchdog();
+    b.eeprom_update(target.wrapping_add(1), hi);
+    b.feed_watchdog();
+
+    // Read back everything.
+    let seq_ok = b.eeprom_read(target) == lo && b.eeprom_read(target.wrapping_add(1)) == hi;
+    let img_ok = img
+        .iter()
+        .enumerate()
+        .all(|(i, &v)| b.eeprom_read(image_addr(target, i)) == v);
+    if seq_ok && img_ok {
+        Ok(())
+    } else {
+        Err(StoreError::Verify)
+    }
 }
 
 /// The program in the newest slot whose image is valid.
 pub fn load<B: Board>(b: &mut B) -> Result<Program, LoadError> {
-    let _ = b;
-    Err(LoadError::NoValidImage)
+    let (slot, _) = newest_slot(b).ok_or(LoadError::NoValidImage)?;
+    let mut prog = Program::blank();
+    for (i, line) in prog.uf.iter_mut().enumerate() {
+        *line = b.eeprom_read(image_addr(slot, UF_OFFSET + i));
+    }
+    for (i, preset) in prog.presets.iter_mut().enumerate() {
+        *preset = b.eeprom_read(image_addr(slot, PRESETS_OFFSET + i));
+    }
+    b.feed_watchdog();
+    Ok(prog)
 }

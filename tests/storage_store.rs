@@ -1,0 +1,553 @@
+//! Two-slot EEPROM storage (SPEC §9, docs/FORMAT.md): alternation, sequence wrap, writing
+//! only changed bytes, read-back verification, and fault injection (a reset at every point
+//! of a STORE, flipped bytes, erased and random EEPROM).
+
+use utile::core::board::Board;
+use utile::core::engine::Program;
+use utile::core::image;
+use utile::core::store::{self, LoadError, StoreError, SLOT_ADDR};
+use utile::sim::SimBoard;
+
+struct Rng(u32);
+impl Rng {
+    fn next(&mut self) -> u32 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 17;
+        self.0 ^= self.0 << 5;
+        self.0
+    }
+    fn byte(&mut self) -> u8 {
+        (self.next() >> 24) as u8
+    }
+}
+
+fn random_program(rng: &mut Rng) -> Program {
+    let mut p = Program::blank();
+    p.uf.iter_mut().for_each(|b| *b = rng.byte());
+    p.presets.iter_mut().for_each(|b| *b = rng.byte());
+    p
+}
+
+/// A typical small program: a few lines, the rest blank.
+fn small_program() -> Program {
+    let mut p = Program::blank();
+    p.uf[..6].copy_from_slice(&[0x20, 0x30, 0x03, 0x40, 0x01, 0x00]);
+    p.presets[4] = 5;
+    p
+}
+
+fn seq(b: &SimBoard, slot: usize) -> u16 {
+    let a = usize::from(SLOT_ADDR[slot]);
+    u16::from_le_bytes([b.eeprom[a], b.eeprom[a + 1]])
+}
+
+fn slot_image(b: &SimBoard, slot: usize) -> &[u8] {
+    let a = usize::from(SLOT_ADDR[slot]) + 2;
+    &b.eeprom[a..a + image::IMAGE_LEN]
+}
+
+/// How a write cut by a reset leaves the byte being written.
+#[derive(Clone, Copy, Debug)]
+enum Tear {
+    /// The write never started.
+    Old,
+    /// Erased (0xFF) but not yet programmed.
+    Erased,
+    /// Some bits programmed: old AND new.
+    Partial,
+}
+
+/// A board whose EEPROM stops taking writes after `budget` byte writes (a reset in the
+/// middle of STORE); the interrupted write leaves the byte as `tear` says.
+struct FaultBoard {
+    inner: SimBoard,
+    budget: u32,
+    tear: Tear,
+    torn: bool,
+}
+
+impl Board for FaultBoard {
+    fn inputs(&mut self) -> u8 {
+        self.inner.inputs()
+    }
+    fn take_leading(&mut self, mask: u8) -> bool {
+        self.inner.take_leading(mask)
+    }
+    fn take_trailing(&mut self, mask: u8) -> bool {
+        self.inner.take_trailing(mask)
+    }
+    fn toggles(&mut self) -> u8 {
+        self.inner.toggles()
+    }
+    fn resync_inputs(&mut self) {
+        self.inner.resync_inputs()
+    }
+    fn clocks(&mut self) -> u8 {
+        self.inner.clocks()
+    }
+    fn now_ms(&mut self) -> u32 {
+        self.inner.now_ms()
+    }
+    fn write_outputs(&mut self, py: u8) {
+        self.inner.write_outputs(py)
+    }
+    fn rx(&mut self) -> Option<u8> {
+        self.inner.rx()
+    }
+    fn tx(&mut self, byte: u8) {
+        self.inner.tx(byte)
+    }
+    fn tx_room(&mut self) -> u8 {
+        self.inner.tx_room()
+    }
+    fn eeprom_read(&mut self, addr: u16) -> u8 {
+        self.inner.eeprom_read(addr)
+    }
+    fn eeprom_update(&mut self, addr: u16, value: u8) {
+        let old = self.inner.eeprom_read(addr);
+        if old == value {
+            return;
+        }
+        if self.budget > 0 {
+            self.budget -= 1;
+            self.inner.eeprom_update(addr, value);
+        } else if !self.torn {
+            self.torn = true;
+            let left = match self.tear {
+                Tear::Old => old,
+                Tear::Erased => 0xFF,
+                Tear::Partial => old & value,
+            };
+            self.inner.eeprom_update(addr, left);
+        }
+    }
+}
+
+/// Byte writes a STORE of `new` over the EEPROM of `b` needs.
+fn writes_needed(b: &SimBoard, new: &Program) -> u32 {
+    let mut dry = b.clone();
+    dry.eeprom_writes = 0;
+    store::store(new, &mut dry).expect("store");
+    dry.eeprom_writes
+}
+
+/// Reset STORE of `new` after every possible number of writes, with every tear mode:
+/// afterwards LOAD must give `old` or `new` (or nothing when there was nothing before), and
+/// a following STORE must work. Returns the number of cases checked.
+fn reset_during_store(before: &SimBoard, old: Option<&Program>, new: &Program) -> u32 {
+    let total = writes_needed(before, new);
+    let mut cases = 0;
+    let mut saw_new = false;
+    let mut saw_old = false;
+    for n in 0..=total {
+        for tear in [Tear::Old, Tear::Erased, Tear::Partial] {
+            let mut fb = FaultBoard {
+                inner: before.clone(),
+                budget: n,
+                tear,
+                torn: false,
+            };
+            let result = store::store(new, &mut fb);
+            if n < total && matches!(tear, Tear::Old) {
+                assert_eq!(
+                    result,
+                    Err(StoreError::Verify),
+                    "cut after {n} of {total} writes"
+                );
+            } else if n < total {
+                // A torn byte may happen to hold the intended value; then STORE succeeded.
+                if result == Ok(()) {
+                    assert_eq!(store::load(&mut fb.inner.clone()).as_ref(), Ok(new));
+                }
+            } else {
+                assert_eq!(result, Ok(()));
+            }
+            // Reboot: plain board, LOAD.
+            let mut after = fb.inner;
+            match store::load(&mut after) {
+                Ok(p) if &p == new => saw_new = true,
+                Ok(p) => {
+                    assert_eq!(Some(&p), old, "garbage after cut {n}/{total} ({tear:?})");
+                    saw_old = true;
+                }
+                Err(LoadError::NoValidImage) => {
+                    assert!(
+                        old.is_none(),
+                        "old program lost after cut {n}/{total} ({tear:?})"
+                    )
+                }
+            }
+            // The next STORE works and wins.
+            let mut next = new.clone();
+            next.uf[200] = next.uf[200].wrapping_add(1);
+            assert_eq!(store::store(&next, &mut after), Ok(()));
+            assert_eq!(store::load(&mut after), Ok(next));
+            cases += 1;
+        }
+    }
+    assert!(saw_new, "the complete STORE gives the new program");
+    assert!(
+        saw_old || old.is_none() || old == Some(new),
+        "an early cut keeps the old one"
+    );
+    cases
+}
+
+#[test]
+fn erased_eeprom_has_no_image_and_load_changes_nothing() {
+    let mut b = SimBoard::new();
+    assert_eq!(store::load(&mut b), Err(LoadError::NoValidImage));
+    assert_eq!(b.eeprom_writes, 0);
+    assert!(b.eeprom.iter().all(|&x| x == 0xFF));
+}
+
+#[test]
+fn random_eeprom_has_no_image() {
+    let mut rng = Rng(0xABCD);
+    for _ in 0..300 {
+        let mut b = SimBoard::new();
+        b.eeprom.iter_mut().for_each(|x| *x = rng.byte());
+        let snapshot = b.eeprom.clone();
+        assert_eq!(store::load(&mut b), Err(LoadError::NoValidImage));
+        assert_eq!(b.eeprom, snapshot, "LOAD never writes");
+        // Random contents with a correct header still fail the CRC.
+        for &a in &SLOT_ADDR {
+            let a = usize::from(a) + 2;
+            b.eeprom[a..a + 4].copy_from_slice(&[b'u', b'T', 1, 0]);
+        }
+        assert_eq!(store::load(&mut b), Err(LoadError::NoValidImage));
+        // And STORE works on top of any junk.
+        let p = random_program(&mut rng);
+        assert_eq!(store::store(&p, &mut b), Ok(()));
+        assert_eq!(store::load(&mut b), Ok(p));
+    }
+}
+
+#[test]
+fn store_then_load_round_trip_and_slots_alternate() {
+    let mut rng = Rng(42);
+    let mut b = SimBoard::new();
+    let mut expect_slot = 0;
+    for k in 1..=10u16 {
+        let p = random_program(&mut rng);
+        assert_eq!(store::store(&p, &mut b), Ok(()));
+        assert_eq!(
+            slot_image(&b, expect_slot),
+            &image::encode(&p)[..],
+            "STORE {k}"
+        );
+        assert_eq!(seq(&b, expect_slot), k, "sequence numbers count up");
+        assert_eq!(store::load(&mut b), Ok(p.clone()));
+        // The other slot still holds the previous program (if any).
+        expect_slot ^= 1;
+    }
+    // Slot layout: nothing outside the two slots is touched.
+    assert!(b.eeprom[0x118..0x200].iter().all(|&x| x == 0xFF));
+    assert!(b.eeprom[0x318..].iter().all(|&x| x == 0xFF));
+}
+
+#[test]
+fn sequence_number_wraps() {
+    let mut b = SimBoard::new();
+    let progs: Vec<Program> = (0..6u8)
+        .map(|k| {
+            let mut p = small_program();
+            p.uf[10] = k;
+            p
+        })
+        .collect();
+    store::store(&progs[0], &mut b).unwrap();
+    // Pretend slot 0 was stored as number 0xFFFE.
+    b.eeprom[0] = 0xFE;
+    b.eeprom[1] = 0xFF;
+    assert_eq!(store::load(&mut b), Ok(progs[0].clone()));
+    let expected = [(1, 0xFFFF), (0, 0x0000), (1, 0x0001), (0, 0x0002)];
+    for (k, &(slot, s)) in expected.iter().enumerate() {
+        store::store(&progs[k + 1], &mut b).unwrap();
+        assert_eq!(seq(&b, slot), s);
+        assert_eq!(
+            store::load(&mut b),
+            Ok(progs[k + 1].clone()),
+            "after wrap step {k}"
+        );
+    }
+}
+
+#[test]
+fn only_changed_bytes_are_written() {
+    let mut b = SimBoard::new();
+    let mut p = small_program();
+
+    // First STORE on erased EEPROM.
+    store::store(&p, &mut b).unwrap();
+    let first = b.eeprom_writes;
+
+    // Fill the second slot too, then one-line edits as a user makes them.
+    let mut counts = Vec::new();
+    for line in 6..14 {
+        p.uf[line] = 0x20 + line as u8;
+        let before = b.eeprom_writes;
+        store::store(&p, &mut b).unwrap();
+        counts.push(b.eeprom_writes - before);
+        assert_eq!(store::load(&mut b), Ok(p.clone()));
+    }
+    // Steady state: the older slot is two edits behind, so two lines differ; plus the CRC
+    // (2), the magic clear/restore (2) and the sequence number (1 or 2).
+    let typical = *counts.last().unwrap();
+    assert!(typical <= 8, "one-line edit wrote {typical} bytes");
+
+    // The same program again: only the sequence number (and the lines the older slot lacks).
+    let before = b.eeprom_writes;
+    store::store(&p, &mut b).unwrap();
+    let same_again = b.eeprom_writes - before;
+    let before = b.eeprom_writes;
+    store::store(&p, &mut b).unwrap();
+    let same_twice = b.eeprom_writes - before;
+    assert!(
+        same_twice <= 2,
+        "identical slot: only the sequence number ({same_twice})"
+    );
+
+    // A full rewrite: every line and preset different from both slots.
+    let mut q = p.clone();
+    q.uf.iter_mut().for_each(|x| *x ^= 0x5A);
+    q.presets.iter_mut().for_each(|x| *x ^= 0xA5);
+    let before = b.eeprom_writes;
+    store::store(&q, &mut b).unwrap();
+    let full = b.eeprom_writes - before;
+    assert!((272..=278).contains(&full), "full rewrite wrote {full}");
+
+    let ms = |n: u32| f64::from(n) * 3.3;
+    println!("STORE figures (EEPROM byte writes, at 3.3 ms each):");
+    println!(
+        "  first STORE on erased EEPROM: {first} writes = {:.0} ms",
+        ms(first)
+    );
+    println!("  one-line edits, successive STOREs: {counts:?}");
+    println!(
+        "  typical one-line change: {typical} writes = {:.0} ms",
+        ms(typical)
+    );
+    println!("  same program again: {same_again} then {same_twice} writes");
+    println!("  full rewrite: {full} writes = {:.0} ms", ms(full));
+}
+
+#[test]
+fn reset_at_every_point_of_a_store() {
+    let mut rng = Rng(0x5EED);
+    let mut cases = 0;
+
+    // First STORE ever: nothing or the new program.
+    let erased = SimBoard::new();
+    let p = random_program(&mut rng);
+    cases += reset_during_store(&erased, None, &p);
+
+    for round in 0..12 {
+        // Two programs already stored (both slots valid), then a third.
+        let mut b = SimBoard::new();
+        let a = random_program(&mut rng);
+        let old = random_program(&mut rng);
+        store::store(&a, &mut b).unwrap();
+        if round % 3 != 0 {
+            store::store(&old, &mut b).unwrap();
+        }
+        let old_now = store::load(&mut b).unwrap();
+        let new = match round % 4 {
+            0 => random_program(&mut rng), // full rewrite
+            1 => {
+                let mut n = old_now.clone();
+                n.uf[(rng.next() % 256) as usize] ^= 0x11; // one line
+                n
+            }
+            2 => {
+                let mut n = old_now.clone();
+                n.presets[3] = n.presets[3].wrapping_add(1); // one preset
+                n
+            }
+            _ => old_now.clone(), // the same program again
+        };
+        cases += reset_during_store(&b, Some(&old_now), &new);
+    }
+    println!("reset-during-STORE cases checked: {cases}");
+    assert!(cases > 3000);
+}
+
+#[test]
+fn flipped_bytes_in_either_slot_fall_back_to_the_other() {
+    let mut rng = Rng(31337);
+    let a = random_program(&mut rng);
+    let bp = random_program(&mut rng);
+    let mut base = SimBoard::new();
+    store::store(&a, &mut base).unwrap(); // slot 0, older
+    store::store(&bp, &mut base).unwrap(); // slot 1, newest
+    assert_eq!(store::load(&mut base.clone()), Ok(bp.clone()));
+
+    for (slot, survivor) in [(0usize, &bp), (1, &a)] {
+        let start = usize::from(SLOT_ADDR[slot]);
+        for i in 2..2 + image::IMAGE_LEN {
+            for flip in [0x01u8, 0x80] {
+                let mut b = base.clone();
+                b.eeprom[start + i] ^= flip;
+                assert_eq!(
+                    store::load(&mut b),
+                    Ok(survivor.clone()),
+                    "slot {slot} byte {i}"
+                );
+            }
+        }
+        // A flipped sequence number only changes which (valid) program is newest.
+        for i in 0..2 {
+            let mut b = base.clone();
+            b.eeprom[start + i] ^= 0x80;
+            let got = store::load(&mut b).unwrap();
+            assert!(got == a || got == bp);
+        }
+    }
+
+    // Damage the newest slot, then STORE: it must go into the damaged slot and keep `a`.
+    let mut b = base.clone();
+    b.eeprom[usize::from(SLOT_ADDR[1]) + 100] ^= 0xFF;
+    let c = random_program(&mut rng);
+    store::store(&c, &mut b).unwrap();
+    assert_eq!(
+        slot_image(&b, 0),
+        &image::encode(&a)[..],
+        "the good slot is kept"
+    );
+    assert_eq!(store::load(&mut b), Ok(c));
+
+    // Both damaged: nothing to load.
+    let mut b = base.clone();
+    b.eeprom[10] ^= 1;
+    b.eeprom[usize::from(SLOT_ADDR[1]) + 10] ^= 1;
+    assert_eq!(store::load(&mut b), Err(LoadError::NoValidImage));
+}
+
+/// A board with a stuck EEPROM cell (writes to it are lost).
+#[test]
+fn failing_eeprom_is_reported_and_the_old_program_kept() {
+    let mut rng = Rng(8);
+    let old = random_program(&mut rng);
+    let new = random_program(&mut rng);
+    let mut base = SimBoard::new();
+    store::store(&old, &mut base).unwrap(); // slot 0
+                                            // Slot 1 byte 50 is stuck at its erased value, which differs from the new image.
+    let stuck = usize::from(SLOT_ADDR[1]) + 50;
+    assert_ne!(image::encode(&new)[48], 0xFF);
+    let mut fb = FaultBoard {
+        inner: base,
+        budget: u32::MAX,
+        tear: Tear::Old,
+        torn: false,
+    };
+    struct Stuck<'a>(&'a mut FaultBoard, usize);
+    impl Board for Stuck<'_> {
+        fn inputs(&mut self) -> u8 {
+            self.0.inputs()
+        }
+        fn take_leading(&mut self, m: u8) -> bool {
+            self.0.take_leading(m)
+        }
+        fn take_trailing(&mut self, m: u8) -> bool {
+            self.0.take_trailing(m)
+        }
+        fn toggles(&mut self) -> u8 {
+            self.0.toggles()
+        }
+        fn resync_inputs(&mut self) {
+            self.0.resync_inputs()
+        }
+        fn clocks(&mut self) -> u8 {
+            self.0.clocks()
+        }
+        fn now_ms(&mut self) -> u32 {
+            self.0.now_ms()
+        }
+        fn write_outputs(&mut self, py: u8) {
+            self.0.write_outputs(py)
+        }
+        fn rx(&mut self) -> Option<u8> {
+            self.0.rx()
+        }
+        fn tx(&mut self, b: u8) {
+            self.0.tx(b)
+        }
+        fn tx_room(&mut self) -> u8 {
+            self.0.tx_room()
+        }
+        fn eeprom_read(&mut self, a: u16) -> u8 {
+            self.0.eeprom_read(a)
+        }
+        fn eeprom_update(&mut self, a: u16, v: u8) {
+            if usize::from(a) != self.1 {
+                self.0.eeprom_update(a, v)
+            }
+        }
+    }
+    assert_eq!(
+        store::store(&new, &mut Stuck(&mut fb, stuck)),
+        Err(StoreError::Verify)
+    );
+    assert_eq!(store::load(&mut fb.inner), Ok(old));
+}
+
+/// STORE feeds the watchdog while it writes (each byte takes 3.3 ms on the chip).
+#[test]
+fn store_feeds_the_watchdog() {
+    struct Dog(SimBoard, u32, u32, u32);
+    impl Board for Dog {
+        fn inputs(&mut self) -> u8 {
+            self.0.inputs()
+        }
+        fn take_leading(&mut self, m: u8) -> bool {
+            self.0.take_leading(m)
+        }
+        fn take_trailing(&mut self, m: u8) -> bool {
+            self.0.take_trailing(m)
+        }
+        fn toggles(&mut self) -> u8 {
+            self.0.toggles()
+        }
+        fn resync_inputs(&mut self) {
+            self.0.resync_inputs()
+        }
+        fn clocks(&mut self) -> u8 {
+            self.0.clocks()
+        }
+        fn now_ms(&mut self) -> u32 {
+            self.0.now_ms()
+        }
+        fn write_outputs(&mut self, py: u8) {
+            self.0.write_outputs(py)
+        }
+        fn rx(&mut self) -> Option<u8> {
+            self.0.rx()
+        }
+        fn tx(&mut self, b: u8) {
+            self.0.tx(b)
+        }
+        fn tx_room(&mut self) -> u8 {
+            self.0.tx_room()
+        }
+        fn eeprom_read(&mut self, a: u16) -> u8 {
+            self.0.eeprom_read(a)
+        }
+        fn eeprom_update(&mut self, a: u16, v: u8) {
+            if self.0.eeprom_read(a) != v {
+                // Writes since the last feed.
+                self.1 += 1;
+                self.3 = self.3.max(self.1);
+            }
+            self.0.eeprom_update(a, v)
+        }
+        fn feed_watchdog(&mut self) {
+            self.1 = 0;
+            self.2 += 1;
+        }
+    }
+    let mut rng = Rng(3);
+    let mut d = Dog(SimBoard::new(), 0, 0, 0);
+    store::store(&random_program(&mut rng), &mut d).unwrap();
+    assert!(d.2 >= 278, "fed {} times", d.2);
+    assert_eq!(d.3, 1, "at most one byte write between feeds");
+}
