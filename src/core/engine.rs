@@ -15,6 +15,18 @@ pub const TIMER_UNIT_MS: [u32; UNITS] = [
     60_000, 400_000,
 ];
 
+/// Timer m's unit in milliseconds, by arithmetic rather than [`TIMER_UNIT_MS`], which as a
+/// table would sit in RAM on the chip.
+#[inline]
+pub fn unit_ms(m: u8) -> u32 {
+    match m {
+        0..=3 => 100,
+        4..=11 => 1_000,
+        12..=14 => 60_000,
+        _ => 400_000,
+    }
+}
+
 /// The user's program: UF0 and the 16 timer presets. This is what STORE/LOAD/READ/WRITE move.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Program {
@@ -201,7 +213,7 @@ impl Engine {
         if preset == 0 {
             return;
         }
-        let unit = TIMER_UNIT_MS.get(i).copied().unwrap_or(0);
+        let unit = unit_ms(m);
         let due = b.now_ms().wrapping_add(u32::from(preset) * unit);
         if let Some(d) = self.deadline.get_mut(i) {
             *d = due;
@@ -335,5 +347,17 @@ fn set_bit16(word: &mut u16, n: u8, v: bool) {
         *word |= mask;
     } else {
         *word &= !mask;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unit_arithmetic_matches_the_table() {
+        for m in 0..UNITS as u8 {
+            assert_eq!(unit_ms(m), TIMER_UNIT_MS[usize::from(m)], "T{m:X}");
+        }
     }
 }

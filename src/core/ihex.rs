@@ -66,9 +66,16 @@ fn hex_value(c: u8) -> Option<u8> {
 /// line ends, then the end-of-file record `:00000001FF` CR LF. The last data record is
 /// shorter when the length is not a multiple of 16 (278 = 17 × 16 + 6).
 pub fn write_hex(image: &[u8], out: &mut impl FnMut(u8)) {
+    write_hex_with(image.len(), |i| image.get(i).copied().unwrap_or(0), out);
+}
+
+/// [`write_hex`] of a `len`-byte image whose byte `i` is `byte(i)`: WRITE streams the image
+/// this way instead of building a copy on the chip's stack.
+pub fn write_hex_with(len: usize, byte_at: impl Fn(usize) -> u8, out: &mut impl FnMut(u8)) {
     let mut addr: u16 = 0;
-    for chunk in image.chunks(RECORD_LEN) {
-        // A chunk holds at most 16 bytes, so its length fits a u8.
+    for start in (0..len).step_by(RECORD_LEN) {
+        let chunk = start..len.min(start + RECORD_LEN);
+        // A record holds at most 16 bytes, so its length fits a u8.
         let count = chunk.len() as u8;
         let [hi, lo] = addr.to_be_bytes();
         let mut sum = count.wrapping_add(hi).wrapping_add(lo);
@@ -81,7 +88,7 @@ pub fn write_hex(image: &[u8], out: &mut impl FnMut(u8)) {
         byte(hi);
         byte(lo);
         byte(0x00);
-        for &b in chunk {
+        for b in chunk.map(&byte_at) {
             sum = sum.wrapping_add(b);
             byte(b);
         }

@@ -68,28 +68,33 @@ pub fn crc16(bytes: &[u8]) -> u16 {
     bytes.iter().fold(0xFFFF, |crc, &b| crc16_update(crc, b))
 }
 
+/// Byte `i` of `prog`'s image, where `crc` is [`image_crc`]`(prog)`. Lets STORE and WRITE
+/// stream the image without a 278-byte copy on the chip's small stack.
+pub fn image_byte(prog: &Program, crc: u16, i: usize) -> u8 {
+    match i {
+        0 => MAGIC[0],
+        1 => MAGIC[1],
+        VERSION_OFFSET => VERSION,
+        RESERVED_OFFSET => 0,
+        _ if i < PRESETS_OFFSET => prog.uf.get(i - UF_OFFSET).copied().unwrap_or(0),
+        _ if i < CRC_OFFSET => prog.presets.get(i - PRESETS_OFFSET).copied().unwrap_or(0),
+        CRC_OFFSET => crc.to_be_bytes()[0],
+        _ => crc.to_be_bytes()[1],
+    }
+}
+
+/// The CRC of `prog`'s image (over every byte before the CRC).
+pub fn image_crc(prog: &Program) -> u16 {
+    (0..CRC_OFFSET).fold(0xFFFF, |crc, i| crc16_update(crc, image_byte(prog, 0, i)))
+}
+
 /// The image bytes of a program.
 pub fn encode(prog: &Program) -> [u8; IMAGE_LEN] {
+    let crc = image_crc(prog);
     let mut out = [0u8; IMAGE_LEN];
-    out[0] = MAGIC[0];
-    out[1] = MAGIC[1];
-    out[VERSION_OFFSET] = VERSION;
-    out[RESERVED_OFFSET] = 0;
-    for (dst, &src) in out[UF_OFFSET..PRESETS_OFFSET]
-        .iter_mut()
-        .zip(prog.uf.iter())
-    {
-        *dst = src;
+    for (i, byte) in out.iter_mut().enumerate() {
+        *byte = image_byte(prog, crc, i);
     }
-    for (dst, &src) in out[PRESETS_OFFSET..CRC_OFFSET]
-        .iter_mut()
-        .zip(prog.presets.iter())
-    {
-        *dst = src;
-    }
-    let crc = crc16(&out[..CRC_OFFSET]).to_be_bytes();
-    out[CRC_OFFSET] = crc[0];
-    out[CRC_OFFSET + 1] = crc[1];
     out
 }
 
@@ -107,28 +112,23 @@ pub fn check_header(magic: [u8; 2], version: u8) -> Result<(), ImageError> {
 /// Check and decode an image: length, magic, version, then CRC. Any opcode byte is
 /// accepted (unassigned opcodes run as NOP), and so is any preset 0..255.
 pub fn decode(bytes: &[u8]) -> Result<Program, ImageError> {
+    let mut prog = Program::blank();
+    decode_into(bytes, &mut prog)?;
+    Ok(prog)
+}
+
+/// [`decode`] straight into `prog`, which changes only if the image is valid (no
+/// 272-byte temporary on the chip's stack).
+pub fn decode_into(bytes: &[u8], prog: &mut Program) -> Result<(), ImageError> {
     let img: &[u8; IMAGE_LEN] = bytes.try_into().map_err(|_| ImageError::Length)?;
     check_header([img[0], img[1]], img[VERSION_OFFSET])?;
     let stored = u16::from_be_bytes([img[CRC_OFFSET], img[CRC_OFFSET + 1]]);
     if crc16(&img[..CRC_OFFSET]) != stored {
         return Err(ImageError::Crc);
     }
-    let mut prog = Program::blank();
-    for (dst, &src) in prog
-        .uf
-        .iter_mut()
-        .zip(img[UF_OFFSET..PRESETS_OFFSET].iter())
-    {
-        *dst = src;
-    }
-    for (dst, &src) in prog
-        .presets
-        .iter_mut()
-        .zip(img[PRESETS_OFFSET..CRC_OFFSET].iter())
-    {
-        *dst = src;
-    }
-    Ok(prog)
+    prog.uf.copy_from_slice(&img[UF_OFFSET..PRESETS_OFFSET]);
+    prog.presets.copy_from_slice(&img[PRESETS_OFFSET..CRC_OFFSET]);
+    Ok(())
 }
 
 #[cfg(test)]

@@ -157,6 +157,102 @@ pub const FAMILIES: [Family; 16] = [
 /// Longest command name (`CLKA.`, `.TK0`): 5 characters.
 pub const MAX_NAME: usize = 5;
 
+/// Bytes of one family record in flash: base, count, prefix (3, NUL-padded), suffix (or NUL).
+const FAM_REC: usize = 6;
+
+/// The single names as NUL-padded 5-byte slots, built at compile time.
+const fn single_slots() -> [u8; SINGLES.len() * MAX_NAME] {
+    let mut out = [0u8; SINGLES.len() * MAX_NAME];
+    let mut i = 0;
+    while i < SINGLES.len() {
+        let name = SINGLES[i].as_bytes();
+        let mut j = 0;
+        while j < name.len() {
+            out[i * MAX_NAME + j] = name[j];
+            j += 1;
+        }
+        i += 1;
+    }
+    out
+}
+
+/// The family table as flat records, built at compile time.
+const fn family_records() -> [u8; FAMILIES.len() * FAM_REC] {
+    let mut out = [0u8; FAMILIES.len() * FAM_REC];
+    let mut i = 0;
+    while i < FAMILIES.len() {
+        let f = &FAMILIES[i];
+        out[i * FAM_REC] = f.base;
+        out[i * FAM_REC + 1] = f.count;
+        let p = f.prefix.as_bytes();
+        let mut j = 0;
+        while j < p.len() {
+            out[i * FAM_REC + 2 + j] = p[j];
+            j += 1;
+        }
+        let s = f.suffix.as_bytes();
+        if !s.is_empty() {
+            out[i * FAM_REC + 5] = s[0];
+        }
+        i += 1;
+    }
+    out
+}
+
+// The name tables are read a byte at a time from flash: as RAM statics they would cost
+// about 400 of the chip's 2048 bytes.
+avr_progmem::progmem! {
+    static progmem SINGLE_NAMES: [u8; SINGLES.len() * MAX_NAME] = single_slots();
+    static progmem FAMILY_RECORDS: [u8; FAMILIES.len() * FAM_REC] = family_records();
+}
+
+/// One family as read from flash.
+#[derive(Clone, Copy)]
+struct FamRec([u8; FAM_REC]);
+
+impl FamRec {
+    fn load(i: usize) -> Option<Self> {
+        if i >= FAMILIES.len() {
+            return None;
+        }
+        let mut r = [0u8; FAM_REC];
+        for (k, slot) in r.iter_mut().enumerate() {
+            *slot = FAMILY_RECORDS.load_at(i * FAM_REC + k);
+        }
+        Some(Self(r))
+    }
+    fn base(&self) -> u8 {
+        self.0[0]
+    }
+    fn count(&self) -> u8 {
+        self.0[1]
+    }
+    fn prefix(&self) -> &[u8] {
+        let p = &self.0[2..5];
+        let len = p.iter().position(|&c| c == 0).unwrap_or(p.len());
+        p.get(..len).unwrap_or(&[])
+    }
+    fn suffix(&self) -> &[u8] {
+        let s = &self.0[5..6];
+        if s.first() == Some(&0) {
+            &[]
+        } else {
+            s
+        }
+    }
+    fn holds(&self, op: u8) -> bool {
+        op >= self.base() && op - self.base() < self.count()
+    }
+}
+
+/// Index of the family holding `op`, with the number.
+fn find_family(op: u8) -> Option<(FamRec, u8)> {
+    (0..FAMILIES.len()).find_map(|i| {
+        let f = FamRec::load(i)?;
+        f.holds(op).then(|| (f, op - f.base()))
+    })
+}
+
 /// A command name, spelled into a small fixed buffer (no heap, no RAM tables).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Name {
@@ -165,12 +261,10 @@ pub struct Name {
 }
 
 impl Name {
-    fn push_str(&mut self, s: &str) {
-        for &b in s.as_bytes() {
-            if let Some(slot) = self.buf.get_mut(usize::from(self.len)) {
-                *slot = b;
-                self.len += 1;
-            }
+    fn push(&mut self, b: u8) {
+        if let Some(slot) = self.buf.get_mut(usize::from(self.len)) {
+            *slot = b;
+            self.len += 1;
         }
     }
 
@@ -194,7 +288,7 @@ fn hex_digit(n: u8) -> u8 {
     }
 }
 
-/// The family an opcode belongs to, with its number.
+/// The family an opcode belongs to, with its number (documentation and tools).
 pub fn family_of(op: u8) -> Option<(&'static Family, u8)> {
     FAMILIES
         .iter()
@@ -205,23 +299,27 @@ pub fn family_of(op: u8) -> Option<(&'static Family, u8)> {
 /// The command name of an opcode, or `None` for a blank or unassigned byte (shown `.....`).
 pub fn name(op: u8) -> Option<Name> {
     let mut n = Name { buf: [0; MAX_NAME], len: 0 };
-    if let Some(s) = SINGLES.get(usize::from(op)) {
-        n.push_str(s);
+    let i = usize::from(op);
+    if i < SINGLES.len() {
+        for k in 0..MAX_NAME {
+            let c = SINGLE_NAMES.load_at(i * MAX_NAME + k);
+            if c == 0 {
+                break;
+            }
+            n.push(c);
+        }
         return Some(n);
     }
-    let (fam, num) = family_of(op)?;
-    n.push_str(fam.prefix);
-    if let Some(slot) = n.buf.get_mut(usize::from(n.len)) {
-        *slot = hex_digit(num);
-        n.len += 1;
-    }
-    n.push_str(fam.suffix);
+    let (fam, num) = find_family(op)?;
+    fam.prefix().iter().for_each(|&c| n.push(c));
+    n.push(hex_digit(num));
+    fam.suffix().iter().for_each(|&c| n.push(c));
     Some(n)
 }
 
 /// True if the byte is an assigned opcode (not blank, not reserved).
 pub fn is_valid(op: u8) -> bool {
-    usize::from(op) < SINGLES.len() || family_of(op).is_some()
+    usize::from(op) < SINGLES.len() || find_family(op).is_some()
 }
 
 /// Value of one hex digit, either case.
@@ -241,11 +339,17 @@ fn eq_fold(a: &[u8], b: &[u8]) -> bool {
 
 /// The opcode of an executable command name (any case), or `None`.
 pub fn lookup(word: &[u8]) -> Option<u8> {
-    if let Some(i) = SINGLES.iter().position(|s| eq_fold(s.as_bytes(), word)) {
-        return u8::try_from(i).ok();
+    if word.len() > MAX_NAME {
+        return None;
     }
-    FAMILIES.iter().find_map(|f| {
-        let (p, s) = (f.prefix.as_bytes(), f.suffix.as_bytes());
+    for op in 0..SINGLES.len() as u8 {
+        if name(op).is_some_and(|n| eq_fold(n.as_bytes(), word)) {
+            return Some(op);
+        }
+    }
+    (0..FAMILIES.len()).find_map(|i| {
+        let f = FamRec::load(i)?;
+        let (p, s) = (f.prefix(), f.suffix());
         if word.len() != p.len() + 1 + s.len() {
             return None;
         }
@@ -255,7 +359,7 @@ pub fn lookup(word: &[u8]) -> Option<u8> {
             return None;
         }
         let n = hex_value(*digit.first()?)?;
-        (n < f.count).then_some(f.base + n)
+        (n < f.count()).then_some(f.base() + n)
     })
 }
 

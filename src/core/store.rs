@@ -91,7 +91,8 @@ pub fn newest_slot<B: Board>(b: &mut B) -> Option<(u16, u16)> {
 
 /// Write `prog` into the older slot (only bytes that differ), then verify it.
 pub fn store<B: Board>(prog: &Program, b: &mut B) -> Result<(), StoreError> {
-    let img = image::encode(prog);
+    let crc = image::image_crc(prog);
+    let img = |i: usize| image::image_byte(prog, crc, i);
     let [a0, a1] = SLOT_ADDR;
     let (target, seq) = match newest_slot(b) {
         Some((newest, s)) => (if newest == a0 { a1 } else { a0 }, s.wrapping_add(1)),
@@ -99,18 +100,14 @@ pub fn store<B: Board>(prog: &Program, b: &mut B) -> Result<(), StoreError> {
     };
 
     // 1. Invalidate for certain while the body changes.
-    let body_changes = img
-        .iter()
-        .enumerate()
-        .skip(1)
-        .any(|(i, &v)| b.eeprom_read(image_addr(target, i)) != v);
+    let body_changes = (1..IMAGE_LEN).any(|i| b.eeprom_read(image_addr(target, i)) != img(i));
     if body_changes && b.eeprom_read(image_addr(target, 0)) == image::MAGIC[0] {
         b.eeprom_update(image_addr(target, 0), 0x00);
         b.feed_watchdog();
     }
     // 2. The body (eeprom_update skips bytes that are already right).
-    for (i, &v) in img.iter().enumerate().skip(1) {
-        b.eeprom_update(image_addr(target, i), v);
+    for i in 1..IMAGE_LEN {
+        b.eeprom_update(image_addr(target, i), img(i));
         b.feed_watchdog();
     }
     // 3. The image is complete: make it valid.
@@ -125,10 +122,7 @@ pub fn store<B: Board>(prog: &Program, b: &mut B) -> Result<(), StoreError> {
 
     // Read back everything.
     let seq_ok = b.eeprom_read(target) == lo && b.eeprom_read(target.wrapping_add(1)) == hi;
-    let img_ok = img
-        .iter()
-        .enumerate()
-        .all(|(i, &v)| b.eeprom_read(image_addr(target, i)) == v);
+    let img_ok = (0..IMAGE_LEN).all(|i| b.eeprom_read(image_addr(target, i)) == img(i));
     if seq_ok && img_ok {
         Ok(())
     } else {
@@ -138,8 +132,15 @@ pub fn store<B: Board>(prog: &Program, b: &mut B) -> Result<(), StoreError> {
 
 /// The program in the newest slot whose image is valid.
 pub fn load<B: Board>(b: &mut B) -> Result<Program, LoadError> {
-    let (slot, _) = newest_slot(b).ok_or(LoadError::NoValidImage)?;
     let mut prog = Program::blank();
+    load_into(b, &mut prog)?;
+    Ok(prog)
+}
+
+/// [`load`] straight into `prog`, which changes only if a valid image exists (no 272-byte
+/// temporary on the chip's stack).
+pub fn load_into<B: Board>(b: &mut B, prog: &mut Program) -> Result<(), LoadError> {
+    let (slot, _) = newest_slot(b).ok_or(LoadError::NoValidImage)?;
     for (i, line) in prog.uf.iter_mut().enumerate() {
         *line = b.eeprom_read(image_addr(slot, UF_OFFSET + i));
     }
@@ -147,5 +148,5 @@ pub fn load<B: Board>(b: &mut B) -> Result<Program, LoadError> {
         *preset = b.eeprom_read(image_addr(slot, PRESETS_OFFSET + i));
     }
     b.feed_watchdog();
-    Ok(prog)
+    Ok(())
 }

@@ -1,0 +1,106 @@
+//! VT100 output primitives: short cursor addressing, erase, reverse video, numbers.
+//!
+//! Numbers are printed by subtracting powers of ten (no division on the AVR).
+
+use super::super::board::Board;
+
+/// Send raw bytes.
+pub fn raw<B: Board>(b: &mut B, bytes: &[u8]) {
+    for &c in bytes {
+        b.feed_watchdog();
+        b.tx(c);
+    }
+}
+
+/// Cursor to `row`, `col` (1-based), in the shortest form (`ESC[rH` for column 1).
+pub fn goto<B: Board>(b: &mut B, row: u8, col: u8) {
+    raw(b, b"\x1b[");
+    num(b, u32::from(row));
+    if col > 1 {
+        b.tx(b';');
+        num(b, u32::from(col));
+    }
+    b.tx(b'H');
+}
+
+/// Erase to the end of the line.
+pub fn ceol<B: Board>(b: &mut B) {
+    raw(b, b"\x1b[K");
+}
+
+/// Reverse video on.
+pub fn reverse<B: Board>(b: &mut B) {
+    raw(b, b"\x1b[7m");
+}
+
+/// Attributes off.
+pub fn normal<B: Board>(b: &mut B) {
+    raw(b, b"\x1b[m");
+}
+
+/// Clear the screen.
+pub fn clear<B: Board>(b: &mut B) {
+    raw(b, b"\x1b[H\x1b[J");
+}
+
+const POW10: [u32; 9] = [
+    1_000_000_000,
+    100_000_000,
+    10_000_000,
+    1_000_000,
+    100_000,
+    10_000,
+    1_000,
+    100,
+    10,
+];
+
+/// The decimal digits of `v`, most significant first, `width` digits at least (leading zeros).
+fn digits<B: Board>(b: &mut B, mut v: u32, width: u8) {
+    let mut started = false;
+    for (i, &p) in POW10.iter().enumerate() {
+        let mut d = b'0';
+        while v >= p {
+            v -= p;
+            d += 1;
+        }
+        // Position of this digit counted from the right (10 for the first).
+        let place = (POW10.len() - i + 1) as u8;
+        if d != b'0' || started || place <= width {
+            started = true;
+            b.tx(d);
+        }
+    }
+    // `v` is now below 10.
+    b.tx(b'0' + v as u8);
+}
+
+/// A number without leading zeros.
+pub fn num<B: Board>(b: &mut B, v: u32) {
+    digits(b, v, 1);
+}
+
+/// A number with leading zeros to `width` digits.
+pub fn num_width<B: Board>(b: &mut B, v: u32, width: u8) {
+    digits(b, v, width);
+}
+
+/// A byte as 8 bits `7 6 .. 0`: `0 1 0 1 0 1 0 1` (15 characters).
+pub fn bits<B: Board>(b: &mut B, v: u8) {
+    for i in (0..8).rev() {
+        b.tx(if v & (1 << i) != 0 { b'1' } else { b'0' });
+        if i != 0 {
+            b.tx(b' ');
+        }
+    }
+}
+
+/// An upper-case hex digit.
+pub fn hex_digit(n: u8) -> u8 {
+    let n = n & 0x0F;
+    if n < 10 {
+        b'0' + n
+    } else {
+        b'A' + (n - 10)
+    }
+}

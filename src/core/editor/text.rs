@@ -1,0 +1,238 @@
+//! Every text the editor sends, kept in flash as one progmem blob.
+//!
+//! A text is named by a [`Txt`] (offset and length into the blob), computed at compile time,
+//! so RAM holds no strings and no per-text pointers.
+// The `progmem!` expansion contains `unsafe` blocks that place the blob in flash.
+#![allow(unsafe_code)]
+
+use avr_progmem::progmem;
+
+use super::super::board::Board;
+
+/// A text in the flash blob.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Txt {
+    off: u16,
+    len: u16,
+}
+
+impl Txt {
+    /// Number of bytes in the text.
+    pub const fn len(self) -> u16 {
+        self.len
+    }
+
+    /// True for an empty text.
+    pub const fn is_empty(self) -> bool {
+        self.len == 0
+    }
+
+    /// The text's byte at `i` (0 past the end).
+    pub fn byte(self, i: u16) -> u8 {
+        if i >= self.len {
+            return 0;
+        }
+        let at = usize::from(self.off) + usize::from(i);
+        if at < BLOB_LEN {
+            TEXT.load_at(at)
+        } else {
+            0
+        }
+    }
+
+    /// Send the text (waits while the transmit buffer is full).
+    pub fn send<B: Board>(self, b: &mut B) {
+        for i in 0..self.len {
+            b.feed_watchdog();
+            b.tx(self.byte(i));
+        }
+    }
+}
+
+/// Sum of the lengths of `parts[..n]`.
+const fn offset_of(parts: &[&str], n: usize) -> usize {
+    let mut i = 0;
+    let mut sum = 0;
+    while i < n {
+        sum += parts[i].len();
+        i += 1;
+    }
+    sum
+}
+
+/// All parts, concatenated.
+const fn join<const N: usize>(parts: &[&str]) -> [u8; N] {
+    let mut out = [0u8; N];
+    let mut at = 0;
+    let mut i = 0;
+    while i < parts.len() {
+        let s = parts[i].as_bytes();
+        let mut j = 0;
+        while j < s.len() {
+            out[at] = s[j];
+            at += 1;
+            j += 1;
+        }
+        i += 1;
+    }
+    out
+}
+
+/// The date this firmware version was built (shown by VER and the help screen).
+macro_rules! build_date {
+    () => {
+        "2026-11-22"
+    };
+}
+
+/// Declares the texts: each becomes a public [`Txt`] constant; all go into one blob.
+macro_rules! texts {
+    ($($(#[$m:meta])* $name:ident = $s:expr;)*) => {
+        const PARTS: &[&str] = &[$($s),*];
+        #[allow(non_camel_case_types, clippy::upper_case_acronyms, dead_code)]
+        enum Index { $($name),* }
+        $(
+            $(#[$m])*
+            pub const $name: Txt = Txt {
+                off: offset_of(PARTS, Index::$name as usize) as u16,
+                len: PARTS[Index::$name as usize].len() as u16,
+            };
+        )*
+    };
+}
+
+texts! {
+    /// Screen title, row 1.
+    TITLE = "<<<< Nano - u T I L E - ATmega328 >>>>";
+    /// Half a dashed separator row.
+    DASHES40 = "----------------------------------------";
+    /// Bit Stack label.
+    BIT_STACK = "Bit Stack";
+    /// Port Byte label.
+    PORT_BYTE = "Port Byte";
+    /// Data label.
+    DATA = "Data";
+    /// Bit numbers over a byte display.
+    BIT_NUMBERS = "7 6 5 4 3 2 1 0";
+    /// Underline of a byte display.
+    EQ15 = "===============";
+    /// Underline of the data display.
+    EQ5 = "=====";
+    /// The prompt.
+    ENTER = "Enter: ";
+    /// A blank line's name field.
+    DOTS = ".....";
+    /// EDIT mode status.
+    USER_FILE = "*** User File 0 ***";
+    /// RUN mode status.
+    RUNNING = "*** Running User File Program ***";
+    /// Waiting for a key.
+    STRIKE = "Strike any key -->";
+    /// Unknown input.
+    UNRECOGNIZED = "*** Unrecognized Input! ***";
+    /// More than 8 characters.
+    TOO_LONG = "*** Line too long (8 max) - refused ***";
+    /// A number past 65535.
+    TOO_BIG = "*** Number too big (65535 max) ***";
+    /// VER.
+    VERSION = concat!("*** Version ", env!("CARGO_PKG_VERSION"), " - ", build_date!(), " ***");
+    /// STORE in progress.
+    STORING = "Storing UF0, please wait ...";
+    /// STORE done.
+    STORED = "*** UF0 stored in EEPROM ***";
+    /// STORE failed.
+    STORE_FAILED = "*** STORE failed: EEPROM verify error ***";
+    /// LOAD done.
+    LOADED = "*** UF0 loaded from EEPROM ***";
+    /// LOAD found nothing.
+    NO_STORED = "*** No stored program - nothing loaded ***";
+    /// LDT labels, first row.
+    LDT_LABELS0 = "T0     T1     T2     T3     T4     T5     T6     T7";
+    /// LDT labels, second row.
+    LDT_LABELS1 = "T8     T9     TA     TB     TC     TD     TE     TF";
+    /// LDT underline.
+    LDT_EQ = "===================================================";
+    /// LDT status.
+    LDT_STATUS = "*** Load timers, Z clear all, <CR> exit ***";
+    /// Gap between two LDT values.
+    GAP4 = "    ";
+    /// WRITE prompt.
+    WRITE_PROMPT = "File write .... 'CR' to send .... '/' to abort";
+    /// READ prompt.
+    READ_PROMPT = "Reading file ...... '/' to abort";
+    /// Host transfer status.
+    TRANSFER = "*** Start/end host transfer procedure ***";
+    /// READ succeeded.
+    READ_DONE = "File read completed";
+    /// READ failed.
+    READ_ERROR = "Read error! - ";
+    /// After a READ.
+    FOR_MENU = " - 'CR' for menu -->";
+    /// Read error reason.
+    WHY_BAD_CHAR = "bad character";
+    /// Read error reason.
+    WHY_CHECKSUM = "record checksum";
+    /// Read error reason.
+    WHY_ADDRESS = "address out of range";
+    /// Read error reason.
+    WHY_RECORD_TYPE = "unknown record type";
+    /// Read error reason.
+    WHY_SHORT = "file too short";
+    /// Read error reason.
+    WHY_TOO_LONG = "record too long";
+    /// Read error reason.
+    WHY_TIMEOUT = "no end record (time-out)";
+    /// Read error reason.
+    WHY_ABORT = "aborted";
+    /// Read error reason.
+    WHY_LENGTH = "wrong image length";
+    /// Read error reason.
+    WHY_MAGIC = "not a uTile image";
+    /// Read error reason.
+    WHY_VERSION = "unknown image version";
+    /// Read error reason.
+    WHY_CRC = "image CRC error";
+    /// LIST prompt.
+    LIST_PROMPT = "# LIST .... 'CR' to send .... '/' to abort";
+    /// LIST header comment.
+    LIST_HEAD = concat!("# uTile UF0 listing, version ", env!("CARGO_PKG_VERSION"));
+    /// LIST trailer comment.
+    LIST_END = "# end of listing - 'CR' for menu -->";
+    /// Preset line middle.
+    PRESET_EQ = " = ";
+    /// STAT text.
+    STAT_MIN = "Last run: scan min ";
+    /// STAT text.
+    STAT_AVG = " us, avg ";
+    /// STAT text.
+    STAT_MAX = " us, max ";
+    /// STAT text.
+    STAT_RATE = " us; scans/s ";
+    /// STAT text.
+    STAT_OVERRUNS = "; rx overruns ";
+    /// The help screen (rows 8..22), lines ended by CR LF.
+    HELP = concat!(
+        "  Logic    Bit Stack    I/O - Commands                  Interpreter       Timers\r\n",
+        "  -----    ---------    ----------------------------    -------------     ------\r\n",
+        "  and      set  clr     In:   Ai.  ALi.  ATi.  ADi.     fill  ex0  run    TQm.\r\n",
+        "  or       dup  2dup    Out:  .Yn  Yn.                  ins   del  key    .TKm\r\n",
+        "  xor      drop swap    Virt: Un.  .Un  Vn.  .Vn        end   /    ver    .TRm\r\n",
+        "  !  !!    f.   z.      (i = 0..5, n = 0..7, m = 0..f)  ?     stat ldt\r\n",
+        "  nop                                                   load  store\r\n",
+        "                                                        list  read write\r\n",
+        "  ------- Byte Commands -------   - Flip/Flop -   --- Clock Pulses ---\r\n",
+        "  PA. .PY  PU. .PU  PV. .PV  PY.  .Sm .Rm  Qm.    clka.   clkb.   clkc.\r\n",
+        "  PPA PBS  PPU PPV  PPY                           0.4 s   1.2 s   3.6 s\r\n",
+        "  Ground D8 to enable Autostart   Timers: T0..T3 (0.1 s)  T4..Tb (1 s)\r\n",
+        "  Ground D9 to invert outputs             Tc..Te (1 min)  Tf (6.66 min)\r\n",
+        "  Date: ", build_date!(), "  Ver ", env!("CARGO_PKG_VERSION"),
+    );
+}
+
+/// Length of the blob.
+const BLOB_LEN: usize = offset_of(PARTS, PARTS.len());
+
+progmem! {
+    /// Every text of the editor, back to back.
+    static progmem TEXT: [u8; BLOB_LEN] = join::<BLOB_LEN>(PARTS);
+}
