@@ -1,1 +1,390 @@
-//! The hardware layer (AVR only): pins, USART, timers, EEPROM, watchdog.
+//! The hardware layer (AVR only): pins, USART, timers, EEPROM, watchdog, warm-reset memory.
+//!
+//! It only adapts the ATmega328P to [`Board`]; all logic lives in [`crate::core`]. The
+//! interrupt vectors themselves are declared in `src/main.rs` (they need a crate feature) and
+//! call [`on_tick`], [`serial::on_rx`] and [`serial::on_udre`].
+//!
+//! Pins (SPEC §2): A0..A5 = PC0..PC5 inputs with pull-ups; Y0..Y5 = PD2..PD7, Y6 = PB4,
+//! Y7 = PB5; D8 = PB0 autostart jumper, D9 = PB1 out_sense jumper (both pulled up, active low).
+
+pub mod kept;
+pub mod serial;
+
+use core::cell::UnsafeCell;
+
+use avr_device::atmega328p::Peripherals;
+use avr_device::interrupt::{self, CriticalSection};
+
+use crate::core::board::Board;
+use crate::core::ticker::{Ticker, INPUT_MASK};
+
+/// Write a whole register; every value this module writes is a documented bit pattern.
+macro_rules! wr {
+    ($reg:expr, $v:expr) => {
+        // SAFETY: the value is a valid bit pattern for this register (see the comment at the call).
+        {
+            let _ = $reg.write(|w| unsafe { w.bits($v) });
+        }
+    };
+}
+pub(crate) use wr;
+
+/// The register blocks. The HAL is their only user; registers shared between the main
+/// program and an interrupt are only changed inside critical sections.
+#[inline(always)]
+pub(crate) fn regs() -> Peripherals {
+    // SAFETY: `Peripherals` is a set of zero-sized handles; ownership discipline is kept by
+    // this module (see above), not by the handles.
+    unsafe { Peripherals::steal() }
+}
+
+/// A value shared with interrupt handlers, reachable only with interrupts disabled.
+pub(crate) struct IsrCell<T>(UnsafeCell<T>);
+
+// SAFETY: the AVR has one core; access goes through `with`, which needs a critical section.
+unsafe impl<T> Sync for IsrCell<T> {}
+
+impl<T> IsrCell<T> {
+    /// A cell holding `value`.
+    pub(crate) const fn new(value: T) -> Self {
+        Self(UnsafeCell::new(value))
+    }
+
+    /// Run `f` on the value. Never call `with` on the same cell inside `f`.
+    #[inline(always)]
+    pub(crate) fn with<R>(&self, _cs: CriticalSection, f: impl FnOnce(&mut T) -> R) -> R {
+        // SAFETY: interrupts are off (the token proves it), so neither an interrupt nor the
+        // main program can hold another reference; this module never nests `with` calls.
+        f(unsafe { &mut *self.0.get() })
+    }
+}
+
+/// PORTB bits that are pull-ups, never outputs: D8 (PB0), D9 (PB1), unused D10/D11 (PB2/PB3).
+const PORTB_PULLUPS: u8 = 0x0F;
+/// PORTB bits of Y6 (PB4) and Y7 (PB5).
+const PORTB_Y: u8 = 0x30;
+/// PORTD bits of Y0..Y5 (PD2..PD7).
+const PORTD_Y: u8 = 0xFC;
+/// PINB bit of the autostart jumper D8.
+const D8_BIT: u8 = 0x01;
+/// PINB bit of the out_sense jumper D9.
+const D9_BIT: u8 = 0x02;
+
+/// The output image as it reaches the pins.
+struct Outputs {
+    /// Output image PY from the core (never inverted).
+    py: u8,
+    /// 0xFF while D9 is grounded (outputs inverted at the pins), else 0.
+    invert: u8,
+}
+
+static TICKER: IsrCell<Option<Ticker>> = IsrCell::new(None);
+static OUTPUTS: IsrCell<Outputs> = IsrCell::new(Outputs { py: 0, invert: 0 });
+
+/// The out_sense mask for the present level of D9.
+#[inline(always)]
+fn invert_mask(pinb: u8) -> u8 {
+    if pinb & D9_BIT == 0 {
+        0xFF
+    } else {
+        0
+    }
+}
+
+/// Put pin levels (bit n = Yn, already inverted as needed) on PD2..PD7, PB4, PB5.
+/// Bits are changed one register at a time, keeping the other bits of each port.
+#[inline(always)]
+fn drive_pins(_cs: CriticalSection, pins: u8) {
+    let dp = regs();
+    let d = (dp.PORTD.portd().read().bits() & !PORTD_Y) | (pins << 2);
+    // Y0..Y5 on PD2..PD7; PD0/PD1 (USART) keep their bits.
+    wr!(dp.PORTD.portd(), d);
+    let b = PORTB_PULLUPS | ((pins >> 2) & PORTB_Y);
+    // Y6/Y7 on PB4/PB5, pull-ups on PB0..PB3, PB6/PB7 (crystal) 0.
+    if dp.PORTB.portb().read().bits() != b {
+        wr!(dp.PORTB.portb(), b);
+    }
+}
+
+/// Why the chip started.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BootInfo {
+    /// Power-on or brown-out reset: RAM holds nothing worth keeping.
+    pub cold: bool,
+    /// The raw MCUSR reset flags (a boot loader may have cleared them: then 0).
+    pub mcusr: u8,
+}
+
+/// The Arduino Nano board: the ATmega328P behind the [`Board`] trait.
+pub struct Nano {
+    _private: (),
+}
+
+/// Bring the chip up: outputs off (honouring out_sense) before they become outputs,
+/// watchdog, stack paint, input timer, statistics timer, USART. Enables interrupts.
+/// Call once, first thing in `main`.
+pub fn init() -> (Nano, BootInfo) {
+    let dp = regs();
+    // 1. Pull-ups on the jumpers and on the unused pins; Y pins still inputs (high-Z).
+    wr!(dp.PORTB.portb(), PORTB_PULLUPS);
+    // A0..A5: pull-ups.
+    wr!(dp.PORTC.portc(), INPUT_MASK);
+    // Let the pull-up charge the pin before D9 is read (about 16 µs).
+    avr_device::asm::delay_cycles(256);
+    // 2. Off level on the output bits, then the pins become outputs.
+    let invert = invert_mask(dp.PORTB.pinb().read().bits());
+    let pins = invert;
+    // Y0..Y5 levels on PD2..PD7; pull-up on PD0 (RX).
+    wr!(dp.PORTD.portd(), (pins << 2) | 0x01);
+    // Y6/Y7 levels on PB4/PB5 with the pull-ups.
+    wr!(dp.PORTB.portb(), PORTB_PULLUPS | ((pins >> 2) & PORTB_Y));
+    // PD2..PD7 outputs.
+    wr!(dp.PORTD.ddrd(), PORTD_Y);
+    // PB4/PB5 outputs.
+    wr!(dp.PORTB.ddrb(), PORTB_Y);
+    interrupt::free(|cs| OUTPUTS.with(cs, |o| o.invert = invert));
+
+    // 3. Reset cause, then the watchdog (after a watchdog reset it runs at 16 ms already).
+    let mcusr = dp.CPU.mcusr().read().bits();
+    // Clear the flags so the next reset reports its own cause (WDRF must be 0 to change WDE).
+    wr!(dp.CPU.mcusr(), 0);
+    watchdog_on();
+    let cold = mcusr & 0x05 != 0; // PORF or BORF
+
+    paint_stack();
+
+    // 4. Timer0: CTC, clk/64, OCR0A = 249 → exactly 1 kHz at 16 MHz.
+    // TCCR0A: WGM01 (CTC).
+    wr!(dp.TC0.tccr0a(), 0x02);
+    // OCR0A: 250 counts per period.
+    wr!(dp.TC0.ocr0a(), 249);
+    // TCCR0B: CS01|CS00 = clk/64.
+    wr!(dp.TC0.tccr0b(), 0x03);
+    // TIMSK0: OCIE0A.
+    wr!(dp.TC0.timsk0(), 0x02);
+    let raw = dp.PORTC.pinc().read().bits() & INPUT_MASK;
+    interrupt::free(|cs| TICKER.with(cs, |t| *t = Some(Ticker::new(raw))));
+
+    // 5. Timer1: normal mode, clk/8 (0.5 µs per count), free running for scan statistics.
+    // TCCR1A: normal mode.
+    wr!(dp.TC1.tccr1a(), 0);
+    // TCCR1B: CS11 = clk/8.
+    wr!(dp.TC1.tccr1b(), 0x02);
+
+    serial::init();
+
+    // SAFETY: all shared state is initialised; the handlers may run from now on.
+    unsafe { interrupt::enable() };
+    (Nano { _private: () }, BootInfo { cold, mcusr })
+}
+
+/// Watchdog: system reset after 250 ms without `wdr` (WDE, WDP2).
+fn watchdog_on() {
+    let dp = regs();
+    interrupt::free(|_| {
+        avr_device::asm::wdr();
+        // Timed sequence: WDCE|WDE, then within 4 cycles the new setting WDE|WDP2.
+        wr!(dp.WDT.wdtcsr(), 0x18);
+        wr!(dp.WDT.wdtcsr(), 0x0C);
+    });
+}
+
+/// Byte painted over the free RAM between the static data and the stack at boot.
+pub const STACK_PAINT: u8 = 0xC5;
+
+extern "C" {
+    /// End of static data (.data, .bss, .noinit), from the avr-gcc linker script.
+    static __heap_start: u8;
+}
+
+/// Paint the free RAM below the stack pointer with [`STACK_PAINT`], so a simulator or a
+/// debugger can find how deep the stack ever went (the lowest overwritten byte).
+#[inline(never)]
+fn paint_stack() {
+    // SAFETY: SPL/SPH are the stack pointer I/O registers (data addresses 0x5D/0x5E).
+    let sp = unsafe {
+        u16::from(core::ptr::read_volatile(0x5D as *const u8))
+            | (u16::from(core::ptr::read_volatile(0x5E as *const u8)) << 8)
+    };
+    // Only the symbol's address is taken.
+    let mut p = core::ptr::addr_of!(__heap_start) as u16;
+    // Everything from the end of static data up to (not including) SP is unused: this
+    // function's frame and all callers' frames are at or above SP.
+    while p < sp {
+        // SAFETY: p is in [__heap_start, SP): free RAM that no object occupies.
+        unsafe { core::ptr::write_volatile(p as *mut u8, STACK_PAINT) };
+        p += 1;
+    }
+}
+
+/// The 1 kHz tick (Timer0 compare A interrupt): time base, debouncer, clocks, and
+/// re-applying the outputs when the out_sense jumper D9 changes.
+#[inline(always)]
+pub fn on_tick(cs: CriticalSection) {
+    let dp = regs();
+    let raw = dp.PORTC.pinc().read().bits() & INPUT_MASK;
+    TICKER.with(cs, |t| {
+        if let Some(t) = t {
+            t.tick(raw);
+        }
+    });
+    let invert = invert_mask(dp.PORTB.pinb().read().bits());
+    let changed = OUTPUTS.with(cs, |o| {
+        if o.invert == invert {
+            None
+        } else {
+            o.invert = invert;
+            Some(o.py ^ invert)
+        }
+    });
+    if let Some(pins) = changed {
+        drive_pins(cs, pins);
+    }
+}
+
+impl Nano {
+    /// The autostart jumper D8 is grounded.
+    pub fn autostart_jumper(&self) -> bool {
+        regs().PORTB.pinb().read().bits() & D8_BIT == 0
+    }
+
+    /// Timer1 count (0.5 µs per count, wraps every 32.768 ms), for scan statistics.
+    #[inline(always)]
+    pub fn stats_ticks(&self) -> u16 {
+        regs().TC1.tcnt1().read().bits()
+    }
+
+    #[inline(always)]
+    fn ticker<R>(&self, f: impl FnOnce(&mut Ticker) -> R) -> Option<R> {
+        interrupt::free(|cs| TICKER.with(cs, |t| t.as_mut().map(f)))
+    }
+}
+
+impl Board for Nano {
+    #[inline]
+    fn inputs(&mut self) -> u8 {
+        self.ticker(|t| t.inputs.level()).unwrap_or(0)
+    }
+
+    #[inline]
+    fn take_leading(&mut self, mask: u8) -> bool {
+        self.ticker(|t| t.inputs.take_leading(mask))
+            .unwrap_or(false)
+    }
+
+    #[inline]
+    fn take_trailing(&mut self, mask: u8) -> bool {
+        self.ticker(|t| t.inputs.take_trailing(mask))
+            .unwrap_or(false)
+    }
+
+    #[inline]
+    fn toggles(&mut self) -> u8 {
+        self.ticker(|t| t.inputs.toggles()).unwrap_or(0)
+    }
+
+    fn resync_inputs(&mut self) {
+        interrupt::free(|cs| {
+            let raw = regs().PORTC.pinc().read().bits() & INPUT_MASK;
+            TICKER.with(cs, |t| {
+                if let Some(t) = t {
+                    t.inputs.resync(raw);
+                }
+            });
+        });
+    }
+
+    #[inline]
+    fn clocks(&mut self) -> u8 {
+        self.ticker(|t| t.clocks()).unwrap_or(0)
+    }
+
+    #[inline]
+    fn now_ms(&mut self) -> u32 {
+        self.ticker(|t| t.now_ms()).unwrap_or(0)
+    }
+
+    #[inline]
+    fn write_outputs(&mut self, py: u8) {
+        interrupt::free(|cs| {
+            let pins = OUTPUTS.with(cs, |o| {
+                if o.py == py {
+                    None
+                } else {
+                    o.py = py;
+                    Some(py ^ o.invert)
+                }
+            });
+            if let Some(pins) = pins {
+                drive_pins(cs, pins);
+            }
+        });
+    }
+
+    #[inline]
+    fn rx(&mut self) -> Option<u8> {
+        serial::rx()
+    }
+
+    fn tx(&mut self, byte: u8) {
+        serial::tx(byte);
+    }
+
+    #[inline]
+    fn tx_room(&mut self) -> u8 {
+        serial::tx_room()
+    }
+
+    fn eeprom_read(&mut self, addr: u16) -> u8 {
+        if addr >= EEPROM_SIZE {
+            return 0xFF;
+        }
+        let dp = regs();
+        eeprom_wait();
+        interrupt::free(|_| {
+            // EEAR: the address (checked above to be < 1024).
+            wr!(dp.EEPROM.eear(), addr);
+            // EECR: EERE starts the read; the data is in EEDR at once.
+            wr!(dp.EEPROM.eecr(), 0x01);
+            dp.EEPROM.eedr().read().bits()
+        })
+    }
+
+    fn eeprom_update(&mut self, addr: u16, value: u8) {
+        if addr >= EEPROM_SIZE || self.eeprom_read(addr) == value {
+            return;
+        }
+        let dp = regs();
+        eeprom_wait();
+        interrupt::free(|_| {
+            // EEAR: the address (< 1024).
+            wr!(dp.EEPROM.eear(), addr);
+            // EEDR: the byte to write.
+            wr!(dp.EEPROM.eedr(), value);
+            // EECR: EEMPE (erase + write mode), then within 4 cycles EEMPE|EEPE.
+            wr!(dp.EEPROM.eecr(), 0x04);
+            wr!(dp.EEPROM.eecr(), 0x06);
+        });
+        eeprom_wait();
+    }
+
+    fn rx_overruns(&mut self) -> u16 {
+        serial::overruns()
+    }
+
+    #[inline]
+    fn feed_watchdog(&mut self) {
+        avr_device::asm::wdr();
+    }
+}
+
+/// Bytes of EEPROM on the ATmega328P.
+pub const EEPROM_SIZE: u16 = 1024;
+
+/// Wait until no EEPROM write is in progress (about 3.4 ms per byte), feeding the watchdog.
+fn eeprom_wait() {
+    let dp = regs();
+    while dp.EEPROM.eecr().read().bits() & 0x02 != 0 {
+        avr_device::asm::wdr();
+    }
+}

@@ -451,7 +451,8 @@ impl Editor {
     pub fn idle<B: Board>(&mut self, eng: &mut Engine, b: &mut B) {
         // One instance of the drawing code: every entry point goes through `Tracked`.
         let b = &mut Tracked { b, sent: false };
-        let _ = eng;
+        // No END runs in the editor: retire expired timers here instead.
+        eng.retire_timers(b);
         let now = b.now_ms();
         self.keys.expire(now);
         if let Screen::Read(rs) = &mut self.screen {
@@ -517,7 +518,8 @@ impl Editor {
     pub fn on_break<B: Board>(&mut self, eng: &mut Engine, b: &mut B) {
         // One instance of the drawing code: every entry point goes through `Tracked`.
         let b = &mut Tracked { b, sent: false };
-        let _ = eng;
+        // No END runs in the editor: retire expired timers here instead.
+        eng.retire_timers(b);
         let now = b.now_ms();
         self.stats.run_ms = now.wrapping_sub(self.run_start_ms);
         self.screen = Screen::Break;

@@ -1,1 +1,244 @@
-fn main(){}
+//! Build tasks, run through cargo aliases (`.cargo/config.toml`).
+//!
+//! `cargo fw [--features F]` builds the release firmware for the ATmega328P, writes
+//! `out/m328-nano-utile.hex` and `out/m328-nano-utile.elf` (with features: `m328-nano-utile-F.*`)
+//! and prints flash and RAM use against the budgets of `memory.x`.
+//!
+//! `cargo fw --check-budget-enforced` links the firmware with shrunken budgets (a copy of
+//! `memory.x` with tiny flash, then tiny RAM) and succeeds only if both links FAIL, proving
+//! that an image over budget cannot be built.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode};
+
+/// Flash budget: 32 KiB less 2 KiB for a boot loader (must match memory.x).
+const FLASH_BUDGET: u64 = 30 * 1024;
+/// Static RAM budget (memory.x `__DATA_REGION_LENGTH__`).
+const STATIC_RAM_BUDGET: u64 = 1024;
+/// RAM of the ATmega328P.
+const RAM_TOTAL: u64 = 2048;
+/// Static data plus worst-case stack must stay within this (SPEC §11).
+const RAM_BUDGET: u64 = 1536;
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let result = match args.first().map(String::as_str) {
+        Some("fw") => fw(&args[1..]),
+        _ => Err("usage: xtask fw [--features F] [--check-budget-enforced]".into()),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// The repository root (the parent of `tools/`).
+fn root() -> PathBuf {
+    let tools = Path::new(env!("CARGO_MANIFEST_DIR"));
+    tools.parent().unwrap_or(tools).to_path_buf()
+}
+
+/// `cargo build` of the AVR firmware, with optional features and environment.
+fn avr_build(features: Option<&str>, memory_x: Option<&Path>) -> Command {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let mut cmd = Command::new(cargo);
+    cmd.current_dir(root()).args([
+        "build",
+        "--release",
+        "--target",
+        "avr-atmega328p.json",
+        "-Z",
+        "build-std=core",
+        "-Z",
+        "json-target-spec",
+        "--bin",
+        "utile-fw",
+    ]);
+    if let Some(f) = features {
+        cmd.args(["--features", f]);
+    }
+    match memory_x {
+        Some(path) => cmd.env("UTILE_MEMORY_X", path),
+        None => cmd.env_remove("UTILE_MEMORY_X"),
+    };
+    cmd
+}
+
+fn fw(args: &[String]) -> Result<(), String> {
+    let mut features: Option<String> = None;
+    let mut check = false;
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--features" => features = it.next().cloned(),
+            "--check-budget-enforced" => check = true,
+            other => match other.strip_prefix("--features=") {
+                Some(f) => features = Some(f.to_string()),
+                None => return Err(format!("unknown argument `{other}`")),
+            },
+        }
+    }
+    if check {
+        return check_budget_enforced();
+    }
+    let started = std::time::Instant::now();
+    let status = avr_build(features.as_deref(), None)
+        .status()
+        .map_err(|e| format!("cannot run cargo: {e}"))?;
+    if !status.success() {
+        return Err("firmware build failed".into());
+    }
+    let root = root();
+    let elf = root.join("target/avr-atmega328p/release/utile-fw.elf");
+    let out = root.join("out");
+    std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    let stem = match &features {
+        Some(f) if !f.is_empty() => format!("m328-nano-utile-{}", f.replace([',', ' '], "-")),
+        _ => "m328-nano-utile".to_string(),
+    };
+    let out_elf = out.join(format!("{stem}.elf"));
+    let out_hex = out.join(format!("{stem}.hex"));
+    std::fs::copy(&elf, &out_elf).map_err(|e| format!("cannot copy {}: {e}", elf.display()))?;
+    // Only flash contents: .text and the initial values of .data (never .noinit/.eeprom).
+    let status = Command::new("avr-objcopy")
+        .args(["-O", "ihex", "-j", ".text", "-j", ".data"])
+        .arg(&out_elf)
+        .arg(&out_hex)
+        .status()
+        .map_err(|e| format!("cannot run avr-objcopy (binutils-avr): {e}"))?;
+    if !status.success() {
+        return Err("avr-objcopy failed".into());
+    }
+    let sizes = section_sizes(&out_elf)?;
+    let get = |name: &str| sizes.iter().find(|(n, _)| n == name).map_or(0, |(_, s)| *s);
+    let (text, data, bss, noinit) = (get(".text"), get(".data"), get(".bss"), get(".noinit"));
+    let flash = text + data;
+    let ram = data + bss + noinit;
+    println!("firmware: {}", rel(&out_hex));
+    println!("          {} (simavr, debugger)", rel(&out_elf));
+    println!(
+        "flash: {flash:>6} bytes = .text {text} + .data {data}   budget {FLASH_BUDGET} ({:.1} % used)",
+        percent(flash, FLASH_BUDGET)
+    );
+    println!(
+        "RAM:   {ram:>6} bytes = .data {data} + .bss {bss} + .noinit {noinit}   static budget {STATIC_RAM_BUDGET} ({:.1} % used)",
+        percent(ram, STATIC_RAM_BUDGET)
+    );
+    println!(
+        "       {} of {RAM_TOTAL} bytes left for the stack; static + stack must stay <= {RAM_BUDGET} (stack measured in simavr)",
+        RAM_TOTAL.saturating_sub(ram)
+    );
+    println!("built in {:.1} s", started.elapsed().as_secs_f64());
+    if flash > FLASH_BUDGET || ram > STATIC_RAM_BUDGET {
+        return Err("over budget".into());
+    }
+    Ok(())
+}
+
+fn percent(used: u64, budget: u64) -> f64 {
+    used as f64 * 100.0 / budget as f64
+}
+
+/// A path relative to the repository root, for messages.
+fn rel(p: &Path) -> String {
+    let root = root();
+    p.strip_prefix(&root).unwrap_or(p).display().to_string()
+}
+
+/// `(section, size)` from `avr-size -A`.
+fn section_sizes(elf: &Path) -> Result<Vec<(String, u64)>, String> {
+    let out = Command::new("avr-size")
+        .arg("-A")
+        .arg(elf)
+        .output()
+        .map_err(|e| format!("cannot run avr-size (binutils-avr): {e}"))?;
+    if !out.status.success() {
+        return Err("avr-size failed".into());
+    }
+    let text = String::from_utf8_lossy(&out.stdout);
+    Ok(text
+        .lines()
+        .filter_map(|l| {
+            let mut w = l.split_whitespace();
+            let name = w.next()?;
+            let size = w.next()?.parse().ok()?;
+            name.starts_with('.').then(|| (name.to_string(), size))
+        })
+        .collect())
+}
+
+/// A linker message saying that a section does not fit its memory region.
+fn is_region_error(line: &str) -> bool {
+    [
+        "will not fit in region",
+        "overflowed by",
+        "is not within region",
+    ]
+    .iter()
+    .any(|p| line.contains(p))
+}
+
+/// Link with a shrunken flash region, then with a shrunken RAM region: both must fail with
+/// the linker's region-overflow error. The normal image is relinked afterwards by `cargo fw`.
+fn check_budget_enforced() -> Result<(), String> {
+    let root = root();
+    let original = std::fs::read_to_string(root.join("memory.x"))
+        .map_err(|e| format!("cannot read memory.x: {e}"))?;
+    let dir = root.join("target/budget-check");
+    std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    let cases = [
+        ("__TEXT_REGION_LENGTH__", "1K", "flash budget of 1 KiB"),
+        (
+            "__DATA_REGION_LENGTH__",
+            "64",
+            "static RAM budget of 64 bytes",
+        ),
+    ];
+    for (symbol, value, what) in cases {
+        let shrunk: String = original
+            .lines()
+            .map(|l| {
+                if l.trim_start().starts_with(symbol) {
+                    format!("{symbol} = {value};")
+                } else {
+                    l.to_string()
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("\n");
+        if !shrunk.contains(&format!("{symbol} = {value};")) {
+            return Err(format!("memory.x does not define {symbol}"));
+        }
+        let path = dir.join(format!(
+            "memory-{}.x",
+            symbol.trim_matches('_').to_lowercase()
+        ));
+        std::fs::write(&path, shrunk)
+            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+        let out = avr_build(None, Some(&path))
+            .output()
+            .map_err(|e| format!("cannot run cargo: {e}"))?;
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let overflow = stderr.lines().any(is_region_error);
+        if out.status.success() || !overflow {
+            eprintln!("{stderr}");
+            return Err(format!(
+                "the image linked with a {what}: budgets are NOT enforced"
+            ));
+        }
+        let line = stderr.lines().find(|l| is_region_error(l)).unwrap_or("");
+        println!("ok: with a {what} the link fails: {}", line.trim());
+    }
+    // Relink the real image so target/ holds the in-budget firmware again.
+    let status = avr_build(None, None)
+        .status()
+        .map_err(|e| format!("cannot run cargo: {e}"))?;
+    if !status.success() {
+        return Err("the normal firmware build failed after the check".into());
+    }
+    println!("budgets in memory.x are enforced by the linker");
+    Ok(())
+}
