@@ -7,3 +7,5 @@ pub mod simulate;
 pub mod diagram;
 /// The virtual Nano (`cargo nano`): firmware in simavr, UART on a terminal or pty.
 pub mod vnano;
+/// Benchmarks of the real firmware image in simavr (`bench` binary, issue 7).
+pub mod bench;

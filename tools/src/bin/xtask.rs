@@ -11,10 +11,22 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 
-/// Flash budget: 32 KiB less 2 KiB for a boot loader (must match memory.x).
-const FLASH_BUDGET: u64 = 30 * 1024;
-/// Static RAM budget (memory.x `__DATA_REGION_LENGTH__`).
-const STATIC_RAM_BUDGET: u64 = 1024;
+/// A region length from `memory.x` (`__NAME__ = 1152;` or `= 30K;`), so the printed budgets
+/// are the ones the linker enforces.
+fn budget(symbol: &str) -> Result<u64, String> {
+    let text = std::fs::read_to_string(root().join("memory.x"))
+        .map_err(|e| format!("cannot read memory.x: {e}"))?;
+    let value = text
+        .lines()
+        .find_map(|l| l.trim().strip_prefix(symbol)?.trim().strip_prefix('='))
+        .map(|v| v.trim().trim_end_matches(';').trim())
+        .ok_or_else(|| format!("memory.x does not define {symbol}"))?;
+    match value.strip_suffix('K') {
+        Some(k) => k.parse::<u64>().map(|k| k * 1024),
+        None => value.parse::<u64>(),
+    }
+    .map_err(|e| format!("memory.x: {symbol} = {value}: {e}"))
+}
 /// RAM of the ATmega328P.
 const RAM_TOTAL: u64 = 2048;
 /// Static data plus worst-case stack must stay within this (SPEC §11).
@@ -117,22 +129,24 @@ fn fw(args: &[String]) -> Result<(), String> {
     let (text, data, bss, noinit) = (get(".text"), get(".data"), get(".bss"), get(".noinit"));
     let flash = text + data;
     let ram = data + bss + noinit;
+    let flash_budget = budget("__TEXT_REGION_LENGTH__")?;
+    let static_budget = budget("__DATA_REGION_LENGTH__")?;
     println!("firmware: {}", rel(&out_hex));
     println!("          {} (simavr, debugger)", rel(&out_elf));
     println!(
-        "flash: {flash:>6} bytes = .text {text} + .data {data}   budget {FLASH_BUDGET} ({:.1} % used)",
-        percent(flash, FLASH_BUDGET)
+        "flash: {flash:>6} bytes = .text {text} + .data {data}   budget {flash_budget} ({:.1} % used)",
+        percent(flash, flash_budget)
     );
     println!(
-        "RAM:   {ram:>6} bytes = .data {data} + .bss {bss} + .noinit {noinit}   static budget {STATIC_RAM_BUDGET} ({:.1} % used)",
-        percent(ram, STATIC_RAM_BUDGET)
+        "RAM:   {ram:>6} bytes = .data {data} + .bss {bss} + .noinit {noinit}   static budget {static_budget} ({:.1} % used)",
+        percent(ram, static_budget)
     );
     println!(
         "       {} of {RAM_TOTAL} bytes left for the stack; static + stack must stay <= {RAM_BUDGET} (stack measured in simavr)",
         RAM_TOTAL.saturating_sub(ram)
     );
     println!("built in {:.1} s", started.elapsed().as_secs_f64());
-    if flash > FLASH_BUDGET || ram > STATIC_RAM_BUDGET {
+    if flash > flash_budget || ram > static_budget {
         return Err("over budget".into());
     }
     Ok(())

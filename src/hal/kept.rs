@@ -1,0 +1,77 @@
+//! The engine lives in RAM that the C runtime does not clear (`.noinit`), so a warm reset
+//! (reset button, watchdog) keeps the UF and the timer presets (SPEC §3).
+//!
+//! The program is trusted after a reset only if a magic word and the CRC-16 of the UF and of
+//! the presets, resealed by the main loop after every change, still match. A power-on or
+//! brown-out reset always starts cold: all lines blank, presets 0.
+
+use core::mem::MaybeUninit;
+use core::ptr::{addr_of, addr_of_mut};
+
+use crate::core::board::Board;
+use crate::core::engine::{Engine, Program, LINES, UNITS};
+use crate::core::image::crc16;
+use crate::core::opcodes::BLANK;
+
+/// Marks a sealed program ("uTiL").
+const MAGIC: u32 = 0x5554_694C;
+
+/// What survives a warm reset.
+#[repr(C)]
+struct Kept {
+    magic: u32,
+    crc_uf: u16,
+    crc_presets: u16,
+    engine: Engine,
+}
+
+/// Not cleared at start-up: after a warm reset it still holds the last sealed program.
+/// The all-zero initializer is a valid `Kept`, so Rust never sees uninitialised bytes; the
+/// C runtime neither copies nor clears `.noinit`, and `cargo fw` leaves it out of the hex.
+/// The runtime fields are rewritten at boot before any use (see [`take_engine`]).
+#[link_section = ".noinit"]
+static mut KEPT: MaybeUninit<Kept> = MaybeUninit::zeroed();
+
+/// The engine, with the program kept over a warm reset (when `cold` is false and the seal
+/// matches) or a blank program, and its runtime state cleared. Call exactly once, at boot.
+///
+/// Everything is done in place: building an `Engine` value would put two copies of the
+/// 272-byte program on the stack.
+pub fn take_engine<B: Board>(cold: bool, board: &mut B) -> &'static mut Engine {
+    let kept = addr_of_mut!(KEPT).cast::<Kept>();
+    // SAFETY: called once at boot; no interrupt handler touches KEPT. Before a reference
+    // to the engine is made, its only fields with invalid bit patterns (the two `Option`s)
+    // are written; all other fields are integers or byte arrays, valid whatever RAM holds.
+    unsafe {
+        let uf = addr_of_mut!((*kept).engine.prog.uf);
+        let presets = addr_of_mut!((*kept).engine.prog.presets);
+        let valid = !cold
+            && addr_of!((*kept).magic).read() == MAGIC
+            && addr_of!((*kept).crc_uf).read() == crc16(&*uf)
+            && addr_of!((*kept).crc_presets).read() == crc16(&*presets);
+        if !valid {
+            // Cold start: every line blank, presets 0.
+            uf.cast::<u8>().write_bytes(BLANK, LINES);
+            presets.cast::<u8>().write_bytes(0, UNITS);
+        }
+        addr_of_mut!((*kept).engine.port_view).write(None);
+        addr_of_mut!((*kept).engine.bs_view).write(None);
+        let engine = &mut *addr_of_mut!((*kept).engine);
+        engine.clear_runtime(board);
+        reseal(&engine.prog);
+        engine
+    }
+}
+
+/// Record the present program as the one to keep over a warm reset.
+pub fn reseal(prog: &Program) {
+    let (crc_uf, crc_presets) = (crc16(&prog.uf), crc16(&prog.presets));
+    let kept = addr_of_mut!(KEPT).cast::<Kept>();
+    // SAFETY: writes only the seal fields, disjoint from the engine the caller borrows;
+    // no interrupt handler touches KEPT.
+    unsafe {
+        addr_of_mut!((*kept).crc_uf).write(crc_uf);
+        addr_of_mut!((*kept).crc_presets).write(crc_presets);
+        addr_of_mut!((*kept).magic).write(MAGIC);
+    }
+}

@@ -1,0 +1,492 @@
+//! Benchmarks of the real firmware image in simavr (`cargo run -p utile-tools --release
+//! --bin bench`, `./x bench`): scan cycles, press-to-output latency, timer error,
+//! reset-to-running, flash/RAM/stack, UART bytes of the editor, STORE duration.
+//! Results are reported, never asserted; BENCHMARKS.md explains each row.
+
+pub mod chip;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use chip::{Chip, Port, CYCLES_PER_BYTE, CYCLES_PER_MS, F_CPU, RETI, VECTORS_END};
+use utile::core::engine::{Engine, Program, LINES, TIMER_UNIT_MS};
+use utile::core::opcodes::{self, END, NOP};
+use utile::sim::SimBoard;
+
+/// The vector number of TIMER0_COMPA (the 1 ms tick) on the ATmega328P.
+pub const TICK_VECTOR: u32 = 14;
+/// Byte painted over free RAM at boot by the HAL (`utile::hal::STACK_PAINT`, AVR-only).
+pub const STACK_PAINT: u8 = 0xC5;
+
+/// The firmware image to measure: `UTILE_ELF`, else `out/m328-nano-utile.elf` of the repo.
+pub fn elf_path() -> PathBuf {
+    match std::env::var_os("UTILE_ELF") {
+        Some(p) => PathBuf::from(p),
+        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../out/m328-nano-utile.elf"),
+    }
+}
+
+/// Minimum, median and maximum of a sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Spread {
+    /// Smallest value.
+    pub min: f64,
+    /// Median (lower middle for an even count).
+    pub median: f64,
+    /// Largest value.
+    pub max: f64,
+    /// Sample size.
+    pub n: usize,
+}
+
+impl Spread {
+    /// The spread of `values` (None when empty).
+    pub fn of(values: &[f64]) -> Option<Spread> {
+        if values.is_empty() {
+            return None;
+        }
+        let mut v = values.to_vec();
+        v.sort_by(f64::total_cmp);
+        Some(Spread { min: v[0], median: v[(v.len() - 1) / 2], max: v[v.len() - 1], n: v.len() })
+    }
+}
+
+/// A small deterministic generator (xorshift64*), so every run presses at the same moments.
+pub struct Rng(u64);
+
+impl Rng {
+    /// A generator from a non-zero seed.
+    pub fn new(seed: u64) -> Rng {
+        Rng(seed.max(1))
+    }
+    /// The next 64 random bits.
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+    /// Uniform in `lo..hi` (hi > lo).
+    pub fn range(&mut self, lo: u64, hi: u64) -> u64 {
+        lo + self.next_u64() % (hi - lo)
+    }
+}
+
+/// A program from command names, line 0 onwards; the rest of the UF is NOP.
+pub fn program(words: &[&str]) -> Program {
+    let mut p = Program::blank();
+    p.uf = [NOP; LINES];
+    for (line, w) in p.uf.iter_mut().zip(words) {
+        *line = opcodes::lookup(w.as_bytes()).unwrap_or_else(|| panic!("unknown command {w}"));
+    }
+    p
+}
+
+/// 255 NOP lines, then END on line 255.
+pub fn nops_program() -> Program {
+    let mut p = Program::blank();
+    p.uf = [NOP; LINES];
+    p.uf[LINES - 1] = END;
+    p
+}
+
+/// Every valid opcode once (END last), presets 10 so the timers run.
+pub fn every_opcode_program() -> Program {
+    let mut p = Program::blank();
+    p.uf = [NOP; LINES];
+    let ops: Vec<u8> = (0..=0xFEu8).filter(|&op| op != END && opcodes::is_valid(op)).collect();
+    for (line, op) in p.uf.iter_mut().zip(&ops) {
+        *line = *op;
+    }
+    p.uf[ops.len().min(LINES - 1)] = END;
+    p.presets = [10; 16];
+    p
+}
+
+/// A `.utl` listing from the repository's examples directory.
+pub fn example(name: &str) -> Result<Program, String> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples").join(name);
+    let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    crate::listing::parse(name, &text).map_err(|e| e.to_string())
+}
+
+/// The EEPROM contents after STORE of `prog` into an erased EEPROM (by the core itself).
+pub fn eeprom_with(prog: &Program, stores: usize) -> Vec<u8> {
+    let mut board = SimBoard::new();
+    for _ in 0..stores {
+        let _ = utile::core::store::store(prog, &mut board);
+    }
+    board.eeprom.clone()
+}
+
+/// A chip with `prog` stored in EEPROM and D8 grounded: it autostarts at power-up.
+pub fn autostarting(elf: &Path, prog: &Program) -> Result<Chip, String> {
+    let mut chip = Chip::load(elf)?;
+    chip.set_eeprom(&eeprom_with(prog, 1));
+    chip.hold_low(Port::B, 0, true);
+    Ok(chip)
+}
+
+/// Cycles per scan of one program.
+#[derive(Clone, Debug)]
+pub struct ScanResult {
+    /// Scan period END to END, interrupts included.
+    pub with_isr: Spread,
+    /// The same with the cycles spent in interrupt handlers taken out.
+    pub without_isr: Spread,
+    /// Average cycles of one 1 ms tick interrupt (vector jump to `reti`).
+    pub tick_cycles: f64,
+    /// Share of all CPU time spent in the tick interrupt, percent.
+    pub tick_share: f64,
+    /// Share of all CPU time spent in other interrupts (UART), percent.
+    pub other_isr_share: f64,
+}
+
+/// Byte addresses of every `lds Rd, 0x0084` (a read of TCNT1L): the main loop reads
+/// Timer1 once per scan for STAT, which marks the scan boundary.
+fn tcnt1_reads(chip: &Chip) -> Vec<u32> {
+    let mut v = Vec::new();
+    let mut pc = 0u32;
+    while (pc as usize) + 3 < chip.flash_len() {
+        if chip.flash_word(pc) & 0xFE0F == 0x9000 && chip.flash_word(pc + 2) == 0x0084 {
+            v.push(pc);
+        }
+        pc += 2;
+    }
+    v
+}
+
+/// Tracks interrupt handlers from the PC before and after each step.
+#[derive(Default)]
+struct IsrTrack {
+    vector: Option<u32>,
+    start: u64,
+    /// Cycles per vector number.
+    cycles: [u64; 26],
+    /// Entries per vector number.
+    entries: [u64; 26],
+}
+
+impl IsrTrack {
+    /// Accounts one step; returns the cycles of a handler that just ended.
+    fn step(&mut self, pc0: u32, op: u16, pc1: u32, c1: u64) -> u64 {
+        let mut ended = 0;
+        if let Some(v) = self.vector {
+            if op == RETI {
+                ended = c1 - self.start;
+                self.cycles[v as usize] += ended;
+                self.vector = None;
+            }
+        }
+        let entered = pc1 < VECTORS_END && (pc0 >= VECTORS_END || op == RETI) && pc1 != 0;
+        if self.vector.is_none() && entered {
+            let v = pc1 / 4;
+            self.vector = Some(v);
+            self.entries[v as usize] += 1;
+            self.start = c1;
+        }
+        ended
+    }
+    fn in_isr(&self) -> bool {
+        self.vector.is_some()
+    }
+}
+
+/// Scan cycles of `prog` over `scans` scans, after `settle_ms` of running (the RUN-mode
+/// screen is drawn first).
+pub fn measure_scans(elf: &Path, prog: &Program, scans: usize, settle_ms: u64) -> Result<ScanResult, String> {
+    let mut chip = autostarting(elf, prog)?;
+    chip.run_for(settle_ms * CYCLES_PER_MS);
+    let candidates = tcnt1_reads(&chip);
+    if candidates.is_empty() {
+        return Err("no Timer1 read in the image (scan marker)".into());
+    }
+    // Which of the Timer1 reads is the per-scan one: the one hit most in 20 ms.
+    let mut hits = vec![0u64; candidates.len()];
+    let end = chip.cycle() + 20 * CYCLES_PER_MS;
+    while chip.cycle() < end {
+        if let Ok(i) = candidates.binary_search(&chip.pc()) {
+            hits[i] += 1;
+        }
+        if !chip.step() {
+            return Err("CPU stopped".into());
+        }
+    }
+    let (best, &count) = hits.iter().enumerate().max_by_key(|(_, h)| **h).ok_or("no candidates")?;
+    if count < 2 {
+        return Err("the program does not reach the scan marker (not running?)".into());
+    }
+    let marker = candidates[best];
+
+    let mut isr = IsrTrack::default();
+    let mut with = Vec::with_capacity(scans);
+    let mut without = Vec::with_capacity(scans);
+    let mut last: Option<u64> = None;
+    let mut isr_in_scan = 0u64;
+    let start = chip.cycle();
+    let limit = start + 400 * F_CPU;
+    while with.len() < scans && chip.cycle() < limit {
+        let pc0 = chip.pc();
+        if pc0 == marker && !isr.in_isr() {
+            let c = chip.cycle();
+            if let Some(l) = last {
+                with.push((c - l) as f64);
+                without.push((c - l - isr_in_scan) as f64);
+            }
+            last = Some(c);
+            isr_in_scan = 0;
+        }
+        let op = chip.flash_word(pc0);
+        if !chip.step() {
+            return Err("CPU stopped".into());
+        }
+        isr_in_scan += isr.step(pc0, op, chip.pc(), chip.cycle());
+    }
+    let total = (chip.cycle() - start) as f64;
+    let tick = TICK_VECTOR as usize;
+    let other: u64 = isr.cycles.iter().enumerate().filter(|(v, _)| *v != tick).map(|(_, c)| c).sum();
+    Ok(ScanResult {
+        with_isr: Spread::of(&with).ok_or("no scans measured")?,
+        without_isr: Spread::of(&without).ok_or("no scans measured")?,
+        tick_cycles: isr.cycles[tick] as f64 / isr.entries[tick].max(1) as f64,
+        tick_share: 100.0 * isr.cycles[tick] as f64 / total,
+        other_isr_share: 100.0 * other as f64 / total,
+    })
+}
+
+/// Press-to-output and release-to-output latency (ms) of `A0. ! .Y0 END` over `presses`
+/// presses at random moments (fixed seed).
+pub fn measure_latency(elf: &Path, presses: usize, seed: u64) -> Result<(Spread, Spread), String> {
+    let prog = program(&["A0.", "!", ".Y0", "END"]);
+    let mut chip = autostarting(elf, &prog)?;
+    chip.run_for(300 * CYCLES_PER_MS);
+    let mut rng = Rng::new(seed);
+    let (mut on, mut off) = (Vec::new(), Vec::new());
+    for _ in 0..presses {
+        chip.run_for(rng.range(10 * CYCLES_PER_MS, 40 * CYCLES_PER_MS));
+        if chip.y(0) {
+            return Err("Y0 is on before the press".into());
+        }
+        chip.hold_low(Port::C, 0, true);
+        let c0 = chip.cycle();
+        let c1 = chip.run_until(100 * CYCLES_PER_MS, |c| c.y(0)).ok_or("Y0 never came on")?;
+        on.push((c1 - c0) as f64 / CYCLES_PER_MS as f64);
+        chip.run_for(rng.range(20 * CYCLES_PER_MS, 60 * CYCLES_PER_MS));
+        chip.hold_low(Port::C, 0, false);
+        let c0 = chip.cycle();
+        let c1 = chip.run_until(100 * CYCLES_PER_MS, |c| !c.y(0)).ok_or("Y0 never went off")?;
+        off.push((c1 - c0) as f64 / CYCLES_PER_MS as f64);
+    }
+    Ok((Spread::of(&on).ok_or("none")?, Spread::of(&off).ok_or("none")?))
+}
+
+/// The timer test program for unit `m`: A0 pressed triggers timer m; Y1 shows the trigger
+/// (so its fall marks the debounced release as the program saw it), Y0 shows TQm.
+pub fn timer_program(m: u8, preset: u8) -> Program {
+    let tk = format!(".TK{m:X}");
+    let tq = format!("TQ{m:X}.");
+    let mut p = program(&["A0.", "!", "DUP", ".Y1", &tk, &tq, ".Y0", "END"]);
+    p.presets[usize::from(m)] = preset;
+    p
+}
+
+/// Timer error in ms (measured off-delay minus preset × unit) in simavr.
+pub fn measure_timer_simavr(elf: &Path, m: u8, preset: u8) -> Result<f64, String> {
+    let mut chip = autostarting(elf, &timer_program(m, preset))?;
+    chip.run_for(300 * CYCLES_PER_MS);
+    chip.hold_low(Port::C, 0, true);
+    chip.run_for(50 * CYCLES_PER_MS);
+    if !chip.y(0) || !chip.y(1) {
+        return Err("timer did not start".into());
+    }
+    chip.hold_low(Port::C, 0, false);
+    let fall1 = chip.run_until(100 * CYCLES_PER_MS, |c| !c.y(1)).ok_or("Y1 stayed on")?;
+    let want_ms = u64::from(preset) * u64::from(TIMER_UNIT_MS[usize::from(m)]);
+    let fall0 = chip
+        .run_until((want_ms + 2000) * CYCLES_PER_MS, |c| !c.y(0))
+        .ok_or("Y0 stayed on")?;
+    Ok((fall0 - fall1) as f64 / CYCLES_PER_MS as f64 - want_ms as f64)
+}
+
+/// The same measurement on the host core (`SimBoard`, 1 ms resolution, one scan per ms).
+pub fn measure_timer_host(m: u8, preset: u8) -> Result<f64, String> {
+    let mut eng = Engine::new(timer_program(m, preset));
+    let mut board = SimBoard::new();
+    eng.clear_runtime(&mut board);
+    board.run_for(&mut eng, 100, 1);
+    board.press(0);
+    board.run_for(&mut eng, 50, 1);
+    board.release(0);
+    let want = u64::from(preset) * u64::from(TIMER_UNIT_MS[usize::from(m)]);
+    board.output_log.clear();
+    board.run_for(&mut eng, (want + 1000) as u32, 1);
+    let fall = |bit: u8| {
+        board
+            .output_log
+            .iter()
+            .find(|(_, img)| img & (1 << bit) == 0)
+            .map(|(ms, _)| u64::from(*ms))
+    };
+    let (f1, f0) = (fall(1).ok_or("Y1 stayed on")?, fall(0).ok_or("Y0 stayed on")?);
+    Ok(f0 as f64 - f1 as f64 - want as f64)
+}
+
+/// Milliseconds from power-up to the first output change of an autostarted `SET .Y0 END`.
+pub fn measure_autostart(elf: &Path) -> Result<f64, String> {
+    let mut chip = autostarting(elf, &program(&["SET", ".Y0", "END"]))?;
+    let c = chip.run_until(3000 * CYCLES_PER_MS, |c| c.y(0)).ok_or("Y0 never came on")?;
+    Ok(c as f64 / CYCLES_PER_MS as f64)
+}
+
+/// Section sizes from `avr-size -A`: (flash = .text + .data, static RAM = .data + .bss +
+/// .noinit).
+pub fn sizes(elf: &Path) -> Result<(u64, u64), String> {
+    let out = Command::new("avr-size")
+        .arg("-A")
+        .arg(elf)
+        .output()
+        .map_err(|e| format!("avr-size: {e}"))?;
+    let text = String::from_utf8_lossy(&out.stdout);
+    let size = |name: &str| -> u64 {
+        text.lines()
+            .filter_map(|l| {
+                let mut it = l.split_whitespace();
+                (it.next()? == name).then(|| it.next()?.parse::<u64>().ok())?
+            })
+            .sum()
+    };
+    let (t, d, b, n) = (size(".text"), size(".data"), size(".bss"), size(".noinit"));
+    Ok((t + d, d + b + n))
+}
+
+/// Data-space address of a symbol (from `avr-nm`; data symbols carry 0x800000).
+pub fn symbol(elf: &Path, name: &str) -> Option<usize> {
+    let out = Command::new("avr-nm").arg(elf).output().ok()?;
+    String::from_utf8_lossy(&out.stdout).lines().find_map(|l| {
+        let mut it = l.split_whitespace();
+        let addr = it.next()?;
+        let _kind = it.next()?;
+        (it.next()? == name).then(|| usize::from_str_radix(addr, 16).ok().map(|a| a & 0xFFFF))?
+    })
+}
+
+/// UART output of the editor, in bytes: power-up screen, one command entry, page flip,
+/// full redraw (`/`).
+#[derive(Clone, Debug, Default)]
+pub struct UartBytes {
+    /// Power-up screen.
+    pub power_up: usize,
+    /// `A0.` + CR.
+    pub command: usize,
+    /// ESC [ C.
+    pub page_flip: usize,
+    /// `/` + CR.
+    pub redraw: usize,
+}
+
+fn exchange(chip: &mut Chip, input: &[u8]) -> usize {
+    chip.take_output();
+    chip.send(input);
+    chip.run_until_quiet(40, 5000);
+    chip.take_output().len()
+}
+
+/// Counts the editor's UART bytes (D8 open, erased EEPROM).
+pub fn measure_uart(elf: &Path) -> Result<UartBytes, String> {
+    let mut chip = Chip::load(elf)?;
+    chip.run_until_quiet(40, 5000);
+    let power_up = chip.take_output().len();
+    if power_up == 0 {
+        return Err("no power-up screen".into());
+    }
+    Ok(UartBytes {
+        power_up,
+        command: exchange(&mut chip, b"A0.\r"),
+        page_flip: exchange(&mut chip, b"\x1b[C"),
+        redraw: exchange(&mut chip, b"/\r"),
+    })
+}
+
+/// Stack use: (bytes of stack used at the deepest point, free bytes never touched).
+pub fn measure_stack(elf: &Path) -> Result<(usize, usize, Vec<String>), String> {
+    let heap = symbol(elf, "__heap_start").ok_or("no __heap_start symbol")?;
+    let mut chip = Chip::load(elf)?;
+    chip.run_until_quiet(40, 5000);
+    let mut big = every_opcode_program();
+    for (i, line) in big.uf.iter_mut().enumerate().skip(200) {
+        *line = opcodes::lookup(b"A0.").unwrap_or(NOP) + (i % 6) as u8;
+    }
+    big.uf[LINES - 1] = END;
+    let hex = crate::listing::to_hex(&big);
+    let mut log = Vec::new();
+    let steps: Vec<(&str, Vec<u8>)> = vec![
+        ("help", b"?\r".to_vec()),
+        ("help key", b" ".to_vec()),
+        ("LDT", b"LDT\r5\r\x1b[C300\rZ\r\r".to_vec()),
+        ("READ 256 lines", [b"READ\r".to_vec(), hex].concat()),
+        ("LIST", b"LIST\r\r".to_vec()),
+        ("LIST back", b"\r".to_vec()),
+        ("WRITE", b"WRITE\r\r".to_vec()),
+        ("WRITE back", b"\r".to_vec()),
+        ("keys", b"\x1b[C\x1b[D\x1b[A\x1b[B\x1b[1~\x1b[2~\x1b[3~40\r\x1bH".to_vec()),
+        ("entry", b"A0.\r!\r.Y0\rINS\rDEL\rVER\r99999\r".to_vec()),
+        ("STORE", b"STORE\r".to_vec()),
+        ("LOAD", b"LOAD\r".to_vec()),
+        ("RUN", b"EX0\r".to_vec()),
+        ("break", b"/".to_vec()),
+        ("strike", b" ".to_vec()),
+        ("STAT", b"STAT\r".to_vec()),
+        ("FILL", b"FILL\r/\r".to_vec()),
+    ];
+    for (name, bytes) in steps {
+        let n = exchange(&mut chip, &bytes);
+        log.push(format!("{name}: {n} bytes"));
+    }
+    let ramend = chip.ramend();
+    let lowest = (heap..=ramend).find(|&a| chip.data(a) != STACK_PAINT).unwrap_or(ramend);
+    Ok((ramend + 1 - lowest, lowest - heap, log))
+}
+
+/// STORE timing: (EEPROM byte writes, CPU ms in simavr, estimated ms on hardware).
+#[derive(Clone, Copy, Debug)]
+pub struct StoreTiming {
+    /// EEPROM bytes written (each takes 3.4 ms on the chip; simavr finishes them at once).
+    pub writes: u64,
+    /// From the CR of STORE to its last message byte, in simavr.
+    pub sim_ms: f64,
+    /// `sim_ms` + writes × 3.4 ms.
+    pub est_ms: f64,
+}
+
+fn timed_store(chip: &mut Chip) -> StoreTiming {
+    let w0 = chip.ee_writes();
+    chip.send(b"STORE\r");
+    chip.run_until(1000 * CYCLES_PER_MS, |c| !c.input_pending());
+    // The CR is complete one frame after it starts.
+    let start = chip.last_rx_cycle + CYCLES_PER_BYTE;
+    let end = chip.run_until_quiet(40, 10_000);
+    let writes = chip.ee_writes() - w0;
+    let sim_ms = end.saturating_sub(start) as f64 / CYCLES_PER_MS as f64;
+    StoreTiming { writes, sim_ms, est_ms: sim_ms + writes as f64 * 3.4 }
+}
+
+/// STORE after a one-line change (both slots hold the loaded program) and STORE into an
+/// erased EEPROM (every byte written).
+pub fn measure_store(elf: &Path) -> Result<(StoreTiming, StoreTiming), String> {
+    let prog = example("11.2b-intrusion-alarm.utl")?;
+    let mut chip = Chip::load(elf)?;
+    chip.set_eeprom(&eeprom_with(&prog, 2));
+    chip.run_until_quiet(40, 5000);
+    exchange(&mut chip, b"LOAD\r");
+    exchange(&mut chip, b"A1.\r");
+    let small = timed_store(&mut chip);
+
+    let mut chip = Chip::load(elf)?;
+    chip.run_until_quiet(40, 5000);
+    exchange(&mut chip, b"FILL\r");
+    let full = timed_store(&mut chip);
+    if full.writes == 0 {
+        return Err("STORE wrote nothing".into());
+    }
+    Ok((small, full))
+}

@@ -1,0 +1,197 @@
+//! Command line of `cargo nano` (the `vnano` binary).
+
+use std::path::PathBuf;
+
+/// The usage text.
+pub const USAGE: &str = "\
+usage: cargo nano [OPTIONS]       (the vnano binary)
+
+Runs the uTile firmware image in simavr: a virtual Arduino Nano at 16 MHz, paced to the
+wall clock, its UART (19200 8N1) on this terminal, with a virtual test rig.
+
+Rig keys: press Ctrl-] then
+  0..5  press/release switch A0..A5      8  fit/remove the D8 jumper (autostart, read at reset)
+  r     reset the chip (warm reset)      9  fit/remove the D9 jumper (out_sense)
+  q     quit                             ?  help        ]  send a Ctrl-] to the firmware
+The line below the uTile screen shows the switches, jumpers and the LEDs Y0..Y7.
+
+options:
+  --elf PATH          firmware ELF (default: $UTILE_ELF, else out/m328-nano-utile.elf)
+  --pty               put the UART on a pseudo-terminal (connect minicom, picocom or
+                      C-Kermit to the printed /dev/pts/N); rig keys without Ctrl-]
+  --link PATH         with --pty: also make PATH a symlink to it (e.g. /tmp/utile-tty)
+  --fast              do not pace to the wall clock (run as fast as the host can)
+  --for SECONDS       stop after this much simulated time
+  --press LIST        switches held pressed from the start, e.g. --press 0,3
+  --d8-low            start with the D8 jumper fitted (autostart)
+  --d9-low            start with the D9 jumper fitted (inverted outputs)
+  --eeprom FILE       load the EEPROM from a binary file (up to 1024 bytes) at power-up
+  --save-eeprom FILE  write the EEPROM to a binary file on exit
+  --persist           same as --eeprom out/vnano.eeprom (if it exists)
+                      --save-eeprom out/vnano.eeprom: STORE survives between runs
+  --load FILE         load a .utl program (not yet supported: issue 6)
+  -h, --help          this text
+";
+
+/// Options of one run.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct Options {
+    /// Firmware ELF given with `--elf`.
+    pub elf: Option<PathBuf>,
+    /// UART on a pseudo-terminal instead of this terminal.
+    pub pty: bool,
+    /// Symlink to the pty.
+    pub link: Option<PathBuf>,
+    /// No wall-clock pacing.
+    pub fast: bool,
+    /// Simulated seconds to run.
+    pub run_for: Option<f64>,
+    /// Switches A0..A5 pressed at start, bits 0..5.
+    pub pressed: u8,
+    /// D8 jumper fitted at start.
+    pub d8_low: bool,
+    /// D9 jumper fitted at start.
+    pub d9_low: bool,
+    /// EEPROM image to load (must exist).
+    pub eeprom: Option<PathBuf>,
+    /// EEPROM image to load if it exists (`--persist`).
+    pub eeprom_if_exists: Option<PathBuf>,
+    /// Where to save the EEPROM on exit.
+    pub save_eeprom: Option<PathBuf>,
+    /// `-h`/`--help`.
+    pub help: bool,
+}
+
+/// Parses the arguments (without the program name). `persist_file` is the file `--persist`
+/// uses.
+pub fn parse<I: IntoIterator<Item = String>>(
+    args: I,
+    persist_file: PathBuf,
+) -> Result<Options, String> {
+    let mut o = Options::default();
+    let mut it = args.into_iter();
+    while let Some(arg) = it.next() {
+        let mut value = |name: &str| it.next().ok_or_else(|| format!("{name} needs a value"));
+        match arg.as_str() {
+            "-h" | "--help" => o.help = true,
+            "--elf" => o.elf = Some(PathBuf::from(value("--elf")?)),
+            "--pty" => o.pty = true,
+            "--link" => {
+                o.link = Some(PathBuf::from(value("--link")?));
+                o.pty = true;
+            }
+            "--fast" => o.fast = true,
+            "--for" => {
+                let v = value("--for")?;
+                let secs: f64 = v
+                    .parse()
+                    .map_err(|_| format!("--for: not a number of seconds: {v}"))?;
+                if !(secs > 0.0 && secs.is_finite()) {
+                    return Err(format!("--for: must be more than 0 seconds: {v}"));
+                }
+                o.run_for = Some(secs);
+            }
+            "--press" => {
+                let v = value("--press")?;
+                for part in v
+                    .split(|c: char| c == ',' || c.is_whitespace())
+                    .filter(|p| !p.is_empty())
+                {
+                    let part = part.trim_start_matches(['A', 'a']);
+                    match part.parse::<u8>() {
+                        Ok(n) if n <= 5 => o.pressed |= 1 << n,
+                        _ => {
+                            return Err(format!("--press: switches are 0..5 (A0..A5), not {part}"))
+                        }
+                    }
+                }
+            }
+            "--d8-low" => o.d8_low = true,
+            "--d9-low" => o.d9_low = true,
+            "--eeprom" => o.eeprom = Some(PathBuf::from(value("--eeprom")?)),
+            "--save-eeprom" => o.save_eeprom = Some(PathBuf::from(value("--save-eeprom")?)),
+            "--persist" => {
+                o.eeprom_if_exists = Some(persist_file.clone());
+                o.save_eeprom = Some(persist_file.clone());
+            }
+            "--load" => {
+                let v = value("--load")?;
+                return Err(format!(
+                    "--load {v}: loading .utl programs is not yet supported (issue 6)"
+                ));
+            }
+            other => return Err(format!("unknown option {other} (see --help)")),
+        }
+    }
+    Ok(o)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn p(args: &[&str]) -> Result<Options, String> {
+        parse(
+            args.iter().map(|s| s.to_string()),
+            PathBuf::from("out/vnano.eeprom"),
+        )
+    }
+
+    #[test]
+    fn defaults_are_a_paced_terminal_session() {
+        let o = p(&[]).unwrap();
+        assert_eq!(o, Options::default());
+        assert!(!o.fast && !o.pty && o.run_for.is_none());
+    }
+
+    #[test]
+    fn every_option() {
+        let o = p(&[
+            "--elf",
+            "x.elf",
+            "--fast",
+            "--for",
+            "2.5",
+            "--press",
+            "0,3",
+            "--press",
+            "A5",
+            "--d8-low",
+            "--d9-low",
+            "--eeprom",
+            "in.bin",
+            "--save-eeprom",
+            "out.bin",
+            "--link",
+            "/tmp/t",
+        ])
+        .unwrap();
+        assert_eq!(o.elf, Some(PathBuf::from("x.elf")));
+        assert!(o.fast && o.pty && o.d8_low && o.d9_low);
+        assert_eq!(o.run_for, Some(2.5));
+        assert_eq!(o.pressed, 0b10_1001);
+        assert_eq!(o.eeprom, Some(PathBuf::from("in.bin")));
+        assert_eq!(o.save_eeprom, Some(PathBuf::from("out.bin")));
+        assert_eq!(o.link, Some(PathBuf::from("/tmp/t")));
+    }
+
+    #[test]
+    fn persist_loads_if_present_and_saves() {
+        let o = p(&["--persist"]).unwrap();
+        assert_eq!(o.eeprom_if_exists, Some(PathBuf::from("out/vnano.eeprom")));
+        assert_eq!(o.save_eeprom, Some(PathBuf::from("out/vnano.eeprom")));
+        assert_eq!(o.eeprom, None);
+    }
+
+    #[test]
+    fn errors_are_explained() {
+        assert!(p(&["--press", "6"]).unwrap_err().contains("0..5"));
+        assert!(p(&["--for", "abc"]).unwrap_err().contains("--for"));
+        assert!(p(&["--for", "0"]).unwrap_err().contains("more than 0"));
+        assert!(p(&["--elf"]).unwrap_err().contains("needs a value"));
+        assert!(p(&["--load", "x.utl"])
+            .unwrap_err()
+            .contains("not yet supported"));
+        assert!(p(&["--bogus"]).unwrap_err().contains("unknown option"));
+    }
+}

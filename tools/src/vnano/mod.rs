@@ -1,0 +1,11 @@
+//! The virtual Nano: the real firmware image running in simavr, its UART on the user's
+//! terminal (or a pseudo-terminal), and a virtual test rig driven from the keyboard.
+//! The `vnano` binary (`cargo nano`) puts these pieces together.
+
+pub mod args;
+pub mod nano;
+pub mod pty;
+pub mod rig;
+pub mod term;
+
+pub use nano::{CpuState, Nano, RigPin};
