@@ -17,6 +17,7 @@ mod firmware {
     use utile::core::board::Board;
     use utile::core::editor::{Editor, Mode};
     use utile::core::engine::{Engine, Flow};
+    use utile::core::stats::ScanStats;
     use utile::core::store;
     use utile::hal;
 
@@ -58,39 +59,47 @@ mod firmware {
             editor.boot(eng, &mut board);
         }
 
-        // Timer1 count at the last END: a scan is measured END to END.
+        loop {
+            if mode == Mode::Run {
+                run(eng, editor, &mut board);
+                mode = Mode::Edit;
+            }
+            board.feed_watchdog();
+            match board.rx() {
+                Some(byte) => {
+                    #[cfg(feature = "hang-test")]
+                    if byte == HANG_BYTE {
+                        // Hang on purpose: the watchdog must reset the chip.
+                        #[allow(clippy::empty_loop)]
+                        loop {}
+                    }
+                    mode = editor.key(byte, eng, &mut board);
+                    hal::kept::reseal(&eng.prog);
+                }
+                None => editor.idle(eng, &mut board),
+            }
+        }
+    }
+
+    /// RUN mode until KEY breaks out: scans back to back. The statistics are a local, so
+    /// the per-scan bookkeeping stays in registers; a scan is measured END to END.
+    #[inline(always)]
+    fn run(eng: &mut Engine, editor: &mut Editor, board: &mut hal::Nano) {
+        let mut stats = ScanStats::new();
         let mut last_end = board.stats_ticks();
         loop {
             board.feed_watchdog();
-            match mode {
-                Mode::Run => {
-                    let flow = eng.scan(&mut board);
-                    let now = board.stats_ticks();
-                    editor.stats.record(now.wrapping_sub(last_end));
-                    last_end = now;
-                    if flow == Flow::Break {
-                        editor.on_break(eng, &mut board);
-                        mode = Mode::Edit;
-                    } else {
-                        editor.after_scan(eng, &mut board);
-                    }
-                }
-                Mode::Edit => match board.rx() {
-                    Some(byte) => {
-                        #[cfg(feature = "hang-test")]
-                        if byte == HANG_BYTE {
-                            // Hang on purpose: the watchdog must reset the chip.
-                            #[allow(clippy::empty_loop)]
-                            loop {}
-                        }
-                        mode = editor.key(byte, eng, &mut board);
-                        hal::kept::reseal(&eng.prog);
-                        if mode == Mode::Run {
-                            last_end = board.stats_ticks();
-                        }
-                    }
-                    None => editor.idle(eng, &mut board),
-                },
+            let flow = eng.scan(board);
+            let now = board.stats_ticks();
+            stats.record(now.wrapping_sub(last_end));
+            last_end = now;
+            if flow == Flow::Break {
+                editor.stats = stats;
+                editor.on_break(eng, board);
+                return;
+            }
+            if editor.has_output(eng) {
+                editor.after_scan(eng, board);
             }
         }
     }

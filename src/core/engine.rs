@@ -163,12 +163,21 @@ impl Engine {
     }
 
     /// Run one scan from line 0 until END (or past line 255, which acts as END).
+    ///
     pub fn scan<B: Board>(&mut self, b: &mut B) -> Flow {
-        for line in 0..LINES {
-            let op = self.prog.uf.get(line).copied().unwrap_or(END);
-            match self.exec(op, b) {
-                Flow::Next => {}
-                other => return other,
+        let mut line: u8 = 0;
+        loop {
+            let op = self.prog.uf[usize::from(line)];
+            // NOP (0x00) and blank (0xFF) lines are the commonest: one test skips both.
+            if op.wrapping_add(1) > 1 {
+                match self.exec(op, b) {
+                    Flow::Next => {}
+                    other => return other,
+                }
+            }
+            line = line.wrapping_add(1);
+            if line == 0 {
+                break;
             }
         }
         self.end(b);
@@ -177,7 +186,10 @@ impl Engine {
 
     /// END: flip-flops update (reset wins), outputs reach the pins, one timer is checked.
     pub fn end<B: Board>(&mut self, b: &mut B) {
-        self.q = (self.q | self.set) & !self.reset;
+        // Programs without flip-flops (S and R all 0) skip the update.
+        if self.set | self.reset != 0 {
+            self.q = (self.q | self.set) & !self.reset;
+        }
         b.write_outputs(self.py);
         if self.tq != 0 {
             // Running timers are normally retired when TQ is read; this sweep retires the
@@ -190,7 +202,7 @@ impl Engine {
 
     /// Timer m's output, retiring it if its time has passed.
     fn timer_output<B: Board>(&mut self, m: u8, b: &mut B) -> bool {
-        let bit = 1u16 << m;
+        let bit = bit16(m);
         if self.tq & bit == 0 {
             return false;
         }
@@ -218,22 +230,112 @@ impl Engine {
         if let Some(d) = self.deadline.get_mut(i) {
             *d = due;
         }
-        self.tq |= 1 << m;
+        self.tq |= bit16(m);
     }
 
     /// Execute one command. Blank and unassigned bytes act as NOP.
+    ///
+    /// The opcode's high bits pick the family first (pop, push, single), so the common bit
+    /// commands are reached in a few tests instead of a compare tree over every opcode:
+    /// LLVM's AVR backend emits no jump tables.
+    #[inline(always)]
     pub fn exec<B: Board>(&mut self, op: u8, b: &mut B) -> Flow {
-        let n = op & 0x07;
+        if op >= 0x80 {
+            self.exec_pop(op, b);
+            Flow::Next
+        } else if op >= 0x20 {
+            if let Some(bit) = self.read_bit(op, b) {
+                self.push(bit);
+            }
+            Flow::Next
+        } else {
+            self.exec_single(op, b)
+        }
+    }
+
+    /// The bit a push command (`0x20..=0x7F`) reads, or `None` for an unassigned opcode.
+    #[inline(always)]
+    fn read_bit<B: Board>(&mut self, op: u8, b: &mut B) -> Option<bool> {
+        let mask = bit_mask(op);
+        let low_half = op & 0x08 != 0;
+        Some(if op < 0x40 {
+            // Inputs A, AL, AT, AD: numbers 6 and 7 do not exist.
+            if op & 0x06 == 0x06 {
+                return None;
+            }
+            if op < 0x30 {
+                if op < 0x28 {
+                    b.inputs() & mask != 0
+                } else {
+                    b.take_leading(mask)
+                }
+            } else if op < 0x38 {
+                b.take_trailing(mask)
+            } else {
+                b.toggles() & mask != 0
+            }
+        } else if op < 0x58 {
+            let byte = if op < 0x48 {
+                self.py
+            } else if op < 0x50 {
+                self.pu
+            } else {
+                self.pv
+            };
+            byte & mask != 0
+        } else if op < 0x68 {
+            half(self.q, low_half) & mask != 0
+        } else if op < 0x78 {
+            self.timer_output(op - PUSH_TQ, b)
+        } else {
+            return None;
+        })
+    }
+
+    /// A pop command (`0x80..=0xD7`); unassigned opcodes above do nothing.
+    #[inline(always)]
+    fn exec_pop<B: Board>(&mut self, op: u8, b: &mut B) {
+        if op > 0xD7 {
+            return;
+        }
+        let v = self.pop();
+        let mask = bit_mask(op);
+        if op < 0x98 {
+            let byte = if op < 0x88 {
+                &mut self.py
+            } else if op < 0x90 {
+                &mut self.pu
+            } else {
+                &mut self.pv
+            };
+            if v {
+                *byte |= mask;
+            } else {
+                *byte &= !mask;
+            }
+        } else if op < 0xB8 {
+            // In the 16-wide families, numbers 0..7 have bit 3 set (0x98, 0xA8, ...).
+            let mask16 = if op & 0x08 != 0 { u16::from(mask) } else { u16::from(mask) << 8 };
+            let word = if op < 0xA8 { &mut self.set } else { &mut self.reset };
+            if v {
+                *word |= mask16;
+            } else {
+                *word &= !mask16;
+            }
+        } else if op < 0xC8 {
+            self.trigger(op - POP_TK, v, b);
+        } else if v {
+            self.tq &= !bit16(op - POP_TR);
+        }
+    }
+
+    /// The single commands `0x00..=0x1F`: the frequent ones here, the rest out of line.
+    #[inline(always)]
+    fn exec_single<B: Board>(&mut self, op: u8, b: &mut B) -> Flow {
         match op {
-            NOP => {}
             END => {
                 self.end(b);
                 return Flow::End;
-            }
-            KEY => {
-                if b.rx() == Some(b'/') {
-                    return Flow::Break;
-                }
             }
             AND => {
                 let (x, y) = (self.pop(), self.pop());
@@ -243,15 +345,29 @@ impl Engine {
                 let (x, y) = (self.pop(), self.pop());
                 self.push(x | y);
             }
+            NOT => self.bs ^= 1,
+            DUP => self.push(self.bs & 1 != 0),
+            _ => return self.exec_rare(op, b),
+        }
+        Flow::Next
+    }
+
+    /// The less frequent single commands, out of line to keep the scan loop short.
+    #[inline(never)]
+    fn exec_rare<B: Board>(&mut self, op: u8, b: &mut B) -> Flow {
+        match op {
+            KEY => {
+                if b.rx() == Some(b'/') {
+                    return Flow::Break;
+                }
+            }
             XOR => {
                 let (x, y) = (self.pop(), self.pop());
                 self.push(x ^ y);
             }
-            NOT => self.bs ^= 1,
             NOT_ALL => self.bs = !self.bs,
             SET => self.push(true),
             CLR => self.push(false),
-            DUP => self.push(self.bs & 1 != 0),
             DROP => {
                 self.pop();
             }
@@ -278,75 +394,41 @@ impl Engine {
                 let c = b.clocks() >> (op - CLKA);
                 self.push(c & 1 != 0);
             }
-            0x20..=0x25 => self.push(b.inputs() & (1 << n) != 0),
-            0x28..=0x2D => {
-                let hit = b.take_leading(1 << n);
-                self.push(hit);
-            }
-            0x30..=0x35 => {
-                let hit = b.take_trailing(1 << n);
-                self.push(hit);
-            }
-            0x38..=0x3D => self.push(b.toggles() & (1 << n) != 0),
-            0x40..=0x47 => self.push(self.py & (1 << n) != 0),
-            0x48..=0x4F => self.push(self.pu & (1 << n) != 0),
-            0x50..=0x57 => self.push(self.pv & (1 << n) != 0),
-            0x58..=0x67 => self.push(self.q & (1 << (op - PUSH_Q)) != 0),
-            0x68..=0x77 => {
-                let out = self.timer_output(op - PUSH_TQ, b);
-                self.push(out);
-            }
-            0x80..=0x87 => {
-                let v = self.pop();
-                set_bit8(&mut self.py, n, v);
-            }
-            0x88..=0x8F => {
-                let v = self.pop();
-                set_bit8(&mut self.pu, n, v);
-            }
-            0x90..=0x97 => {
-                let v = self.pop();
-                set_bit8(&mut self.pv, n, v);
-            }
-            0x98..=0xA7 => {
-                let v = self.pop();
-                set_bit16(&mut self.set, op - POP_S, v);
-            }
-            0xA8..=0xB7 => {
-                let v = self.pop();
-                set_bit16(&mut self.reset, op - POP_R, v);
-            }
-            0xB8..=0xC7 => {
-                let v = self.pop();
-                self.trigger(op - POP_TK, v, b);
-            }
-            0xC8..=0xD7 => {
-                let v = self.pop();
-                if v {
-                    self.tq &= !(1u16 << (op - POP_TR));
-                }
-            }
             _ => {}
         }
         Flow::Next
     }
 }
 
-fn set_bit8(byte: &mut u8, n: u8, v: bool) {
-    let mask = 1u8 << n;
-    if v {
-        *byte |= mask;
+/// `1 << n` for n = 0..7, as a table: the AVR has no barrel shifter, and LLVM turns a
+/// variable shift into a loop of up to seven steps.
+const BITS: [u8; 8] = [0x01, 0x02, 0x04, 0x08, 0x10, 0x20, 0x40, 0x80];
+
+/// `1 << (op & 7)`: the bit a family command addresses within its byte.
+#[inline(always)]
+fn bit_mask(op: u8) -> u8 {
+    BITS[usize::from(op & 7)]
+}
+
+/// `1 << m` for a flip-flop or timer number m = 0..15, without a shift loop.
+#[inline(always)]
+fn bit16(m: u8) -> u16 {
+    let b = u16::from(bit_mask(m));
+    if m & 8 == 0 {
+        b
     } else {
-        *byte &= !mask;
+        b << 8
     }
 }
 
-fn set_bit16(word: &mut u16, n: u8, v: bool) {
-    let mask = 1u16 << n;
-    if v {
-        *word |= mask;
+/// One byte of a 16-bit flip-flop or timer word: numbers 0..7 (`low`) or 8..15.
+#[inline(always)]
+fn half(word: u16, low: bool) -> u8 {
+    let [lo, hi] = word.to_le_bytes();
+    if low {
+        lo
     } else {
-        *word &= !mask;
+        hi
     }
 }
 

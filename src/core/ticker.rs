@@ -33,10 +33,15 @@ pub struct Debouncer {
 
 impl Debouncer {
     /// A debouncer that takes `raw` as the settled level, with no edges.
-    pub fn new(raw: u8) -> Self {
-        let mut d = Self::default();
-        d.resync(raw);
-        d
+    pub const fn new(raw: u8) -> Self {
+        Self {
+            level: raw & INPUT_MASK,
+            counting: 0,
+            count: [0; INPUTS],
+            leading: 0,
+            trailing: 0,
+            toggles: 0,
+        }
     }
 
     /// Take one sample of the raw pin levels (bits 0..5).
@@ -116,13 +121,13 @@ pub struct Ticker {
 
 impl Ticker {
     /// State at reset, with the inputs settled at `raw`.
-    pub fn new(raw: u8) -> Self {
+    pub const fn new(raw: u8) -> Self {
         Self::with_time(raw, 0)
     }
 
     /// State at reset with the ms clock starting at `ms` instead of 0 (tests of the 49.7-day
     /// wrap of the clock use a start just below `u32::MAX`).
-    pub fn with_time(raw: u8, ms: u32) -> Self {
+    pub const fn with_time(raw: u8, ms: u32) -> Self {
         Self {
             ms,
             inputs: Debouncer::new(raw),

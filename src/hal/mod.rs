@@ -12,7 +12,7 @@ pub mod serial;
 
 use core::cell::UnsafeCell;
 
-use avr_device::atmega328p::Peripherals;
+use avr_device::atmega328p;
 use avr_device::interrupt::{self, CriticalSection};
 
 use crate::core::board::Board;
@@ -29,13 +29,41 @@ macro_rules! wr {
 }
 pub(crate) use wr;
 
+/// The register blocks this layer uses.
+#[allow(non_snake_case)]
+pub(crate) struct Regs {
+    pub CPU: atmega328p::CPU,
+    pub EEPROM: atmega328p::EEPROM,
+    pub PORTB: atmega328p::PORTB,
+    pub PORTC: atmega328p::PORTC,
+    pub PORTD: atmega328p::PORTD,
+    pub TC0: atmega328p::TC0,
+    pub TC1: atmega328p::TC1,
+    pub USART0: atmega328p::USART0,
+    pub WDT: atmega328p::WDT,
+}
+
 /// The register blocks. The HAL is their only user; registers shared between the main
-/// program and an interrupt are only changed inside critical sections.
+/// program and an interrupt are only changed inside critical sections. Each handle is
+/// stolen on its own: `Peripherals::steal` would also store its "taken" flag to RAM on
+/// every call, which cost a store in every scan.
 #[inline(always)]
-pub(crate) fn regs() -> Peripherals {
-    // SAFETY: `Peripherals` is a set of zero-sized handles; ownership discipline is kept by
-    // this module (see above), not by the handles.
-    unsafe { Peripherals::steal() }
+pub(crate) fn regs() -> Regs {
+    // SAFETY: the handles are zero-sized; ownership discipline is kept by this module (see
+    // above), not by the handles.
+    unsafe {
+        Regs {
+            CPU: atmega328p::CPU::steal(),
+            EEPROM: atmega328p::EEPROM::steal(),
+            PORTB: atmega328p::PORTB::steal(),
+            PORTC: atmega328p::PORTC::steal(),
+            PORTD: atmega328p::PORTD::steal(),
+            TC0: atmega328p::TC0::steal(),
+            TC1: atmega328p::TC1::steal(),
+            USART0: atmega328p::USART0::steal(),
+            WDT: atmega328p::WDT::steal(),
+        }
+    }
 }
 
 /// A value shared with interrupt handlers, reachable only with interrupts disabled.
@@ -78,7 +106,7 @@ struct Outputs {
     invert: u8,
 }
 
-static TICKER: IsrCell<Option<Ticker>> = IsrCell::new(None);
+static TICKER: IsrCell<Ticker> = IsrCell::new(Ticker::new(INPUT_MASK));
 static OUTPUTS: IsrCell<Outputs> = IsrCell::new(Outputs { py: 0, invert: 0 });
 
 /// The out_sense mask for the present level of D9.
@@ -163,7 +191,7 @@ pub fn init() -> (Nano, BootInfo) {
     // TIMSK0: OCIE0A.
     wr!(dp.TC0.timsk0(), 0x02);
     let raw = dp.PORTC.pinc().read().bits() & INPUT_MASK;
-    interrupt::free(|cs| TICKER.with(cs, |t| *t = Some(Ticker::new(raw))));
+    interrupt::free(|cs| TICKER.with(cs, |t| t.inputs.resync(raw)));
 
     // 5. Timer1: normal mode, clk/8 (0.5 µs per count), free running for scan statistics.
     // TCCR1A: normal mode.
@@ -223,11 +251,7 @@ fn paint_stack() {
 pub fn on_tick(cs: CriticalSection) {
     let dp = regs();
     let raw = dp.PORTC.pinc().read().bits() & INPUT_MASK;
-    TICKER.with(cs, |t| {
-        if let Some(t) = t {
-            t.tick(raw);
-        }
-    });
+    TICKER.with(cs, |t| t.tick(raw));
     let invert = invert_mask(dp.PORTB.pinb().read().bits());
     let changed = OUTPUTS.with(cs, |o| {
         if o.invert == invert {
@@ -255,53 +279,47 @@ impl Nano {
     }
 
     #[inline(always)]
-    fn ticker<R>(&self, f: impl FnOnce(&mut Ticker) -> R) -> Option<R> {
-        interrupt::free(|cs| TICKER.with(cs, |t| t.as_mut().map(f)))
+    fn ticker<R>(&self, f: impl FnOnce(&mut Ticker) -> R) -> R {
+        interrupt::free(|cs| TICKER.with(cs, f))
     }
 }
 
 impl Board for Nano {
     #[inline]
     fn inputs(&mut self) -> u8 {
-        self.ticker(|t| t.inputs.level()).unwrap_or(0)
+        self.ticker(|t| t.inputs.level())
     }
 
     #[inline]
     fn take_leading(&mut self, mask: u8) -> bool {
         self.ticker(|t| t.inputs.take_leading(mask))
-            .unwrap_or(false)
     }
 
     #[inline]
     fn take_trailing(&mut self, mask: u8) -> bool {
         self.ticker(|t| t.inputs.take_trailing(mask))
-            .unwrap_or(false)
     }
 
     #[inline]
     fn toggles(&mut self) -> u8 {
-        self.ticker(|t| t.inputs.toggles()).unwrap_or(0)
+        self.ticker(|t| t.inputs.toggles())
     }
 
     fn resync_inputs(&mut self) {
         interrupt::free(|cs| {
             let raw = regs().PORTC.pinc().read().bits() & INPUT_MASK;
-            TICKER.with(cs, |t| {
-                if let Some(t) = t {
-                    t.inputs.resync(raw);
-                }
-            });
+            TICKER.with(cs, |t| t.inputs.resync(raw));
         });
     }
 
     #[inline]
     fn clocks(&mut self) -> u8 {
-        self.ticker(|t| t.clocks()).unwrap_or(0)
+        self.ticker(|t| t.clocks())
     }
 
     #[inline]
     fn now_ms(&mut self) -> u32 {
-        self.ticker(|t| t.now_ms()).unwrap_or(0)
+        self.ticker(|t| t.now_ms())
     }
 
     #[inline]

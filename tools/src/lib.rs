@@ -1,4 +1,3 @@
-pub fn x(){}
 /// `.utl` listings and hex images (the `utile` tool, issue 6).
 pub mod listing;
 /// `utile sim`: timelines, simulation on the core engine, VCD (issue 6).

@@ -480,6 +480,13 @@ impl Editor {
         }
     }
 
+    /// Whether [`Editor::after_scan`] has anything to do: a deferred redraw or a PPx/PBS
+    /// request. The main loop asks first, so an idle scan pays only these tests.
+    #[inline(always)]
+    pub fn has_output(&self, eng: &Engine) -> bool {
+        self.render < STEPS || eng.bs_view.is_some() || eng.port_view.is_some()
+    }
+
     /// After every scan in RUN mode: pending PPx/PBS displays (at most one per 100 ms each)
     /// and deferred screen drawing, only as much as `b.tx_room()` allows. Never waits.
     pub fn after_scan<B: Board>(&mut self, eng: &mut Engine, b: &mut B) {
@@ -1049,7 +1056,7 @@ impl Editor {
         } else {
             s.count / (s.run_ms / 1000).max(1)
         };
-        goto(b, ROW_INFO, COL_PAGE);
+        goto(b, ROW_INFO, 1);
         text::STAT_MIN.send(b);
         num(b, ScanStats::ticks_to_us(min));
         text::STAT_AVG.send(b);

@@ -131,7 +131,7 @@ texts! {
     /// Unknown input.
     UNRECOGNIZED = "*** Unrecognized Input! ***";
     /// More than 8 characters.
-    TOO_LONG = "*** Line too long (8 max) - refused ***";
+    TOO_LONG = "*** Line too long (8 max) ***";
     /// A number past 65535.
     TOO_BIG = "*** Number too big (65535 max) ***";
     /// VER.
@@ -200,16 +200,16 @@ texts! {
     LIST_END = "# end of listing - 'CR' for menu -->";
     /// Preset line middle.
     PRESET_EQ = " = ";
+    /// STAT text (from column 1; with the widest numbers the line is 77 columns).
+    STAT_MIN = "Run: min ";
     /// STAT text.
-    STAT_MIN = "Last run: scan min ";
+    STAT_AVG = " avg ";
     /// STAT text.
-    STAT_AVG = " us, avg ";
+    STAT_MAX = " max ";
     /// STAT text.
-    STAT_MAX = " us, max ";
+    STAT_RATE = " us/scan, ";
     /// STAT text.
-    STAT_RATE = " us; scans/s ";
-    /// STAT text.
-    STAT_OVERRUNS = "; rx overruns ";
+    STAT_OVERRUNS = " scans/s, rx overruns ";
     /// The help screen (rows 8..22), lines ended by CR LF.
     HELP = concat!(
         "  Logic    Bit Stack    I/O - Commands                  Interpreter       Timers\r\n",

@@ -16,6 +16,11 @@ use std::ptr::NonNull;
 pub const F_CPU: u64 = 16_000_000;
 /// CPU cycles of one 19200-baud 8N1 frame (10 bits).
 pub const CYCLES_PER_BYTE: u64 = F_CPU * 10 / 19_200;
+/// CPU cycles between bytes fed to the UART. simavr's UART delivers one received byte per
+/// 11 bit times (it always counts a parity bit) from a 64-byte FIFO: 11 × 832 cycles at
+/// UBRR 51. Feeding faster (every 10 bit times) overflows that FIFO within a long file
+/// and simavr drops bytes, which the firmware never sees.
+pub const RX_CYCLES_PER_BYTE: u64 = 11 * 832;
 /// Cycles per millisecond.
 pub const CYCLES_PER_MS: u64 = F_CPU / 1000;
 
@@ -35,6 +40,8 @@ const UCSR0B: usize = 0xC1;
 const RXEN0: u8 = 1 << 4;
 /// EECR: EEPROM write enable (a write starts when it is set after EEMPE).
 const EEPE: u8 = 1 << 1;
+/// Duration of one EEPROM byte write (erase + write) in µs, from the datasheet.
+pub const EE_WRITE_US: u32 = 3400;
 /// Byte address just past the interrupt vector table of the ATmega328P (26 vectors × 4).
 pub const VECTORS_END: u32 = 26 * 4;
 /// The `reti` instruction word.
@@ -107,7 +114,25 @@ unsafe extern "C" fn on_eecr_write(_avr: *mut ffi::avr_t, _addr: u16, v: u8, par
     let sink = unsafe { &mut *(param as *mut Sink) };
     if v & EEPE != 0 {
         sink.ee_writes += 1;
+        // simavr completes the write at once; the chip keeps EEPE set for 3.4 ms while it
+        // programs the byte. Model that, so the firmware's busy-waits take their real time.
+        // SAFETY: `sink.avr` is the running AVR; EECR is inside its data space.
+        unsafe {
+            *(*sink.avr).data.add(usize::from(EECR)) |= EEPE;
+            ffi::avr_cycle_timer_register_usec(sink.avr, EE_WRITE_US, Some(ee_write_done), param);
+        }
     }
+}
+
+/// The 3.4 ms of an EEPROM byte write are over: EEPE reads 0 again.
+unsafe extern "C" fn ee_write_done(
+    avr: *mut ffi::avr_t,
+    _when: ffi::avr_cycle_count_t,
+    _param: *mut c_void,
+) -> ffi::avr_cycle_count_t {
+    // SAFETY: simavr passes the running AVR; EECR is inside its data space.
+    unsafe { *(*avr).data.add(usize::from(EECR)) &= !EEPE };
+    0
 }
 
 unsafe extern "C" fn no_wall_sleep(_avr: *mut ffi::avr_t, _how_long: ffi::avr_cycle_count_t) {}
@@ -138,7 +163,9 @@ impl Chip {
     pub fn load(elf: &Path) -> Result<Chip, String> {
         let shown = elf.display().to_string();
         if !elf.is_file() {
-            return Err(format!("firmware image {shown} not found: run `cargo fw` first"));
+            return Err(format!(
+                "firmware image {shown} not found: run `cargo fw` first"
+            ));
         }
         let c_path = CString::new(elf.as_os_str().as_encoded_bytes())
             .map_err(|_| format!("bad path {shown}"))?;
@@ -176,13 +203,29 @@ impl Chip {
         // SAFETY: the flag ioctls take a u32; the IRQs belong to `avr`; `param` is the boxed
         // sink, which lives (at a fixed address) as long as the `Chip`.
         let uart_in_irq = unsafe {
-            ffi::avr_ioctl(avr.as_ptr(), IOCTL_UART0_GET_FLAGS, &mut flags as *mut u32 as *mut c_void);
+            ffi::avr_ioctl(
+                avr.as_ptr(),
+                IOCTL_UART0_GET_FLAGS,
+                &mut flags as *mut u32 as *mut c_void,
+            );
             flags &= !(ffi::AVR_UART_FLAG_STDIO | ffi::AVR_UART_FLAG_POLL_SLEEP);
-            ffi::avr_ioctl(avr.as_ptr(), IOCTL_UART0_SET_FLAGS, &mut flags as *mut u32 as *mut c_void);
-            let out = ffi::avr_io_getirq(avr.as_ptr(), IOCTL_UART0_GETIRQ, ffi::UART_IRQ_OUTPUT as c_int);
+            ffi::avr_ioctl(
+                avr.as_ptr(),
+                IOCTL_UART0_SET_FLAGS,
+                &mut flags as *mut u32 as *mut c_void,
+            );
+            let out = ffi::avr_io_getirq(
+                avr.as_ptr(),
+                IOCTL_UART0_GETIRQ,
+                ffi::UART_IRQ_OUTPUT as c_int,
+            );
             ffi::avr_irq_register_notify(out, Some(on_uart_output), param);
             ffi::avr_register_io_write(avr.as_ptr(), EECR, Some(on_eecr_write), param);
-            ffi::avr_io_getirq(avr.as_ptr(), IOCTL_UART0_GETIRQ, ffi::UART_IRQ_INPUT as c_int)
+            ffi::avr_io_getirq(
+                avr.as_ptr(),
+                IOCTL_UART0_GETIRQ,
+                ffi::UART_IRQ_INPUT as c_int,
+            )
         };
         if uart_in_irq.is_null() {
             return Err("no UART0 in simavr".into());
@@ -263,7 +306,7 @@ impl Chip {
             // SAFETY: the UART input IRQ of this AVR takes a byte.
             unsafe { ffi::avr_raise_irq(self.uart_in_irq, u32::from(byte)) };
             self.last_rx_cycle = self.cycle();
-            self.next_rx_cycle = self.cycle() + CYCLES_PER_BYTE;
+            self.next_rx_cycle = self.cycle() + RX_CYCLES_PER_BYTE;
         }
     }
 
@@ -405,9 +448,19 @@ impl Chip {
     /// The whole EEPROM.
     pub fn eeprom(&self) -> Vec<u8> {
         let mut buf = vec![0xFFu8; 1024];
-        let mut desc = ffi::avr_eeprom_desc_t { ee: buf.as_mut_ptr(), offset: 0, size: 1024 };
+        let mut desc = ffi::avr_eeprom_desc_t {
+            ee: buf.as_mut_ptr(),
+            offset: 0,
+            size: 1024,
+        };
         // SAFETY: EEPROM_GET copies `size` bytes into `ee`, which has room for them.
-        unsafe { ffi::avr_ioctl(self.avr.as_ptr(), IOCTL_EEPROM_GET, &mut desc as *mut _ as *mut c_void) };
+        unsafe {
+            ffi::avr_ioctl(
+                self.avr.as_ptr(),
+                IOCTL_EEPROM_GET,
+                &mut desc as *mut _ as *mut c_void,
+            )
+        };
         buf
     }
 
@@ -418,9 +471,19 @@ impl Chip {
             return;
         }
         let mut buf = bytes[..len].to_vec();
-        let mut desc = ffi::avr_eeprom_desc_t { ee: buf.as_mut_ptr(), offset: 0, size: len as u32 };
+        let mut desc = ffi::avr_eeprom_desc_t {
+            ee: buf.as_mut_ptr(),
+            offset: 0,
+            size: len as u32,
+        };
         // SAFETY: EEPROM_SET copies `size` bytes from `ee`.
-        unsafe { ffi::avr_ioctl(self.avr.as_ptr(), IOCTL_EEPROM_SET, &mut desc as *mut _ as *mut c_void) };
+        unsafe {
+            ffi::avr_ioctl(
+                self.avr.as_ptr(),
+                IOCTL_EEPROM_SET,
+                &mut desc as *mut _ as *mut c_void,
+            )
+        };
     }
 }
 

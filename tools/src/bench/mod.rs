@@ -8,7 +8,7 @@ pub mod chip;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use chip::{Chip, Port, CYCLES_PER_BYTE, CYCLES_PER_MS, F_CPU, RETI, VECTORS_END};
+use chip::{Chip, Port, CYCLES_PER_MS, F_CPU, RETI, VECTORS_END};
 use utile::core::engine::{Engine, Program, LINES, TIMER_UNIT_MS};
 use utile::core::opcodes::{self, END, NOP};
 use utile::sim::SimBoard;
@@ -47,7 +47,12 @@ impl Spread {
         }
         let mut v = values.to_vec();
         v.sort_by(f64::total_cmp);
-        Some(Spread { min: v[0], median: v[(v.len() - 1) / 2], max: v[v.len() - 1], n: v.len() })
+        Some(Spread {
+            min: v[0],
+            median: v[(v.len() - 1) / 2],
+            max: v[v.len() - 1],
+            n: v.len(),
+        })
     }
 }
 
@@ -94,7 +99,9 @@ pub fn nops_program() -> Program {
 pub fn every_opcode_program() -> Program {
     let mut p = Program::blank();
     p.uf = [NOP; LINES];
-    let ops: Vec<u8> = (0..=0xFEu8).filter(|&op| op != END && opcodes::is_valid(op)).collect();
+    let ops: Vec<u8> = (0..=0xFEu8)
+        .filter(|&op| op != END && opcodes::is_valid(op))
+        .collect();
     for (line, op) in p.uf.iter_mut().zip(&ops) {
         *line = *op;
     }
@@ -105,7 +112,9 @@ pub fn every_opcode_program() -> Program {
 
 /// A `.utl` listing from the repository's examples directory.
 pub fn example(name: &str) -> Result<Program, String> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples").join(name);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../examples")
+        .join(name);
     let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
     crate::listing::parse(name, &text).map_err(|e| e.to_string())
 }
@@ -194,7 +203,12 @@ impl IsrTrack {
 
 /// Scan cycles of `prog` over `scans` scans, after `settle_ms` of running (the RUN-mode
 /// screen is drawn first).
-pub fn measure_scans(elf: &Path, prog: &Program, scans: usize, settle_ms: u64) -> Result<ScanResult, String> {
+pub fn measure_scans(
+    elf: &Path,
+    prog: &Program,
+    scans: usize,
+    settle_ms: u64,
+) -> Result<ScanResult, String> {
     let mut chip = autostarting(elf, prog)?;
     chip.run_for(settle_ms * CYCLES_PER_MS);
     let candidates = tcnt1_reads(&chip);
@@ -212,7 +226,11 @@ pub fn measure_scans(elf: &Path, prog: &Program, scans: usize, settle_ms: u64) -
             return Err("CPU stopped".into());
         }
     }
-    let (best, &count) = hits.iter().enumerate().max_by_key(|(_, h)| **h).ok_or("no candidates")?;
+    let (best, &count) = hits
+        .iter()
+        .enumerate()
+        .max_by_key(|(_, h)| **h)
+        .ok_or("no candidates")?;
     if count < 2 {
         return Err("the program does not reach the scan marker (not running?)".into());
     }
@@ -244,7 +262,13 @@ pub fn measure_scans(elf: &Path, prog: &Program, scans: usize, settle_ms: u64) -
     }
     let total = (chip.cycle() - start) as f64;
     let tick = TICK_VECTOR as usize;
-    let other: u64 = isr.cycles.iter().enumerate().filter(|(v, _)| *v != tick).map(|(_, c)| c).sum();
+    let other: u64 = isr
+        .cycles
+        .iter()
+        .enumerate()
+        .filter(|(v, _)| *v != tick)
+        .map(|(_, c)| c)
+        .sum();
     Ok(ScanResult {
         with_isr: Spread::of(&with).ok_or("no scans measured")?,
         without_isr: Spread::of(&without).ok_or("no scans measured")?,
@@ -269,15 +293,22 @@ pub fn measure_latency(elf: &Path, presses: usize, seed: u64) -> Result<(Spread,
         }
         chip.hold_low(Port::C, 0, true);
         let c0 = chip.cycle();
-        let c1 = chip.run_until(100 * CYCLES_PER_MS, |c| c.y(0)).ok_or("Y0 never came on")?;
+        let c1 = chip
+            .run_until(100 * CYCLES_PER_MS, |c| c.y(0))
+            .ok_or("Y0 never came on")?;
         on.push((c1 - c0) as f64 / CYCLES_PER_MS as f64);
         chip.run_for(rng.range(20 * CYCLES_PER_MS, 60 * CYCLES_PER_MS));
         chip.hold_low(Port::C, 0, false);
         let c0 = chip.cycle();
-        let c1 = chip.run_until(100 * CYCLES_PER_MS, |c| !c.y(0)).ok_or("Y0 never went off")?;
+        let c1 = chip
+            .run_until(100 * CYCLES_PER_MS, |c| !c.y(0))
+            .ok_or("Y0 never went off")?;
         off.push((c1 - c0) as f64 / CYCLES_PER_MS as f64);
     }
-    Ok((Spread::of(&on).ok_or("none")?, Spread::of(&off).ok_or("none")?))
+    Ok((
+        Spread::of(&on).ok_or("none")?,
+        Spread::of(&off).ok_or("none")?,
+    ))
 }
 
 /// The timer test program for unit `m`: A0 pressed triggers timer m; Y1 shows the trigger
@@ -300,7 +331,9 @@ pub fn measure_timer_simavr(elf: &Path, m: u8, preset: u8) -> Result<f64, String
         return Err("timer did not start".into());
     }
     chip.hold_low(Port::C, 0, false);
-    let fall1 = chip.run_until(100 * CYCLES_PER_MS, |c| !c.y(1)).ok_or("Y1 stayed on")?;
+    let fall1 = chip
+        .run_until(100 * CYCLES_PER_MS, |c| !c.y(1))
+        .ok_or("Y1 stayed on")?;
     let want_ms = u64::from(preset) * u64::from(TIMER_UNIT_MS[usize::from(m)]);
     let fall0 = chip
         .run_until((want_ms + 2000) * CYCLES_PER_MS, |c| !c.y(0))
@@ -327,14 +360,19 @@ pub fn measure_timer_host(m: u8, preset: u8) -> Result<f64, String> {
             .find(|(_, img)| img & (1 << bit) == 0)
             .map(|(ms, _)| u64::from(*ms))
     };
-    let (f1, f0) = (fall(1).ok_or("Y1 stayed on")?, fall(0).ok_or("Y0 stayed on")?);
+    let (f1, f0) = (
+        fall(1).ok_or("Y1 stayed on")?,
+        fall(0).ok_or("Y0 stayed on")?,
+    );
     Ok(f0 as f64 - f1 as f64 - want as f64)
 }
 
 /// Milliseconds from power-up to the first output change of an autostarted `SET .Y0 END`.
 pub fn measure_autostart(elf: &Path) -> Result<f64, String> {
     let mut chip = autostarting(elf, &program(&["SET", ".Y0", "END"]))?;
-    let c = chip.run_until(3000 * CYCLES_PER_MS, |c| c.y(0)).ok_or("Y0 never came on")?;
+    let c = chip
+        .run_until(3000 * CYCLES_PER_MS, |c| c.y(0))
+        .ok_or("Y0 never came on")?;
     Ok(c as f64 / CYCLES_PER_MS as f64)
 }
 
@@ -384,11 +422,17 @@ pub struct UartBytes {
     pub redraw: usize,
 }
 
-fn exchange(chip: &mut Chip, input: &[u8]) -> usize {
+/// Sends `input`, waits until the firmware has been quiet for `quiet_ms`, returns the
+/// number of bytes it sent meanwhile.
+fn exchange_q(chip: &mut Chip, input: &[u8], quiet_ms: u64) -> usize {
     chip.take_output();
     chip.send(input);
-    chip.run_until_quiet(40, 5000);
+    chip.run_until_quiet(quiet_ms, 10_000);
     chip.take_output().len()
+}
+
+fn exchange(chip: &mut Chip, input: &[u8]) -> usize {
+    exchange_q(chip, input, 40)
 }
 
 /// Counts the editor's UART bytes (D8 open, erased EEPROM).
@@ -423,12 +467,17 @@ pub fn measure_stack(elf: &Path) -> Result<(usize, usize, Vec<String>), String> 
         ("help", b"?\r".to_vec()),
         ("help key", b" ".to_vec()),
         ("LDT", b"LDT\r5\r\x1b[C300\rZ\r\r".to_vec()),
-        ("READ 256 lines", [b"READ\r".to_vec(), hex].concat()),
+        ("READ", b"READ\r".to_vec()),
+        ("READ file of 256 lines", hex),
+        ("READ done", b"\r".to_vec()),
         ("LIST", b"LIST\r\r".to_vec()),
         ("LIST back", b"\r".to_vec()),
         ("WRITE", b"WRITE\r\r".to_vec()),
         ("WRITE back", b"\r".to_vec()),
-        ("keys", b"\x1b[C\x1b[D\x1b[A\x1b[B\x1b[1~\x1b[2~\x1b[3~40\r\x1bH".to_vec()),
+        (
+            "keys",
+            b"\x1b[C\x1b[D\x1b[A\x1b[B\x1b[1~\x1b[2~\x1b[3~40\r\x1bH".to_vec(),
+        ),
         ("entry", b"A0.\r!\r.Y0\rINS\rDEL\rVER\r99999\r".to_vec()),
         ("STORE", b"STORE\r".to_vec()),
         ("LOAD", b"LOAD\r".to_vec()),
@@ -439,23 +488,31 @@ pub fn measure_stack(elf: &Path) -> Result<(usize, usize, Vec<String>), String> 
         ("FILL", b"FILL\r/\r".to_vec()),
     ];
     for (name, bytes) in steps {
-        let n = exchange(&mut chip, &bytes);
+        // READ ignores input for 200 ms after the file; RUN needs time to scan.
+        let quiet = match name {
+            "READ file of 256 lines" | "RUN" => 400,
+            // STORE writes for up to a second without a word.
+            "STORE" => 2000,
+            _ => 40,
+        };
+        let n = exchange_q(&mut chip, &bytes, quiet);
         log.push(format!("{name}: {n} bytes"));
     }
     let ramend = chip.ramend();
-    let lowest = (heap..=ramend).find(|&a| chip.data(a) != STACK_PAINT).unwrap_or(ramend);
+    let lowest = (heap..=ramend)
+        .find(|&a| chip.data(a) != STACK_PAINT)
+        .unwrap_or(ramend);
     Ok((ramend + 1 - lowest, lowest - heap, log))
 }
 
-/// STORE timing: (EEPROM byte writes, CPU ms in simavr, estimated ms on hardware).
+/// STORE timing.
 #[derive(Clone, Copy, Debug)]
 pub struct StoreTiming {
-    /// EEPROM bytes written (each takes 3.4 ms on the chip; simavr finishes them at once).
+    /// EEPROM bytes written.
     pub writes: u64,
-    /// From the CR of STORE to its last message byte, in simavr.
-    pub sim_ms: f64,
-    /// `sim_ms` + writes × 3.4 ms.
-    pub est_ms: f64,
+    /// From the end of the CR of STORE to the last byte of its final message, in simavr
+    /// with the 3.4 ms EEPROM write time modelled (see `chip`).
+    pub ms: f64,
 }
 
 fn timed_store(chip: &mut Chip) -> StoreTiming {
@@ -463,11 +520,12 @@ fn timed_store(chip: &mut Chip) -> StoreTiming {
     chip.send(b"STORE\r");
     chip.run_until(1000 * CYCLES_PER_MS, |c| !c.input_pending());
     // The CR is complete one frame after it starts.
-    let start = chip.last_rx_cycle + CYCLES_PER_BYTE;
-    let end = chip.run_until_quiet(40, 10_000);
+    let start = chip.last_rx_cycle + chip::RX_CYCLES_PER_BYTE;
+    // STORE sends nothing while it writes (up to about 1 s): wait for its final message.
+    let end = chip.run_until_quiet(2000, 10_000);
     let writes = chip.ee_writes() - w0;
-    let sim_ms = end.saturating_sub(start) as f64 / CYCLES_PER_MS as f64;
-    StoreTiming { writes, sim_ms, est_ms: sim_ms + writes as f64 * 3.4 }
+    let ms = end.saturating_sub(start) as f64 / CYCLES_PER_MS as f64;
+    StoreTiming { writes, ms }
 }
 
 /// STORE after a one-line change (both slots hold the loaded program) and STORE into an
@@ -489,4 +547,57 @@ pub fn measure_store(elf: &Path) -> Result<(StoreTiming, StoreTiming), String> {
         return Err("STORE wrote nothing".into());
     }
     Ok((small, full))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spread_gives_min_lower_median_and_max() {
+        let s = Spread::of(&[5.0, 1.0, 3.0, 9.0]).unwrap();
+        assert_eq!((s.min, s.median, s.max, s.n), (1.0, 3.0, 9.0, 4));
+        assert!(Spread::of(&[]).is_none());
+    }
+
+    #[test]
+    fn rng_is_repeatable_and_stays_in_range() {
+        let (mut a, mut b) = (Rng::new(7), Rng::new(7));
+        for _ in 0..100 {
+            let x = a.range(10, 40);
+            assert_eq!(x, b.range(10, 40));
+            assert!((10..40).contains(&x));
+        }
+    }
+
+    #[test]
+    fn every_opcode_program_has_each_valid_opcode_once_then_end() {
+        let p = every_opcode_program();
+        let end_at = p.uf.iter().position(|&op| op == END).unwrap();
+        let body = &p.uf[..end_at];
+        for op in 0..=0xFEu8 {
+            let n = body.iter().filter(|&&x| x == op).count();
+            let want = usize::from(op != END && opcodes::is_valid(op));
+            assert_eq!(n, want, "opcode {op:#04x}");
+        }
+    }
+
+    #[test]
+    fn isr_tracking_counts_from_vector_entry_to_reti() {
+        let mut t = IsrTrack::default();
+        // Main code at 0x200 is interrupted: PC lands on vector 14 (0x38) at cycle 100.
+        assert_eq!(t.step(0x200, 0x0000, 0x38, 100), 0);
+        assert!(t.in_isr());
+        assert_eq!(t.step(0x38, 0x940C, 0x400, 103), 0);
+        // reti at cycle 150 ends it.
+        assert_eq!(t.step(0x420, RETI, 0x202, 150), 50);
+        assert!(!t.in_isr());
+        assert_eq!((t.entries[14], t.cycles[14]), (1, 50));
+    }
+
+    #[test]
+    fn host_core_timer_t0_preset_2_is_within_goal() {
+        let err = measure_timer_host(0, 2).unwrap();
+        assert!(err.abs() <= 10.0, "error {err} ms");
+    }
 }
