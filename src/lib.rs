@@ -18,3 +18,6 @@ pub mod hal;
 
 #[cfg(not(target_arch = "avr"))]
 pub mod sim;
+
+#[cfg(not(target_arch = "avr"))]
+pub mod fuzzing;

@@ -203,12 +203,14 @@ fn missing_firmware_says_to_run_cargo_fw_and_load_is_refused() {
         "{err}"
     );
 
+    // --load is supported now (crosscheck_vnano_load.rs); a missing listing is refused.
     let out = Command::new(VNANO)
-        .args(["--load", "prog.utl"])
+        .args(["--load", "/nonexistent/prog.utl"])
         .output()
         .unwrap();
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("not yet supported"));
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--load /nonexistent/prog.utl"), "{err}");
 }
 
 #[test]

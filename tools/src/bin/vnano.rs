@@ -6,6 +6,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 use utile_tools::vnano::args::{self, Options, USAGE};
+use utile_tools::vnano::load::{Loader, Step};
 use utile_tools::vnano::nano::{self, CpuState, Nano, RigPin};
 use utile_tools::vnano::pty::Pty;
 use utile_tools::vnano::rig::{self, Key, KeyParser, OutputTracker, RigAction, RigView};
@@ -15,6 +16,8 @@ use utile_tools::vnano::term::{self, RawMode};
 const CHUNK_CYCLES: u64 = nano::F_CPU / 1000;
 /// Fastest refresh of the status line.
 const STATUS_MIN_GAP: Duration = Duration::from_millis(100);
+/// `--load` gives up if READ has not taken the program after this much simulated time.
+const LOAD_LIMIT_CYCLES: u64 = 20 * nano::F_CPU;
 /// The status line is redrawn this often even without a change (the screen may have
 /// scrolled over it).
 const STATUS_REFRESH: Duration = Duration::from_secs(2);
@@ -96,6 +99,11 @@ struct Session {
 
 fn run(o: &Options) -> Result<(), String> {
     let elf = elf_path(o);
+    // A listing with mistakes stops here, before any terminal set-up.
+    let mut loader = match &o.load {
+        Some(file) => Some(Loader::from_file(file)?),
+        None => None,
+    };
     let mut nano = Nano::load(&elf).map_err(|e| e.to_string())?;
     if let Some(file) = &o.eeprom {
         let bytes = std::fs::read(file).map_err(|e| format!("--eeprom {}: {e}", file.display()))?;
@@ -125,6 +133,9 @@ fn run(o: &Options) -> Result<(), String> {
         let mut out = std::io::stdout();
         let _ = writeln!(out, "{line}");
         let _ = writeln!(out, "vnano: firmware {}; {}", elf.display(), rig::HELP_PTY);
+        if let Some(file) = &o.load {
+            let _ = writeln!(out, "vnano: loading {} through READ", file.display());
+        }
         let _ = out.flush();
         Uart::Pty(pty)
     } else {
@@ -165,7 +176,10 @@ fn run(o: &Options) -> Result<(), String> {
                 break;
             }
         }
-        read_input(&mut s, &mut nano);
+        // While --load feeds READ, the user's keys wait (in the terminal or the pty).
+        if loader.is_none() {
+            read_input(&mut s, &mut nano);
+        }
         if std::mem::take(&mut s.reset) {
             nano.reset();
         }
@@ -180,7 +194,23 @@ fn run(o: &Options) -> Result<(), String> {
         }
         // simavr drops an external level whenever the firmware writes the PORT register.
         nano.assert_pins();
-        let out = nano.take_output();
+        let mut out = nano.take_output();
+        if let Some(l) = &mut loader {
+            match l.feed(&out) {
+                Step::Send(bytes) => {
+                    nano.send(&bytes);
+                    out.clear();
+                    if nano.cycle() > LOAD_LIMIT_CYCLES {
+                        return Err("--load: the firmware did not take the program".into());
+                    }
+                }
+                Step::Show(shown) => {
+                    out = shown;
+                    loader = None;
+                }
+                Step::Failed(why) => return Err(format!("--load: {why}")),
+            }
+        }
         emit(&mut s, &out);
         update_status(&mut s, &nano);
         if crash.is_some() {

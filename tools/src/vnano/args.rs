@@ -29,7 +29,9 @@ options:
   --save-eeprom FILE  write the EEPROM to a binary file on exit
   --persist           same as --eeprom out/vnano.eeprom (if it exists)
                       --save-eeprom out/vnano.eeprom: STORE survives between runs
-  --load FILE         load a .utl program (not yet supported: issue 6)
+  --load FILE         start with the .utl program FILE loaded: after boot it is sent to
+                      the firmware through READ (hidden, about 2 s of simulated time),
+                      then the editor shows it; STORE keeps it in the EEPROM
   -h, --help          this text
 ";
 
@@ -58,6 +60,8 @@ pub struct Options {
     pub eeprom_if_exists: Option<PathBuf>,
     /// Where to save the EEPROM on exit.
     pub save_eeprom: Option<PathBuf>,
+    /// Listing to load through READ right after boot (`--load`).
+    pub load: Option<PathBuf>,
     /// `-h`/`--help`.
     pub help: bool,
 }
@@ -114,12 +118,7 @@ pub fn parse<I: IntoIterator<Item = String>>(
                 o.eeprom_if_exists = Some(persist_file.clone());
                 o.save_eeprom = Some(persist_file.clone());
             }
-            "--load" => {
-                let v = value("--load")?;
-                return Err(format!(
-                    "--load {v}: loading .utl programs is not yet supported (issue 6)"
-                ));
-            }
+            "--load" => o.load = Some(PathBuf::from(value("--load")?)),
             other => return Err(format!("unknown option {other} (see --help)")),
         }
     }
@@ -164,6 +163,8 @@ mod tests {
             "out.bin",
             "--link",
             "/tmp/t",
+            "--load",
+            "prog.utl",
         ])
         .unwrap();
         assert_eq!(o.elf, Some(PathBuf::from("x.elf")));
@@ -173,6 +174,7 @@ mod tests {
         assert_eq!(o.eeprom, Some(PathBuf::from("in.bin")));
         assert_eq!(o.save_eeprom, Some(PathBuf::from("out.bin")));
         assert_eq!(o.link, Some(PathBuf::from("/tmp/t")));
+        assert_eq!(o.load, Some(PathBuf::from("prog.utl")));
     }
 
     #[test]
@@ -189,9 +191,7 @@ mod tests {
         assert!(p(&["--for", "abc"]).unwrap_err().contains("--for"));
         assert!(p(&["--for", "0"]).unwrap_err().contains("more than 0"));
         assert!(p(&["--elf"]).unwrap_err().contains("needs a value"));
-        assert!(p(&["--load", "x.utl"])
-            .unwrap_err()
-            .contains("not yet supported"));
+        assert!(p(&["--load"]).unwrap_err().contains("needs a value"));
         assert!(p(&["--bogus"]).unwrap_err().contains("unknown option"));
     }
 }

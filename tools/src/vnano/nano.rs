@@ -272,6 +272,12 @@ impl Nano {
         unsafe { *avr.data.add(addr) }
     }
 
+    /// One byte of the data space (I/O registers and SRAM), for tests that look inside the
+    /// chip (e.g. when the firmware starts its 1 ms timer); 0 past the end of RAM.
+    pub fn peek(&self, addr: usize) -> u8 {
+        self.data(addr)
+    }
+
     fn set_data(&mut self, addr: usize, value: u8) {
         if addr > usize::from(self.avr().ramend) {
             return;

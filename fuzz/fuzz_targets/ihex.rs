@@ -1,0 +1,8 @@
+//! Fuzz target `ihex`: `utile::fuzzing::ihex` (invariants documented there).
+#![no_main]
+
+libfuzzer_sys::fuzz_target!(|data: &[u8]| {
+    if let Err(why) = utile::fuzzing::ihex(data) {
+        panic!("invariant broken: {why}");
+    }
+});

@@ -1,0 +1,8 @@
+//! Fuzz target `keys`: `utile::fuzzing::keys` (invariants documented there).
+#![no_main]
+
+libfuzzer_sys::fuzz_target!(|data: &[u8]| {
+    if let Err(why) = utile::fuzzing::keys(data) {
+        panic!("invariant broken: {why}");
+    }
+});
