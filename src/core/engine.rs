@@ -332,11 +332,12 @@ impl Engine {
     /// The single commands `0x00..=0x1F`: the frequent ones here, the rest out of line.
     #[inline(always)]
     fn exec_single<B: Board>(&mut self, op: u8, b: &mut B) -> Flow {
+        // END ends every scan: test it first.
+        if op == END {
+            self.end(b);
+            return Flow::End;
+        }
         match op {
-            END => {
-                self.end(b);
-                return Flow::End;
-            }
             AND => {
                 let (x, y) = (self.pop(), self.pop());
                 self.push(x & y);

@@ -11,6 +11,7 @@ pub mod kept;
 pub mod serial;
 
 use core::cell::UnsafeCell;
+use core::sync::atomic::{AtomicU8, Ordering};
 
 use avr_device::atmega328p;
 use avr_device::interrupt::{self, CriticalSection};
@@ -107,6 +108,21 @@ struct Outputs {
 }
 
 static TICKER: IsrCell<Ticker> = IsrCell::new(Ticker::new(INPUT_MASK));
+
+/// Copies of the ticker's one-byte outputs (debounced levels, toggles, clocks), published
+/// by the tick. A one-byte load is atomic on the AVR, so the scan reads them without a
+/// critical section: each `An.` saves the SREG save, `cli` and restore.
+static LEVEL: AtomicU8 = AtomicU8::new(INPUT_MASK);
+static TOGGLES: AtomicU8 = AtomicU8::new(0);
+static CLOCKS: AtomicU8 = AtomicU8::new(0);
+
+/// Publish the ticker's byte outputs (inside the critical section that changed them).
+#[inline(always)]
+fn publish(t: &Ticker) {
+    LEVEL.store(t.inputs.level(), Ordering::Relaxed);
+    TOGGLES.store(t.inputs.toggles(), Ordering::Relaxed);
+    CLOCKS.store(t.clocks(), Ordering::Relaxed);
+}
 static OUTPUTS: IsrCell<Outputs> = IsrCell::new(Outputs { py: 0, invert: 0 });
 
 /// The out_sense mask for the present level of D9.
@@ -191,7 +207,12 @@ pub fn init() -> (Nano, BootInfo) {
     // TIMSK0: OCIE0A.
     wr!(dp.TC0.timsk0(), 0x02);
     let raw = dp.PORTC.pinc().read().bits() & INPUT_MASK;
-    interrupt::free(|cs| TICKER.with(cs, |t| t.inputs.resync(raw)));
+    interrupt::free(|cs| {
+        TICKER.with(cs, |t| {
+            t.inputs.resync(raw);
+            publish(t);
+        })
+    });
 
     // 5. Timer1: normal mode, clk/8 (0.5 µs per count), free running for scan statistics.
     // TCCR1A: normal mode.
@@ -251,7 +272,10 @@ fn paint_stack() {
 pub fn on_tick(cs: CriticalSection) {
     let dp = regs();
     let raw = dp.PORTC.pinc().read().bits() & INPUT_MASK;
-    TICKER.with(cs, |t| t.tick(raw));
+    TICKER.with(cs, |t| {
+        t.tick(raw);
+        publish(t);
+    });
     let invert = invert_mask(dp.PORTB.pinb().read().bits());
     let changed = OUTPUTS.with(cs, |o| {
         if o.invert == invert {
@@ -287,7 +311,7 @@ impl Nano {
 impl Board for Nano {
     #[inline]
     fn inputs(&mut self) -> u8 {
-        self.ticker(|t| t.inputs.level())
+        LEVEL.load(Ordering::Relaxed)
     }
 
     #[inline]
@@ -302,19 +326,22 @@ impl Board for Nano {
 
     #[inline]
     fn toggles(&mut self) -> u8 {
-        self.ticker(|t| t.inputs.toggles())
+        TOGGLES.load(Ordering::Relaxed)
     }
 
     fn resync_inputs(&mut self) {
         interrupt::free(|cs| {
             let raw = regs().PORTC.pinc().read().bits() & INPUT_MASK;
-            TICKER.with(cs, |t| t.inputs.resync(raw));
+            TICKER.with(cs, |t| {
+                t.inputs.resync(raw);
+                publish(t);
+            });
         });
     }
 
     #[inline]
     fn clocks(&mut self) -> u8 {
-        self.ticker(|t| t.clocks())
+        CLOCKS.load(Ordering::Relaxed)
     }
 
     #[inline]
