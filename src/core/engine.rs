@@ -150,38 +150,31 @@ impl Engine {
         }
     }
 
-    #[inline(always)]
-    fn push(&mut self, bit: bool) {
-        self.bs = (self.bs << 1) | u8::from(bit);
-    }
-
-    #[inline(always)]
-    fn pop(&mut self) -> bool {
-        let tos = self.bs & 1 != 0;
-        self.bs >>= 1;
-        tos
-    }
 
     /// Run one scan from line 0 until END (or past line 255, which acts as END).
     ///
     pub fn scan<B: Board>(&mut self, b: &mut B) -> Flow {
+        // The bit stack lives in a local for the whole scan, so it stays in a register
+        // instead of being loaded and stored around every command.
+        let mut bs = self.bs;
         let mut line: u8 = 0;
-        loop {
+        let flow = loop {
             let op = self.prog.uf[usize::from(line)];
             // NOP (0x00) and blank (0xFF) lines are the commonest: one test skips both.
             if op.wrapping_add(1) > 1 {
-                match self.exec(op, b) {
+                match self.step(op, &mut bs, b) {
                     Flow::Next => {}
-                    other => return other,
+                    other => break other,
                 }
             }
             line = line.wrapping_add(1);
             if line == 0 {
-                break;
+                self.end(b);
+                break Flow::End;
             }
-        }
-        self.end(b);
-        Flow::End
+        };
+        self.bs = bs;
+        flow
     }
 
     /// END: flip-flops update (reset wins), outputs reach the pins, one timer is checked.
@@ -238,18 +231,26 @@ impl Engine {
     /// The opcode's high bits pick the family first (pop, push, single), so the common bit
     /// commands are reached in a few tests instead of a compare tree over every opcode:
     /// LLVM's AVR backend emits no jump tables.
-    #[inline(always)]
     pub fn exec<B: Board>(&mut self, op: u8, b: &mut B) -> Flow {
+        let mut bs = self.bs;
+        let flow = self.step(op, &mut bs, b);
+        self.bs = bs;
+        flow
+    }
+
+    /// [`Engine::exec`] on a bit stack held by the caller (the scan keeps it in a local).
+    #[inline(always)]
+    fn step<B: Board>(&mut self, op: u8, bs: &mut u8, b: &mut B) -> Flow {
         if op >= 0x80 {
-            self.exec_pop(op, b);
+            self.exec_pop(op, bs, b);
             Flow::Next
         } else if op >= 0x20 {
             if let Some(bit) = self.read_bit(op, b) {
-                self.push(bit);
+                push(bs, bit);
             }
             Flow::Next
         } else {
-            self.exec_single(op, b)
+            self.exec_single(op, bs, b)
         }
     }
 
@@ -294,11 +295,11 @@ impl Engine {
 
     /// A pop command (`0x80..=0xD7`); unassigned opcodes above do nothing.
     #[inline(always)]
-    fn exec_pop<B: Board>(&mut self, op: u8, b: &mut B) {
+    fn exec_pop<B: Board>(&mut self, op: u8, bs: &mut u8, b: &mut B) {
         if op > 0xD7 {
             return;
         }
-        let v = self.pop();
+        let v = pop(bs);
         let mask = bit_mask(op);
         if op < 0x98 {
             let byte = if op < 0x88 {
@@ -331,7 +332,7 @@ impl Engine {
 
     /// The single commands `0x00..=0x1F`: the frequent ones here, the rest out of line.
     #[inline(always)]
-    fn exec_single<B: Board>(&mut self, op: u8, b: &mut B) -> Flow {
+    fn exec_single<B: Board>(&mut self, op: u8, bs: &mut u8, b: &mut B) -> Flow {
         // END ends every scan: test it first.
         if op == END {
             self.end(b);
@@ -339,66 +340,85 @@ impl Engine {
         }
         match op {
             AND => {
-                let (x, y) = (self.pop(), self.pop());
-                self.push(x & y);
+                let (x, y) = (pop(bs), pop(bs));
+                push(bs, x & y);
             }
             OR => {
-                let (x, y) = (self.pop(), self.pop());
-                self.push(x | y);
+                let (x, y) = (pop(bs), pop(bs));
+                push(bs, x | y);
             }
-            NOT => self.bs ^= 1,
-            DUP => self.push(self.bs & 1 != 0),
-            _ => return self.exec_rare(op, b),
+            NOT => *bs ^= 1,
+            DUP => push(bs, *bs & 1 != 0),
+            _ => {
+                let (flow, new) = self.exec_rare(op, *bs, b);
+                *bs = new;
+                return flow;
+            }
         }
         Flow::Next
     }
 
     /// The less frequent single commands, out of line to keep the scan loop short.
     #[inline(never)]
-    fn exec_rare<B: Board>(&mut self, op: u8, b: &mut B) -> Flow {
+    fn exec_rare<B: Board>(&mut self, op: u8, mut bs: u8, b: &mut B) -> (Flow, u8) {
+        let bs = &mut bs;
         match op {
             KEY => {
                 if b.rx() == Some(b'/') {
-                    return Flow::Break;
+                    return (Flow::Break, *bs);
                 }
             }
             XOR => {
-                let (x, y) = (self.pop(), self.pop());
-                self.push(x ^ y);
+                let (x, y) = (pop(bs), pop(bs));
+                push(bs, x ^ y);
             }
-            NOT_ALL => self.bs = !self.bs,
-            SET => self.push(true),
-            CLR => self.push(false),
+            NOT_ALL => *bs = !*bs,
+            SET => push(bs, true),
+            CLR => push(bs, false),
             DROP => {
-                self.pop();
+                pop(bs);
             }
             SWAP => {
-                let low = self.bs & 3;
-                self.bs = (self.bs & !3) | (low >> 1) | ((low & 1) << 1);
+                let low = *bs & 3;
+                *bs = (*bs & !3) | (low >> 1) | ((low & 1) << 1);
             }
-            DUP2 => self.bs = (self.bs << 2) | (self.bs & 3),
-            FILL_ONES => self.bs = 0xFF,
-            FILL_ZEROS => self.bs = 0,
-            LOAD_PA => self.bs = b.inputs(),
-            LOAD_PY => self.bs = self.py,
-            LOAD_PU => self.bs = self.pu,
-            LOAD_PV => self.bs = self.pv,
-            STORE_PY => self.py = self.bs,
-            STORE_PU => self.pu = self.bs,
-            STORE_PV => self.pv = self.bs,
+            DUP2 => *bs = (*bs << 2) | (*bs & 3),
+            FILL_ONES => *bs = 0xFF,
+            FILL_ZEROS => *bs = 0,
+            LOAD_PA => *bs = b.inputs(),
+            LOAD_PY => *bs = self.py,
+            LOAD_PU => *bs = self.pu,
+            LOAD_PV => *bs = self.pv,
+            STORE_PY => self.py = *bs,
+            STORE_PU => self.pu = *bs,
+            STORE_PV => self.pv = *bs,
             PPA => self.port_view = Some(b.inputs()),
             PPY => self.port_view = Some(self.py),
             PPU => self.port_view = Some(self.pu),
             PPV => self.port_view = Some(self.pv),
-            PBS => self.bs_view = Some(self.bs),
+            PBS => self.bs_view = Some(*bs),
             CLKA..=CLKC => {
                 let c = b.clocks() >> (op - CLKA);
-                self.push(c & 1 != 0);
+                push(bs, c & 1 != 0);
             }
             _ => {}
         }
-        Flow::Next
+        (Flow::Next, *bs)
     }
+}
+
+/// Push a bit onto the bit stack (bit 7 is lost).
+#[inline(always)]
+fn push(bs: &mut u8, bit: bool) {
+    *bs = (*bs << 1) | u8::from(bit);
+}
+
+/// Pop the TOS (0 enters bit 7).
+#[inline(always)]
+fn pop(bs: &mut u8) -> bool {
+    let tos = *bs & 1 != 0;
+    *bs >>= 1;
+    tos
 }
 
 /// `1 << n` for n = 0..7, as a table: the AVR has no barrel shifter, and LLVM turns a
