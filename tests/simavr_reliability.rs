@@ -268,3 +268,33 @@ fn ten_minutes_of_input_and_uart_noise_change_nothing_and_hang_nothing() {
     let out = nano.take_output();
     assert!(contains(&out, b"rx overruns "), "STAT reports receive overruns");
 }
+
+#[test]
+fn write_read_store_power_cycle_load_write_is_bit_exact() {
+    let prog = old_program();
+    let mut file = Vec::new();
+    ihex::write_hex(&image::encode(&prog), &mut |c| file.push(c));
+    let mut nano = Nano::boot();
+    assert!(nano.wait_for("*** User File 0 ***", 2000));
+    nano.enter("READ", 300);
+    nano.type_bytes(&file);
+    nano.drain_typed();
+    assert!(nano.wait_for("File read completed", 3000));
+    nano.enter("", 800);
+    nano.enter("STORE", 1500);
+    assert!(contains(&nano.take_output(), b"stored in EEPROM"));
+    nano.power_cycle();
+    assert!(nano.wait_for("*** User File 0 ***", 2000));
+    nano.run_ms(300);
+    // A power-on starts blank; LOAD brings the program back.
+    assert!(nano.screen().contains("000 ....."), "{}", nano.screen());
+    nano.enter("LOAD", 800);
+    assert!(contains(&nano.take_output(), b"loaded from EEPROM"));
+    nano.enter("WRITE", 300);
+    nano.take_output();
+    nano.type_bytes(b"\r");
+    nano.drain_typed();
+    assert!(nano.wait_for(":00000001FF", 2000));
+    nano.run_ms(20); // the record's CR LF
+    assert!(contains(&nano.take_output(), &file), "the same file, byte for byte");
+}
