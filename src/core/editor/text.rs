@@ -2,8 +2,6 @@
 //!
 //! A text is named by a [`Txt`] (offset and length into the blob), computed at compile time,
 //! so RAM holds no strings and no per-text pointers.
-// The `progmem!` expansion contains `unsafe` blocks that place the blob in flash.
-#![allow(unsafe_code)]
 
 use avr_progmem::progmem;
 
