@@ -1,9 +1,13 @@
 //! The simulated Arduino Nano: simavr running the firmware ELF, with its UART0 queues,
-//! its rig pins (switches and jumpers pulled to ground) and its output pins.
+//! its rig pins (switches and jumpers pulled to ground) and its output pins. The virtual
+//! Nano, its tests and the benchmark (`bench`) all drive the firmware through this one
+//! wrapper.
 //!
-//! This talks to simavr through `simavr-ffi` directly (not `avr-tester`) because the virtual
-//! Nano needs things avr-tester hides: a warm reset, EEPROM access, sleep without a wall-clock
-//! wait, and a UART fed at line speed.
+//! This talks to simavr through `simavr-ffi` directly (not `avr-tester`) because the tools
+//! need things avr-tester hides: a warm reset, EEPROM access, sleep without a wall-clock
+//! wait, a UART fed at line speed, single instructions with the PC after each (to find
+//! scan boundaries and interrupt handlers), and the EEPROM write time (simavr finishes an
+//! EEPROM write at once).
 
 use simavr_ffi as ffi;
 use std::collections::VecDeque;
@@ -21,8 +25,17 @@ pub const BAUD: u64 = 19_200;
 /// CPU cycles one 8N1 frame (10 bits) takes on the line: about 0.52 ms.
 pub const CYCLES_PER_BYTE: u64 = F_CPU * 10 / BAUD;
 
+/// CPU cycles between input bytes in [`RxPacing::Fixed`]: simavr's UART takes one received
+/// byte per 11 bit times (it always counts a parity bit), 11 × 832 cycles at UBRR 51, from a
+/// 64-byte FIFO. Feeding every 10 bit times overflows that FIFO within a long file and
+/// simavr drops bytes the firmware never sees.
+pub const RX_FIXED_CYCLES_PER_BYTE: u64 = 11 * 832;
+
 /// EEPROM size of the ATmega328P.
 pub const EEPROM_SIZE: usize = 1024;
+
+/// Duration of one EEPROM byte write (erase + write) on the chip, in µs (datasheet).
+pub const EE_WRITE_US: u32 = 3400;
 
 // Data-space addresses of the registers the rig looks at (ATmega328P datasheet).
 const PINB: usize = 0x23;
@@ -33,6 +46,10 @@ const PORTD: usize = 0x2B;
 const MCUSR: usize = 0x54;
 const UCSR0B: usize = 0xC1;
 const PINC: usize = 0x26;
+/// Data-space address of EECR (EEPROM control).
+const EECR: u16 = 0x3F;
+/// EECR bit: EEPROM write enable (a byte write starts when it is set after EEMPE).
+const EEPE: u8 = 1 << 1;
 /// MCUSR bit set by an external (reset button) reset.
 const EXTRF: u8 = 1 << 1;
 /// UCSR0B bit: receiver enabled.
@@ -90,6 +107,18 @@ pub enum CpuState {
     Done,
 }
 
+/// How queued UART input goes down the line into the firmware.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RxPacing {
+    /// One byte per frame time, and only once the firmware has read the previous one: no
+    /// byte is ever lost (about 17.5 kbaud of simulated time). What a user sees.
+    #[default]
+    AfterRead,
+    /// One byte every [`RX_FIXED_CYCLES_PER_BYTE`], whatever the firmware does: a steady
+    /// line for timing measurements.
+    Fixed,
+}
+
 /// The rig's side of one input pin: a switch or jumper that pulls it to ground.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RigPin {
@@ -112,25 +141,36 @@ impl RigPin {
     }
 }
 
-/// What simavr's UART callbacks report.
-#[derive(Default)]
-struct UartLink {
+/// What simavr's callbacks report; boxed so its address stays put.
+struct Link {
+    /// The AVR the callbacks belong to (for the cycle counter).
+    avr: *mut ffi::avr_t,
     /// Bytes the firmware sent.
     out: VecDeque<u8>,
+    /// Cycle at which the firmware sent its last byte.
+    out_last_cycle: u64,
     /// simavr's receive FIFO is empty: the firmware has read every byte we gave it.
     rx_empty: bool,
+    /// EEPROM byte writes the firmware started.
+    ee_writes: u64,
+    /// Keep EEPE set for [`EE_WRITE_US`] after each EEPROM write starts.
+    ee_write_time: bool,
 }
 
 /// The simulated Nano.
 pub struct Nano {
     avr: NonNull<ffi::avr_t>,
-    /// Filled by simavr's UART IRQs.
-    uart: Box<UartLink>,
+    /// Filled by simavr's UART IRQs and the EECR write hook.
+    uart: Box<Link>,
     uart_in_irq: *mut ffi::avr_irq_t,
     /// Bytes waiting to go down the line into the UART, one per frame time.
     rx_queue: VecDeque<u8>,
     /// Cycle at which the next byte may start on the line.
     next_rx_cycle: u64,
+    /// Cycle at which the last queued byte went into the UART.
+    last_rx_cycle: u64,
+    /// How the queued bytes are paced.
+    rx_pacing: RxPacing,
     /// Pins held low by the rig, per port: index 0 = port B, 1 = port C.
     held_low: [u8; 2],
     /// Pins released since the last assert (to be returned to the pull-up level once).
@@ -139,17 +179,49 @@ pub struct Nano {
 
 /// simavr's UART output IRQ: the firmware wrote a byte to UDR0.
 unsafe extern "C" fn on_uart_output(_irq: *mut ffi::avr_irq_t, value: u32, param: *mut c_void) {
-    // SAFETY: `param` is the `Box<UartLink>` owned by the `Nano` that registered this
+    // SAFETY: `param` is the `Box<Link>` owned by the `Nano` that registered this
     // callback; simavr only calls it from `avr_run` while the `Nano` is alive and borrowed.
-    let link = unsafe { &mut *(param as *mut UartLink) };
+    let link = unsafe { &mut *(param as *mut Link) };
     link.out.push_back(value as u8);
+    // SAFETY: `link.avr` is the AVR that is running this callback.
+    link.out_last_cycle = unsafe { (*link.avr).cycle };
 }
 
 /// simavr's UART XON IRQ: raised whenever its receive FIFO is (or becomes) empty.
 unsafe extern "C" fn on_uart_xon(_irq: *mut ffi::avr_irq_t, _value: u32, param: *mut c_void) {
     // SAFETY: as in `on_uart_output`.
-    let link = unsafe { &mut *(param as *mut UartLink) };
+    let link = unsafe { &mut *(param as *mut Link) };
     link.rx_empty = true;
+}
+
+/// simavr's hook on EECR writes: counts EEPROM byte writes and, if asked, models their time.
+unsafe extern "C" fn on_eecr_write(avr: *mut ffi::avr_t, _addr: u16, v: u8, param: *mut c_void) {
+    // SAFETY: as in `on_uart_output`.
+    let link = unsafe { &mut *(param as *mut Link) };
+    if v & EEPE == 0 {
+        return;
+    }
+    link.ee_writes += 1;
+    if link.ee_write_time {
+        // simavr has already finished the write; the chip keeps EEPE set while it programs
+        // the byte, so the firmware's busy-waits take their real time.
+        // SAFETY: `avr` is the running AVR; EECR is inside its data space.
+        unsafe {
+            *(*avr).data.add(usize::from(EECR)) |= EEPE;
+            ffi::avr_cycle_timer_register_usec(avr, EE_WRITE_US, Some(ee_write_done), param);
+        }
+    }
+}
+
+/// The modelled EEPROM byte write is over: EEPE reads 0 again.
+unsafe extern "C" fn ee_write_done(
+    avr: *mut ffi::avr_t,
+    _when: ffi::avr_cycle_count_t,
+    _param: *mut c_void,
+) -> ffi::avr_cycle_count_t {
+    // SAFETY: simavr passes the running AVR; EECR is inside its data space.
+    unsafe { *(*avr).data.add(usize::from(EECR)) &= !EEPE };
+    0
 }
 
 /// simavr's sleep hook: the default one waits on the wall clock; pacing is ours.
@@ -202,9 +274,13 @@ impl Nano {
         // its inner allocations are small and live as long as the process anyway.
         drop(firmware);
 
-        let mut uart = Box::new(UartLink {
+        let mut uart = Box::new(Link {
+            avr: avr.as_ptr(),
             out: VecDeque::with_capacity(4096),
+            out_last_cycle: 0,
             rx_empty: true,
+            ee_writes: 0,
+            ee_write_time: false,
         });
         let mut flags: u32 = 0;
         // SAFETY: the UART flag ioctls take a `u32`; the IRQ pointers come from simavr and
@@ -223,7 +299,7 @@ impl Nano {
                 IOCTL_UART0_SET_FLAGS,
                 &mut flags as *mut u32 as *mut c_void,
             );
-            let param = &mut *uart as *mut UartLink as *mut c_void;
+            let param = &mut *uart as *mut Link as *mut c_void;
             let out = ffi::avr_io_getirq(
                 avr.as_ptr(),
                 IOCTL_UART0_GETIRQ,
@@ -236,6 +312,7 @@ impl Nano {
                 ffi::UART_IRQ_OUT_XON as c_int,
             );
             ffi::avr_irq_register_notify(xon, Some(on_uart_xon), param);
+            ffi::avr_register_io_write(avr.as_ptr(), EECR, Some(on_eecr_write), param);
             ffi::avr_io_getirq(
                 avr.as_ptr(),
                 IOCTL_UART0_GETIRQ,
@@ -251,6 +328,8 @@ impl Nano {
             uart_in_irq,
             rx_queue: VecDeque::new(),
             next_rx_cycle: 0,
+            last_rx_cycle: 0,
+            rx_pacing: RxPacing::AfterRead,
             held_low: [0; 2],
             released: [0; 2],
         })
@@ -301,26 +380,41 @@ impl Nano {
     pub fn run_for(&mut self, cycles: u64) -> CpuState {
         let end = self.cycle().saturating_add(cycles);
         while self.cycle() < end {
-            self.feed_uart();
-            // SAFETY: `avr` is valid; callbacks it fires only touch our boxed queue.
-            let state = unsafe { ffi::avr_run(self.avr.as_ptr()) } as u32;
-            match state {
-                ffi::cpu_Crashed => return CpuState::Crashed,
-                ffi::cpu_Done | ffi::cpu_Stopped => return CpuState::Done,
-                _ => {}
+            let state = self.step();
+            if state != CpuState::Running {
+                return state;
             }
         }
         CpuState::Running
     }
 
-    /// Puts the next queued byte on the line when the previous frame has ended and the
-    /// firmware has taken the previous byte. (simavr counts 11 bits per 8N1 frame and its
-    /// FIFO overflows silently if fed at the true line rate; waiting for the firmware to
-    /// read keeps every byte, at about 17.5 kbaud of simulated time.)
+    /// Executes one instruction (plus any interrupt entry simavr does after it, or one
+    /// sleeping stretch), feeding queued UART input on the way.
+    #[inline]
+    pub fn step(&mut self) -> CpuState {
+        self.feed_uart();
+        // SAFETY: `avr` is valid; callbacks it fires only touch our boxed `Link`.
+        let state = unsafe { ffi::avr_run(self.avr.as_ptr()) } as u32;
+        match state {
+            ffi::cpu_Crashed => CpuState::Crashed,
+            ffi::cpu_Done | ffi::cpu_Stopped => CpuState::Done,
+            _ => CpuState::Running,
+        }
+    }
+
+    /// Puts the next queued byte on the line when its turn has come (see [`RxPacing`]).
+    /// (simavr counts 11 bits per 8N1 frame and its FIFO overflows silently if fed at the
+    /// true line rate; waiting for the firmware to read keeps every byte.)
+    #[inline]
     fn feed_uart(&mut self) {
-        if self.rx_queue.is_empty() || self.cycle() < self.next_rx_cycle || !self.uart.rx_empty {
+        if self.rx_queue.is_empty() || self.cycle() < self.next_rx_cycle {
             return;
         }
+        let gap = match self.rx_pacing {
+            RxPacing::AfterRead if !self.uart.rx_empty => return,
+            RxPacing::AfterRead => CYCLES_PER_BYTE,
+            RxPacing::Fixed => RX_FIXED_CYCLES_PER_BYTE,
+        };
         if self.data(UCSR0B) & RXEN0 == 0 {
             // No receiver yet (still booting): a real UART would lose the byte too,
             // but the user typed it, so wait for the receiver instead.
@@ -330,8 +424,61 @@ impl Nano {
             self.uart.rx_empty = false;
             // SAFETY: the input IRQ belongs to this AVR and takes a byte value.
             unsafe { ffi::avr_raise_irq(self.uart_in_irq, u32::from(byte)) };
-            self.next_rx_cycle = self.cycle() + CYCLES_PER_BYTE;
+            self.last_rx_cycle = self.cycle();
+            self.next_rx_cycle = self.cycle() + gap;
         }
+    }
+
+    /// Chooses how queued input is paced (default [`RxPacing::AfterRead`]).
+    pub fn set_rx_pacing(&mut self, pacing: RxPacing) {
+        self.rx_pacing = pacing;
+    }
+
+    /// Cycle at which the last queued byte went into the UART (0 before the first).
+    pub fn last_input_cycle(&self) -> u64 {
+        self.last_rx_cycle
+    }
+
+    /// Cycle at which the firmware sent its last UART byte (0 before the first).
+    pub fn last_output_cycle(&self) -> u64 {
+        self.uart.out_last_cycle
+    }
+
+    /// Program counter (byte address).
+    pub fn pc(&self) -> u32 {
+        self.avr().pc
+    }
+
+    /// Last data-space address (RAMEND).
+    pub fn ramend(&self) -> usize {
+        usize::from(self.avr().ramend)
+    }
+
+    /// Flash size in bytes.
+    pub fn flash_len(&self) -> usize {
+        self.avr().flashend as usize + 1
+    }
+
+    /// The instruction word at byte address `pc` (0xFFFF, erased flash, past the end).
+    pub fn flash_word(&self, pc: u32) -> u16 {
+        let pc = pc as usize;
+        if pc + 1 >= self.flash_len() {
+            return 0xFFFF;
+        }
+        let flash = self.avr().flash;
+        // SAFETY: `flash` holds `flashend + 1` bytes and `pc + 1` is within them.
+        unsafe { u16::from_le_bytes([*flash.add(pc), *flash.add(pc + 1)]) }
+    }
+
+    /// EEPROM byte writes the firmware has started since power-up.
+    pub fn ee_writes(&self) -> u64 {
+        self.uart.ee_writes
+    }
+
+    /// Models the chip's EEPROM write time (off by default): simavr finishes a byte write
+    /// at once, the chip keeps EECR.EEPE set for [`EE_WRITE_US`] while it programs the byte.
+    pub fn set_eeprom_write_time(&mut self, on: bool) {
+        self.uart.ee_write_time = on;
     }
 
     /// Queues bytes to send to the firmware's UART (they go in at line speed).
