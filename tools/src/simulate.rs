@@ -1,4 +1,4 @@
-//! `utile sim`: a program run by the firmware's own engine on a [`SimBoard`] with simulated
+//! `utile sim`: a program run by the firmware's own engine on a [`SimBoard`](utile::sim::SimBoard) with simulated
 //! time, against an input timeline; the result is a set of traces (one per signal).
 //!
 //! A timeline file holds one event per line, in time order:

@@ -8,7 +8,8 @@ pub mod chip;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use chip::{Chip, Port, CYCLES_PER_MS, F_CPU, RETI, VECTORS_END};
+use crate::vnano::nano::{CpuState, Nano, RigPin};
+use chip::{BenchRun, CYCLES_PER_MS, F_CPU, RETI, VECTORS_END};
 use utile::core::engine::{Engine, Program, LINES, TIMER_UNIT_MS};
 use utile::core::opcodes::{self, END, NOP};
 use utile::sim::SimBoard;
@@ -129,10 +130,10 @@ pub fn eeprom_with(prog: &Program, stores: usize) -> Vec<u8> {
 }
 
 /// A chip with `prog` stored in EEPROM and D8 grounded: it autostarts at power-up.
-pub fn autostarting(elf: &Path, prog: &Program) -> Result<Chip, String> {
-    let mut chip = Chip::load(elf)?;
+pub fn autostarting(elf: &Path, prog: &Program) -> Result<Nano, String> {
+    let mut chip = chip::load(elf)?;
     chip.set_eeprom(&eeprom_with(prog, 1));
-    chip.hold_low(Port::B, 0, true);
+    chip.hold_low(RigPin::D8, true);
     Ok(chip)
 }
 
@@ -153,7 +154,7 @@ pub struct ScanResult {
 
 /// Byte addresses of every `lds Rd, 0x0084` (a read of TCNT1L): the main loop reads
 /// Timer1 once per scan for STAT, which marks the scan boundary.
-fn tcnt1_reads(chip: &Chip) -> Vec<u32> {
+fn tcnt1_reads(chip: &Nano) -> Vec<u32> {
     let mut v = Vec::new();
     let mut pc = 0u32;
     while (pc as usize) + 3 < chip.flash_len() {
@@ -210,7 +211,7 @@ pub fn measure_scans(
     settle_ms: u64,
 ) -> Result<ScanResult, String> {
     let mut chip = autostarting(elf, prog)?;
-    chip.run_for(settle_ms * CYCLES_PER_MS);
+    chip.run_rig(settle_ms * CYCLES_PER_MS);
     let candidates = tcnt1_reads(&chip);
     if candidates.is_empty() {
         return Err("no Timer1 read in the image (scan marker)".into());
@@ -222,7 +223,7 @@ pub fn measure_scans(
         if let Ok(i) = candidates.binary_search(&chip.pc()) {
             hits[i] += 1;
         }
-        if !chip.step() {
+        if chip.step() != CpuState::Running {
             return Err("CPU stopped".into());
         }
     }
@@ -255,7 +256,7 @@ pub fn measure_scans(
             isr_in_scan = 0;
         }
         let op = chip.flash_word(pc0);
-        if !chip.step() {
+        if chip.step() != CpuState::Running {
             return Err("CPU stopped".into());
         }
         isr_in_scan += isr.step(pc0, op, chip.pc(), chip.cycle());
@@ -283,22 +284,22 @@ pub fn measure_scans(
 pub fn measure_latency(elf: &Path, presses: usize, seed: u64) -> Result<(Spread, Spread), String> {
     let prog = program(&["A0.", "!", ".Y0", "END"]);
     let mut chip = autostarting(elf, &prog)?;
-    chip.run_for(300 * CYCLES_PER_MS);
+    chip.run_rig(300 * CYCLES_PER_MS);
     let mut rng = Rng::new(seed);
     let (mut on, mut off) = (Vec::new(), Vec::new());
     for _ in 0..presses {
-        chip.run_for(rng.range(10 * CYCLES_PER_MS, 40 * CYCLES_PER_MS));
+        chip.run_rig(rng.range(10 * CYCLES_PER_MS, 40 * CYCLES_PER_MS));
         if chip.y(0) {
             return Err("Y0 is on before the press".into());
         }
-        chip.hold_low(Port::C, 0, true);
+        chip.hold_low(RigPin::Switch(0), true);
         let c0 = chip.cycle();
         let c1 = chip
             .run_until(100 * CYCLES_PER_MS, |c| c.y(0))
             .ok_or("Y0 never came on")?;
         on.push((c1 - c0) as f64 / CYCLES_PER_MS as f64);
-        chip.run_for(rng.range(20 * CYCLES_PER_MS, 60 * CYCLES_PER_MS));
-        chip.hold_low(Port::C, 0, false);
+        chip.run_rig(rng.range(20 * CYCLES_PER_MS, 60 * CYCLES_PER_MS));
+        chip.hold_low(RigPin::Switch(0), false);
         let c0 = chip.cycle();
         let c1 = chip
             .run_until(100 * CYCLES_PER_MS, |c| !c.y(0))
@@ -324,13 +325,13 @@ pub fn timer_program(m: u8, preset: u8) -> Program {
 /// Timer error in ms (measured off-delay minus preset × unit) in simavr.
 pub fn measure_timer_simavr(elf: &Path, m: u8, preset: u8) -> Result<f64, String> {
     let mut chip = autostarting(elf, &timer_program(m, preset))?;
-    chip.run_for(300 * CYCLES_PER_MS);
-    chip.hold_low(Port::C, 0, true);
-    chip.run_for(50 * CYCLES_PER_MS);
+    chip.run_rig(300 * CYCLES_PER_MS);
+    chip.hold_low(RigPin::Switch(0), true);
+    chip.run_rig(50 * CYCLES_PER_MS);
     if !chip.y(0) || !chip.y(1) {
         return Err("timer did not start".into());
     }
-    chip.hold_low(Port::C, 0, false);
+    chip.hold_low(RigPin::Switch(0), false);
     let fall1 = chip
         .run_until(100 * CYCLES_PER_MS, |c| !c.y(1))
         .ok_or("Y1 stayed on")?;
@@ -424,20 +425,20 @@ pub struct UartBytes {
 
 /// Sends `input`, waits until the firmware has been quiet for `quiet_ms`, returns the
 /// number of bytes it sent meanwhile.
-fn exchange_q(chip: &mut Chip, input: &[u8], quiet_ms: u64) -> usize {
+fn exchange_q(chip: &mut Nano, input: &[u8], quiet_ms: u64) -> usize {
     chip.take_output();
     chip.send(input);
     chip.run_until_quiet(quiet_ms, 10_000);
     chip.take_output().len()
 }
 
-fn exchange(chip: &mut Chip, input: &[u8]) -> usize {
+fn exchange(chip: &mut Nano, input: &[u8]) -> usize {
     exchange_q(chip, input, 40)
 }
 
 /// Counts the editor's UART bytes (D8 open, erased EEPROM).
 pub fn measure_uart(elf: &Path) -> Result<UartBytes, String> {
-    let mut chip = Chip::load(elf)?;
+    let mut chip = chip::load(elf)?;
     chip.run_until_quiet(40, 5000);
     let power_up = chip.take_output().len();
     if power_up == 0 {
@@ -454,7 +455,7 @@ pub fn measure_uart(elf: &Path) -> Result<UartBytes, String> {
 /// Stack use: (bytes of stack used at the deepest point, free bytes never touched).
 pub fn measure_stack(elf: &Path) -> Result<(usize, usize, Vec<String>), String> {
     let heap = symbol(elf, "__heap_start").ok_or("no __heap_start symbol")?;
-    let mut chip = Chip::load(elf)?;
+    let mut chip = chip::load(elf)?;
     chip.run_until_quiet(40, 5000);
     let mut big = every_opcode_program();
     for (i, line) in big.uf.iter_mut().enumerate().skip(200) {
@@ -500,7 +501,7 @@ pub fn measure_stack(elf: &Path) -> Result<(usize, usize, Vec<String>), String> 
     }
     let ramend = chip.ramend();
     let lowest = (heap..=ramend)
-        .find(|&a| chip.data(a) != STACK_PAINT)
+        .find(|&a| chip.peek(a) != STACK_PAINT)
         .unwrap_or(ramend);
     Ok((ramend + 1 - lowest, lowest - heap, log))
 }
@@ -511,16 +512,16 @@ pub struct StoreTiming {
     /// EEPROM bytes written.
     pub writes: u64,
     /// From the end of the CR of STORE to the last byte of its final message, in simavr
-    /// with the 3.4 ms EEPROM write time modelled (see `chip`).
+    /// with the 3.4 ms EEPROM write time modelled (see `chip::load`).
     pub ms: f64,
 }
 
-fn timed_store(chip: &mut Chip) -> StoreTiming {
+fn timed_store(chip: &mut Nano) -> StoreTiming {
     let w0 = chip.ee_writes();
     chip.send(b"STORE\r");
-    chip.run_until(1000 * CYCLES_PER_MS, |c| !c.input_pending());
+    chip.run_until(1000 * CYCLES_PER_MS, |c| c.pending_input() == 0);
     // The CR is complete one frame after it starts.
-    let start = chip.last_rx_cycle + chip::RX_CYCLES_PER_BYTE;
+    let start = chip.last_input_cycle() + chip::RX_CYCLES_PER_BYTE;
     // STORE sends nothing while it writes (up to about 1 s): wait for its final message.
     let end = chip.run_until_quiet(2000, 10_000);
     let writes = chip.ee_writes() - w0;
@@ -532,14 +533,14 @@ fn timed_store(chip: &mut Chip) -> StoreTiming {
 /// erased EEPROM (every byte written).
 pub fn measure_store(elf: &Path) -> Result<(StoreTiming, StoreTiming), String> {
     let prog = example("11.2b-intrusion-alarm.utl")?;
-    let mut chip = Chip::load(elf)?;
+    let mut chip = chip::load(elf)?;
     chip.set_eeprom(&eeprom_with(&prog, 2));
     chip.run_until_quiet(40, 5000);
     exchange(&mut chip, b"LOAD\r");
     exchange(&mut chip, b"A1.\r");
     let small = timed_store(&mut chip);
 
-    let mut chip = Chip::load(elf)?;
+    let mut chip = chip::load(elf)?;
     chip.run_until_quiet(40, 5000);
     exchange(&mut chip, b"FILL\r");
     let full = timed_store(&mut chip);

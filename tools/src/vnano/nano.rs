@@ -161,7 +161,7 @@ struct Link {
 pub struct Nano {
     avr: NonNull<ffi::avr_t>,
     /// Filled by simavr's UART IRQs and the EECR write hook.
-    uart: Box<Link>,
+    link: Box<Link>,
     uart_in_irq: *mut ffi::avr_irq_t,
     /// Bytes waiting to go down the line into the UART, one per frame time.
     rx_queue: VecDeque<u8>,
@@ -274,7 +274,7 @@ impl Nano {
         // its inner allocations are small and live as long as the process anyway.
         drop(firmware);
 
-        let mut uart = Box::new(Link {
+        let mut link = Box::new(Link {
             avr: avr.as_ptr(),
             out: VecDeque::with_capacity(4096),
             out_last_cycle: 0,
@@ -284,7 +284,7 @@ impl Nano {
         });
         let mut flags: u32 = 0;
         // SAFETY: the UART flag ioctls take a `u32`; the IRQ pointers come from simavr and
-        // live as long as `avr`; the notify parameter is the boxed queue owned by `Nano`,
+        // live as long as `avr`; the callback parameter is the boxed `Link` owned by `Nano`,
         // whose heap address does not move.
         let uart_in_irq = unsafe {
             ffi::avr_ioctl(
@@ -299,7 +299,7 @@ impl Nano {
                 IOCTL_UART0_SET_FLAGS,
                 &mut flags as *mut u32 as *mut c_void,
             );
-            let param = &mut *uart as *mut Link as *mut c_void;
+            let param = &mut *link as *mut Link as *mut c_void;
             let out = ffi::avr_io_getirq(
                 avr.as_ptr(),
                 IOCTL_UART0_GETIRQ,
@@ -324,7 +324,7 @@ impl Nano {
         }
         Ok(Nano {
             avr,
-            uart,
+            link,
             uart_in_irq,
             rx_queue: VecDeque::new(),
             next_rx_cycle: 0,
@@ -411,7 +411,7 @@ impl Nano {
             return;
         }
         let gap = match self.rx_pacing {
-            RxPacing::AfterRead if !self.uart.rx_empty => return,
+            RxPacing::AfterRead if !self.link.rx_empty => return,
             RxPacing::AfterRead => CYCLES_PER_BYTE,
             RxPacing::Fixed => RX_FIXED_CYCLES_PER_BYTE,
         };
@@ -421,7 +421,7 @@ impl Nano {
             return;
         }
         if let Some(byte) = self.rx_queue.pop_front() {
-            self.uart.rx_empty = false;
+            self.link.rx_empty = false;
             // SAFETY: the input IRQ belongs to this AVR and takes a byte value.
             unsafe { ffi::avr_raise_irq(self.uart_in_irq, u32::from(byte)) };
             self.last_rx_cycle = self.cycle();
@@ -441,7 +441,7 @@ impl Nano {
 
     /// Cycle at which the firmware sent its last UART byte (0 before the first).
     pub fn last_output_cycle(&self) -> u64 {
-        self.uart.out_last_cycle
+        self.link.out_last_cycle
     }
 
     /// Program counter (byte address).
@@ -472,13 +472,13 @@ impl Nano {
 
     /// EEPROM byte writes the firmware has started since power-up.
     pub fn ee_writes(&self) -> u64 {
-        self.uart.ee_writes
+        self.link.ee_writes
     }
 
     /// Models the chip's EEPROM write time (off by default): simavr finishes a byte write
     /// at once, the chip keeps EECR.EEPE set for [`EE_WRITE_US`] while it programs the byte.
     pub fn set_eeprom_write_time(&mut self, on: bool) {
-        self.uart.ee_write_time = on;
+        self.link.ee_write_time = on;
     }
 
     /// Queues bytes to send to the firmware's UART (they go in at line speed).
@@ -498,7 +498,7 @@ impl Nano {
 
     /// Takes everything the firmware has sent since the last call.
     pub fn take_output(&mut self) -> Vec<u8> {
-        self.uart.out.drain(..).collect()
+        self.link.out.drain(..).collect()
     }
 
     /// Holds a rig pin low (switch pressed / jumper fitted) or lets it go (pull-up).
@@ -589,7 +589,7 @@ impl Nano {
         unsafe { ffi::avr_reset(self.avr.as_ptr()) };
         // simavr's UART FIFO is emptied by the reset; our queue waits for the receiver.
         self.next_rx_cycle = self.cycle();
-        self.uart.rx_empty = true;
+        self.link.rx_empty = true;
         self.released = self.held_low.map(|_| 0);
         self.assert_pins();
     }
@@ -597,48 +597,34 @@ impl Nano {
     /// The whole EEPROM.
     pub fn eeprom(&self) -> Vec<u8> {
         let mut buf = vec![0xFFu8; EEPROM_SIZE];
-        let mut desc = ffi::avr_eeprom_desc_t {
-            ee: buf.as_mut_ptr(),
-            offset: 0,
-            size: EEPROM_SIZE as u32,
-        };
-        // SAFETY: EEPROM_GET copies `size` bytes into `ee`, which has room for them.
-        unsafe {
-            ffi::avr_ioctl(
-                self.avr.as_ptr(),
-                IOCTL_EEPROM_GET,
-                &mut desc as *mut _ as *mut c_void,
-            )
-        };
+        self.eeprom_ioctl(IOCTL_EEPROM_GET, &mut buf);
         buf
     }
 
     /// Loads EEPROM contents from offset 0 (at most 1024 bytes; the rest stays as it is).
     pub fn set_eeprom(&mut self, bytes: &[u8]) {
-        let len = bytes.len().min(EEPROM_SIZE);
-        if len == 0 {
-            return;
+        let mut buf = bytes[..bytes.len().min(EEPROM_SIZE)].to_vec();
+        if !buf.is_empty() {
+            self.eeprom_ioctl(IOCTL_EEPROM_SET, &mut buf);
         }
-        let mut buf = bytes[..len].to_vec();
+    }
+
+    /// Copies the EEPROM from offset 0 into `buf` (EEPROM_GET) or `buf` into it (EEPROM_SET).
+    fn eeprom_ioctl(&self, ioctl: u32, buf: &mut [u8]) {
         let mut desc = ffi::avr_eeprom_desc_t {
             ee: buf.as_mut_ptr(),
             offset: 0,
-            size: len as u32,
+            size: buf.len().min(EEPROM_SIZE) as u32,
         };
-        // SAFETY: EEPROM_SET copies `size` bytes from `ee`, which holds them.
-        unsafe {
-            ffi::avr_ioctl(
-                self.avr.as_ptr(),
-                IOCTL_EEPROM_SET,
-                &mut desc as *mut _ as *mut c_void,
-            )
-        };
+        // SAFETY: both EEPROM ioctls copy `size` bytes between `ee` and the EEPROM; `buf`
+        // holds at least `size` bytes, and simavr is not running while we hold `self`.
+        unsafe { ffi::avr_ioctl(self.avr.as_ptr(), ioctl, &mut desc as *mut _ as *mut c_void) };
     }
 }
 
 impl Drop for Nano {
     fn drop(&mut self) {
-        // SAFETY: `avr` came from simavr; after this nothing calls back into our queue.
+        // SAFETY: `avr` came from simavr; after this nothing calls back into our `Link`.
         // avr_terminate frees the I/O modules and memories but not the avr_t itself.
         unsafe {
             ffi::avr_terminate(self.avr.as_ptr());
