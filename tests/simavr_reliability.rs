@@ -233,7 +233,7 @@ fn ten_minutes_of_input_and_uart_noise_change_nothing_and_hang_nothing() {
             .filter(|&c| c != b'/')
             .collect();
         nano.type_bytes(&burst);
-        if noise.next() % 4 == 0 {
+        if noise.next().is_multiple_of(4) {
             let n = (noise.next() % 6) as u8;
             switches[usize::from(n)] ^= true;
             nano.switch(n, switches[usize::from(n)]);
