@@ -86,20 +86,28 @@ mod firmware {
     #[inline(always)]
     fn run(eng: &mut Engine, editor: &mut Editor, board: &mut hal::Nano) {
         let mut stats = ScanStats::new();
+        // Scans since the last 65,536; a 16-bit local stays in registers where the 32-bit
+        // count would be kept on the stack.
+        let mut scans: u16 = 0;
         let mut last_end = board.stats_ticks();
         loop {
             board.feed_watchdog();
             let flow = eng.scan(board);
             let now = board.stats_ticks();
-            stats.record(now.wrapping_sub(last_end));
+            stats.record_time(now.wrapping_sub(last_end));
             last_end = now;
+            scans = scans.wrapping_add(1);
+            if scans == 0 {
+                stats.count = stats.count.wrapping_add(0x1_0000);
+            }
             if flow == Flow::Break {
+                stats.count = stats.count.wrapping_add(u32::from(scans));
                 editor.stats = stats;
                 editor.on_break(eng, board);
                 return;
             }
             // Displays are paced at 100 ms: looking every 16th scan is plenty.
-            if stats.count as u8 & 0x0F == 0 && editor.has_output(eng) {
+            if scans as u8 & 0x0F == 0 && editor.has_output(eng) {
                 editor.after_scan(eng, board);
             }
         }

@@ -32,13 +32,19 @@ impl ScanStats {
     /// once per scan, and the mean comes from the run time instead of a running sum.
     #[inline(always)]
     pub fn record(&mut self, ticks: u16) {
+        self.record_time(ticks);
+        self.count = self.count.wrapping_add(1);
+    }
+
+    /// The min/max part of [`ScanStats::record`], for a caller that counts scans itself.
+    #[inline(always)]
+    pub fn record_time(&mut self, ticks: u16) {
         if ticks < self.min {
             self.min = ticks;
         }
         if ticks > self.max {
             self.max = ticks;
         }
-        self.count = self.count.wrapping_add(1);
     }
 
     /// Mean scan period in ticks: the run time over the number of scans (0 with no scans

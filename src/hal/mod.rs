@@ -125,6 +125,9 @@ fn publish(t: &Ticker) {
 }
 static OUTPUTS: IsrCell<Outputs> = IsrCell::new(Outputs { py: 0, invert: 0 });
 
+/// The last output image the main program wrote (only the main program writes it).
+static LAST_PY: AtomicU8 = AtomicU8::new(0);
+
 /// The out_sense mask for the present level of D9.
 #[inline(always)]
 fn invert_mask(pinb: u8) -> u8 {
@@ -351,6 +354,12 @@ impl Board for Nano {
 
     #[inline]
     fn write_outputs(&mut self, py: u8) {
+        // Most scans leave the outputs as they were: only the main program writes the image,
+        // so its last value can be compared without a critical section.
+        if LAST_PY.load(Ordering::Relaxed) == py {
+            return;
+        }
+        LAST_PY.store(py, Ordering::Relaxed);
         interrupt::free(|cs| {
             let pins = OUTPUTS.with(cs, |o| {
                 if o.py == py {
