@@ -22,8 +22,7 @@ use crate::core::ihex::{self, HexEvent, HexReader};
 use crate::core::image::{self, IMAGE_LEN};
 use crate::core::opcodes::{self, END, NOP};
 use crate::core::store::{self, SLOT_ADDR, SLOT_LEN};
-use crate::core::Board;
-use crate::sim::SimBoard;
+use crate::sim::{EepromFault, SimBoard, Tear};
 
 /// What a harness says: `Ok` or the broken invariant.
 pub type Verdict = Result<(), String>;
@@ -923,57 +922,6 @@ pub fn image_decode(data: &[u8]) -> Verdict {
     }
 }
 
-/// A board whose power fails after `budget` EEPROM writes (later writes are lost).
-struct PowerFail<'a> {
-    b: &'a mut SimBoard,
-    budget: u32,
-}
-
-impl Board for PowerFail<'_> {
-    fn inputs(&mut self) -> u8 {
-        self.b.inputs()
-    }
-    fn take_leading(&mut self, mask: u8) -> bool {
-        self.b.take_leading(mask)
-    }
-    fn take_trailing(&mut self, mask: u8) -> bool {
-        self.b.take_trailing(mask)
-    }
-    fn toggles(&mut self) -> u8 {
-        self.b.toggles()
-    }
-    fn resync_inputs(&mut self) {
-        self.b.resync_inputs()
-    }
-    fn clocks(&mut self) -> u8 {
-        self.b.clocks()
-    }
-    fn now_ms(&mut self) -> u32 {
-        self.b.now_ms()
-    }
-    fn write_outputs(&mut self, py: u8) {
-        self.b.write_outputs(py)
-    }
-    fn rx(&mut self) -> Option<u8> {
-        self.b.rx()
-    }
-    fn tx(&mut self, byte: u8) {
-        self.b.tx(byte)
-    }
-    fn tx_room(&mut self) -> u8 {
-        self.b.tx_room()
-    }
-    fn eeprom_read(&mut self, addr: u16) -> u8 {
-        self.b.eeprom_read(addr)
-    }
-    fn eeprom_update(&mut self, addr: u16, value: u8) {
-        if self.b.eeprom_read(addr) != value && self.budget > 0 {
-            self.budget -= 1;
-            self.b.eeprom_update(addr, value);
-        }
-    }
-}
-
 /// EEPROM `load` on random contents: input bytes 0..280 are slot 0, 280..560 slot 1 (the
 /// rest erased). LOAD returns only a program whose slot holds a valid image (the newest
 /// valid one); STORE then works from any contents; and a STORE cut by a power failure after
@@ -1017,13 +965,11 @@ pub fn eeprom(data: &[u8]) -> Verdict {
     new.presets[0] = data.len() as u8;
     let cut = data.first().map_or(0, |&c| u32::from(c) * 3);
     let mut failing = board.clone();
-    let _ = store::store(
-        &new,
-        &mut PowerFail {
-            b: &mut failing,
-            budget: cut,
-        },
-    );
+    failing.eeprom_fault = EepromFault::PowerFail {
+        writes: cut,
+        tear: Tear::Old,
+    };
+    let _ = store::store(&new, &mut failing);
     let after_cut = store::load(&mut failing);
     let ok = after_cut.as_ref() == Ok(&new) || after_cut == old;
     if !ok {

@@ -14,6 +14,37 @@ use crate::core::ticker::Ticker;
 /// Size of the simulated EEPROM.
 pub const EEPROM_SIZE: usize = 1024;
 
+/// How the byte being written is left when the power fails in the middle of its write.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Tear {
+    /// The write never started: the old value stays.
+    Old,
+    /// Erased (0xFF) but not yet programmed.
+    Erased,
+    /// Some bits programmed: old AND new.
+    Partial,
+}
+
+/// EEPROM faults for storage tests (the chip's EEPROM when things go wrong).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum EepromFault {
+    /// Every write works.
+    #[default]
+    None,
+    /// The power fails after `writes` more byte writes; the write under way then is left
+    /// as `tear` says, and every later write is lost.
+    PowerFail {
+        /// Byte writes that still complete.
+        writes: u32,
+        /// What the interrupted write leaves.
+        tear: Tear,
+    },
+    /// The power is off: writes are lost.
+    PoweredOff,
+    /// Writes to this address are lost (a worn-out cell).
+    Stuck(u16),
+}
+
 /// A host board with simulated time.
 #[derive(Clone, Debug)]
 pub struct SimBoard {
@@ -35,6 +66,14 @@ pub struct SimBoard {
     pub eeprom: Vec<u8>,
     /// Count of EEPROM bytes actually written (wear).
     pub eeprom_writes: u32,
+    /// Injected EEPROM faults.
+    pub eeprom_fault: EepromFault,
+    /// Times the watchdog was fed.
+    pub watchdog_feeds: u32,
+    /// EEPROM byte writes since the last watchdog feed.
+    pub writes_since_feed: u32,
+    /// The most EEPROM byte writes seen between two watchdog feeds.
+    pub max_writes_between_feeds: u32,
 }
 
 impl Default for SimBoard {
@@ -56,6 +95,10 @@ impl SimBoard {
             tx_room_value: 255,
             eeprom: std::vec![0xFF; EEPROM_SIZE],
             eeprom_writes: 0,
+            eeprom_fault: EepromFault::None,
+            watchdog_feeds: 0,
+            writes_since_feed: 0,
+            max_writes_between_feeds: 0,
         }
     }
 
@@ -152,11 +195,39 @@ impl Board for SimBoard {
         self.eeprom.get(usize::from(addr)).copied().unwrap_or(0xFF)
     }
     fn eeprom_update(&mut self, addr: u16, value: u8) {
-        if let Some(cell) = self.eeprom.get_mut(usize::from(addr)) {
-            if *cell != value {
-                *cell = value;
-                self.eeprom_writes += 1;
+        let Some(cell) = self.eeprom.get_mut(usize::from(addr)) else {
+            return;
+        };
+        let old = *cell;
+        if old == value {
+            return;
+        }
+        match &mut self.eeprom_fault {
+            EepromFault::None => {}
+            EepromFault::Stuck(a) if *a == addr => return,
+            EepromFault::Stuck(_) => {}
+            EepromFault::PoweredOff => return,
+            EepromFault::PowerFail { writes, tear } => {
+                if *writes > 0 {
+                    *writes -= 1;
+                } else {
+                    *cell = match tear {
+                        Tear::Old => old,
+                        Tear::Erased => 0xFF,
+                        Tear::Partial => old & value,
+                    };
+                    self.eeprom_fault = EepromFault::PoweredOff;
+                    return;
+                }
             }
         }
+        *cell = value;
+        self.eeprom_writes += 1;
+        self.writes_since_feed += 1;
+        self.max_writes_between_feeds = self.max_writes_between_feeds.max(self.writes_since_feed);
+    }
+    fn feed_watchdog(&mut self) {
+        self.watchdog_feeds += 1;
+        self.writes_since_feed = 0;
     }
 }

@@ -2,31 +2,13 @@
 //! only changed bytes, read-back verification, and fault injection (a reset at every point
 //! of a STORE, flipped bytes, erased and random EEPROM).
 
-use utile::core::board::Board;
+mod rng;
+
+use rng::{random_program, Rng};
 use utile::core::engine::Program;
 use utile::core::image;
 use utile::core::store::{self, LoadError, StoreError, SLOT_ADDR};
-use utile::sim::SimBoard;
-
-struct Rng(u32);
-impl Rng {
-    fn next(&mut self) -> u32 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 17;
-        self.0 ^= self.0 << 5;
-        self.0
-    }
-    fn byte(&mut self) -> u8 {
-        (self.next() >> 24) as u8
-    }
-}
-
-fn random_program(rng: &mut Rng) -> Program {
-    let mut p = Program::blank();
-    p.uf.iter_mut().for_each(|b| *b = rng.byte());
-    p.presets.iter_mut().for_each(|b| *b = rng.byte());
-    p
-}
+use utile::sim::{EepromFault, SimBoard, Tear};
 
 /// A typical small program: a few lines, the rest blank.
 fn small_program() -> Program {
@@ -44,83 +26,6 @@ fn seq(b: &SimBoard, slot: usize) -> u16 {
 fn slot_image(b: &SimBoard, slot: usize) -> &[u8] {
     let a = usize::from(SLOT_ADDR[slot]) + 2;
     &b.eeprom[a..a + image::IMAGE_LEN]
-}
-
-/// How a write cut by a reset leaves the byte being written.
-#[derive(Clone, Copy, Debug)]
-enum Tear {
-    /// The write never started.
-    Old,
-    /// Erased (0xFF) but not yet programmed.
-    Erased,
-    /// Some bits programmed: old AND new.
-    Partial,
-}
-
-/// A board whose EEPROM stops taking writes after `budget` byte writes (a reset in the
-/// middle of STORE); the interrupted write leaves the byte as `tear` says.
-struct FaultBoard {
-    inner: SimBoard,
-    budget: u32,
-    tear: Tear,
-    torn: bool,
-}
-
-impl Board for FaultBoard {
-    fn inputs(&mut self) -> u8 {
-        self.inner.inputs()
-    }
-    fn take_leading(&mut self, mask: u8) -> bool {
-        self.inner.take_leading(mask)
-    }
-    fn take_trailing(&mut self, mask: u8) -> bool {
-        self.inner.take_trailing(mask)
-    }
-    fn toggles(&mut self) -> u8 {
-        self.inner.toggles()
-    }
-    fn resync_inputs(&mut self) {
-        self.inner.resync_inputs()
-    }
-    fn clocks(&mut self) -> u8 {
-        self.inner.clocks()
-    }
-    fn now_ms(&mut self) -> u32 {
-        self.inner.now_ms()
-    }
-    fn write_outputs(&mut self, py: u8) {
-        self.inner.write_outputs(py)
-    }
-    fn rx(&mut self) -> Option<u8> {
-        self.inner.rx()
-    }
-    fn tx(&mut self, byte: u8) {
-        self.inner.tx(byte)
-    }
-    fn tx_room(&mut self) -> u8 {
-        self.inner.tx_room()
-    }
-    fn eeprom_read(&mut self, addr: u16) -> u8 {
-        self.inner.eeprom_read(addr)
-    }
-    fn eeprom_update(&mut self, addr: u16, value: u8) {
-        let old = self.inner.eeprom_read(addr);
-        if old == value {
-            return;
-        }
-        if self.budget > 0 {
-            self.budget -= 1;
-            self.inner.eeprom_update(addr, value);
-        } else if !self.torn {
-            self.torn = true;
-            let left = match self.tear {
-                Tear::Old => old,
-                Tear::Erased => 0xFF,
-                Tear::Partial => old & value,
-            };
-            self.inner.eeprom_update(addr, left);
-        }
-    }
 }
 
 /// Byte writes a STORE of `new` over the EEPROM of `b` needs.
@@ -141,12 +46,8 @@ fn reset_during_store(before: &SimBoard, old: Option<&Program>, new: &Program) -
     let mut saw_old = false;
     for n in 0..=total {
         for tear in [Tear::Old, Tear::Erased, Tear::Partial] {
-            let mut fb = FaultBoard {
-                inner: before.clone(),
-                budget: n,
-                tear,
-                torn: false,
-            };
+            let mut fb = before.clone();
+            fb.eeprom_fault = EepromFault::PowerFail { writes: n, tear };
             let result = store::store(new, &mut fb);
             if n < total && matches!(tear, Tear::Old) {
                 assert_eq!(
@@ -157,13 +58,14 @@ fn reset_during_store(before: &SimBoard, old: Option<&Program>, new: &Program) -
             } else if n < total {
                 // A torn byte may happen to hold the intended value; then STORE succeeded.
                 if result == Ok(()) {
-                    assert_eq!(store::load(&mut fb.inner.clone()).as_ref(), Ok(new));
+                    assert_eq!(store::load(&mut fb.clone()).as_ref(), Ok(new));
                 }
             } else {
                 assert_eq!(result, Ok(()));
             }
-            // Reboot: plain board, LOAD.
-            let mut after = fb.inner;
+            // Reboot: power back, LOAD.
+            let mut after = fb;
+            after.eeprom_fault = EepromFault::None;
             match store::load(&mut after) {
                 Ok(p) if &p == new => saw_new = true,
                 Ok(p) => {
@@ -434,120 +336,22 @@ fn failing_eeprom_is_reported_and_the_old_program_kept() {
                                             // Slot 1 byte 50 is stuck at its erased value, which differs from the new image.
     let stuck = usize::from(SLOT_ADDR[1]) + 50;
     assert_ne!(image::encode(&new)[48], 0xFF);
-    let mut fb = FaultBoard {
-        inner: base,
-        budget: u32::MAX,
-        tear: Tear::Old,
-        torn: false,
-    };
-    struct Stuck<'a>(&'a mut FaultBoard, usize);
-    impl Board for Stuck<'_> {
-        fn inputs(&mut self) -> u8 {
-            self.0.inputs()
-        }
-        fn take_leading(&mut self, m: u8) -> bool {
-            self.0.take_leading(m)
-        }
-        fn take_trailing(&mut self, m: u8) -> bool {
-            self.0.take_trailing(m)
-        }
-        fn toggles(&mut self) -> u8 {
-            self.0.toggles()
-        }
-        fn resync_inputs(&mut self) {
-            self.0.resync_inputs()
-        }
-        fn clocks(&mut self) -> u8 {
-            self.0.clocks()
-        }
-        fn now_ms(&mut self) -> u32 {
-            self.0.now_ms()
-        }
-        fn write_outputs(&mut self, py: u8) {
-            self.0.write_outputs(py)
-        }
-        fn rx(&mut self) -> Option<u8> {
-            self.0.rx()
-        }
-        fn tx(&mut self, b: u8) {
-            self.0.tx(b)
-        }
-        fn tx_room(&mut self) -> u8 {
-            self.0.tx_room()
-        }
-        fn eeprom_read(&mut self, a: u16) -> u8 {
-            self.0.eeprom_read(a)
-        }
-        fn eeprom_update(&mut self, a: u16, v: u8) {
-            if usize::from(a) != self.1 {
-                self.0.eeprom_update(a, v)
-            }
-        }
-    }
-    assert_eq!(
-        store::store(&new, &mut Stuck(&mut fb, stuck)),
-        Err(StoreError::Verify)
-    );
-    assert_eq!(store::load(&mut fb.inner), Ok(old));
+    let mut fb = base;
+    fb.eeprom_fault = EepromFault::Stuck(stuck as u16);
+    assert_eq!(store::store(&new, &mut fb), Err(StoreError::Verify));
+    fb.eeprom_fault = EepromFault::None;
+    assert_eq!(store::load(&mut fb), Ok(old));
 }
 
 /// STORE feeds the watchdog while it writes (each byte takes 3.3 ms on the chip).
 #[test]
 fn store_feeds_the_watchdog() {
-    struct Dog(SimBoard, u32, u32, u32);
-    impl Board for Dog {
-        fn inputs(&mut self) -> u8 {
-            self.0.inputs()
-        }
-        fn take_leading(&mut self, m: u8) -> bool {
-            self.0.take_leading(m)
-        }
-        fn take_trailing(&mut self, m: u8) -> bool {
-            self.0.take_trailing(m)
-        }
-        fn toggles(&mut self) -> u8 {
-            self.0.toggles()
-        }
-        fn resync_inputs(&mut self) {
-            self.0.resync_inputs()
-        }
-        fn clocks(&mut self) -> u8 {
-            self.0.clocks()
-        }
-        fn now_ms(&mut self) -> u32 {
-            self.0.now_ms()
-        }
-        fn write_outputs(&mut self, py: u8) {
-            self.0.write_outputs(py)
-        }
-        fn rx(&mut self) -> Option<u8> {
-            self.0.rx()
-        }
-        fn tx(&mut self, b: u8) {
-            self.0.tx(b)
-        }
-        fn tx_room(&mut self) -> u8 {
-            self.0.tx_room()
-        }
-        fn eeprom_read(&mut self, a: u16) -> u8 {
-            self.0.eeprom_read(a)
-        }
-        fn eeprom_update(&mut self, a: u16, v: u8) {
-            if self.0.eeprom_read(a) != v {
-                // Writes since the last feed.
-                self.1 += 1;
-                self.3 = self.3.max(self.1);
-            }
-            self.0.eeprom_update(a, v)
-        }
-        fn feed_watchdog(&mut self) {
-            self.1 = 0;
-            self.2 += 1;
-        }
-    }
     let mut rng = Rng(3);
-    let mut d = Dog(SimBoard::new(), 0, 0, 0);
+    let mut d = SimBoard::new();
     store::store(&random_program(&mut rng), &mut d).unwrap();
-    assert!(d.2 >= 278, "fed {} times", d.2);
-    assert_eq!(d.3, 1, "at most one byte write between feeds");
+    assert!(d.watchdog_feeds >= 278, "fed {} times", d.watchdog_feeds);
+    assert_eq!(
+        d.max_writes_between_feeds, 1,
+        "at most one byte write between feeds"
+    );
 }
