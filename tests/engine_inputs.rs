@@ -2,24 +2,13 @@
 //! bouncing press, sticky edge bits, no phantom edges after reset or EX0, and latency.
 
 mod common_scenario;
+mod rng;
+
 use common_scenario::*;
+use rng::Rng;
 use utile::core::board::Board;
 use utile::core::ticker::{Debouncer, Ticker};
 use utile::sim::SimBoard;
-
-/// A small deterministic pseudo-random generator (xorshift32).
-struct Rng(u32);
-impl Rng {
-    fn next(&mut self) -> u32 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 17;
-        self.0 ^= self.0 << 5;
-        self.0
-    }
-    fn range(&mut self, lo: u32, hi: u32) -> u32 {
-        lo + self.next() % (hi - lo + 1)
-    }
-}
 
 /// Feed `level` for `ms` samples of 1 ms to input 0 (others high).
 fn feed(d: &mut Debouncer, level: bool, ms: u32) {
@@ -75,7 +64,11 @@ fn debounce_time_is_within_the_spec_window() {
     feed(&mut d, false, 3);
     feed(&mut d, true, 1);
     feed(&mut d, false, 3);
-    assert_eq!(d.level() & 1, 1, "two 3 ms pulses with a 1 ms gap do not pass");
+    assert_eq!(
+        d.level() & 1,
+        1,
+        "two 3 ms pulses with a 1 ms gap do not pass"
+    );
 }
 
 /// A bouncing contact: `bounces` short (1..3 ms) alternations, then settled at `to`.

@@ -3,8 +3,10 @@
 //! noise. Needs `out/m328-nano-utile.elf` (`cargo fw`).
 
 mod common;
+mod rng;
 
 use common::{contains, Nano, Rig, RAMSTART, STACK_PAINT};
+use rng::Rng;
 use utile::core::engine::Program;
 use utile::core::opcodes::{self, NOP};
 use utile::core::{ihex, image, store};
@@ -22,7 +24,10 @@ fn old_program() -> Program {
 
 /// FILL's program: every line NOP, the presets of the program it replaced.
 fn filled(from: &Program) -> Program {
-    Program { uf: [NOP; 256], presets: from.presets }
+    Program {
+        uf: [NOP; 256],
+        presets: from.presets,
+    }
 }
 
 /// An EEPROM holding `prog` as STORE leaves it.
@@ -41,8 +46,14 @@ fn stored_program(eeprom: &[u8]) -> Option<Program> {
 
 /// Boot with `eeprom`, LOAD it, FILL, and type STORE; returns once the CR is received.
 fn start_store(eeprom: &'static [u8]) -> Nano {
-    let mut nano = Nano::boot_with(Rig { eeprom: Some(eeprom), ..Rig::default() });
-    assert!(nano.wait_for("*** User File 0 ***", 2000), "the editor came up");
+    let mut nano = Nano::boot_with(Rig {
+        eeprom: Some(eeprom),
+        ..Rig::default()
+    });
+    assert!(
+        nano.wait_for("*** User File 0 ***", 2000),
+        "the editor came up"
+    );
     nano.enter("LOAD", 400);
     assert!(contains(&nano.take_output(), b"loaded from EEPROM"));
     nano.enter("fill", 400);
@@ -50,6 +61,36 @@ fn start_store(eeprom: &'static [u8]) -> Nano {
     nano.type_bytes(b"STORE\r");
     nano.drain_typed();
     nano
+}
+
+/// READ `file` through the UART and return to the editor.
+fn read_file(nano: &mut Nano, file: &[u8]) {
+    nano.enter("READ", 300);
+    nano.type_bytes(file);
+    nano.drain_typed();
+    assert!(
+        nano.wait_for("File read completed", 3000),
+        "READ took the file"
+    );
+    nano.enter("", 800);
+}
+
+/// WRITE: everything the firmware sends from the CR to the end-of-file record's CR LF.
+fn write_file(nano: &mut Nano) -> Vec<u8> {
+    nano.enter("WRITE", 300);
+    nano.take_output();
+    nano.type_bytes(b"\r");
+    nano.drain_typed();
+    assert!(nano.wait_for(":00000001FF", 2000), "WRITE sent the file");
+    nano.run_ms(20); // the record's CR LF
+    nano.take_output()
+}
+
+/// The Intel HEX file WRITE sends for `prog`.
+fn hex_of(prog: &Program) -> Vec<u8> {
+    let mut file = Vec::new();
+    ihex::write_hex(&image::encode(prog), &mut |c| file.push(c));
+    file
 }
 
 #[test]
@@ -80,7 +121,10 @@ fn a_reset_in_the_middle_of_store_never_loses_the_stored_program() {
         // And the firmware's own LOAD finds a program.
         assert!(nano.wait_for("*** User File 0 ***", 2000));
         nano.enter("LOAD", 400);
-        assert!(contains(&nano.take_output(), b"loaded from EEPROM"), "reset {k}/24");
+        assert!(
+            contains(&nano.take_output(), b"loaded from EEPROM"),
+            "reset {k}/24"
+        );
     }
     // The points really fell before and after the moment the new copy became valid.
     assert!(saw_old > 0 && saw_new > 0, "old {saw_old}, new {saw_new}");
@@ -105,15 +149,8 @@ fn flipped_bytes_in_the_newest_slot_fall_back_to_the_other() {
     nano.enter("LOAD", 400);
     assert!(contains(&nano.take_output(), b"loaded from EEPROM"));
     // WRITE shows what is in RAM now: the old program.
-    nano.enter("WRITE", 300);
-    nano.take_output();
-    nano.type_bytes(b"\r");
-    nano.drain_typed();
-    assert!(nano.wait_for(":00000001FF", 2000));
-    nano.run_ms(20); // the record's CR LF
-    let mut expected = Vec::new();
-    ihex::write_hex(&image::encode(&old), &mut |c| expected.push(c));
-    let out = nano.take_output();
+    let expected = hex_of(&old);
+    let out = write_file(&mut nano);
     assert!(
         contains(&out, &expected),
         "LOAD took the intact older copy:\n{}\nexpected\n{}",
@@ -121,9 +158,7 @@ fn flipped_bytes_in_the_newest_slot_fall_back_to_the_other() {
         String::from_utf8_lossy(&expected)
     );
     // The damaged newer copy (FILL's program) was not taken.
-    let mut damaged = Vec::new();
-    ihex::write_hex(&image::encode(&new), &mut |c| damaged.push(c));
-    assert!(!contains(&out, &damaged));
+    assert!(!contains(&out, &hex_of(&new)));
 }
 
 /// Static data (up to the stack paint) plus the deepest stack since boot.
@@ -146,8 +181,7 @@ fn the_deepest_editor_paths_stay_within_the_ram_budget() {
     prog.uf[ops.len()] = opcodes::KEY;
     prog.uf[ops.len() + 1] = opcodes::END;
     prog.presets = [3; 16];
-    let mut file = Vec::new();
-    ihex::write_hex(&image::encode(&prog), &mut |c| file.push(c));
+    let file = hex_of(&prog);
 
     let mut nano = Nano::boot();
     assert!(nano.wait_for("*** User File 0 ***", 2000));
@@ -160,11 +194,7 @@ fn the_deepest_editor_paths_stay_within_the_ram_budget() {
     nano.type_bytes(b"\x1b[C");
     nano.enter("Z", 300);
     nano.enter("", 800);
-    nano.enter("READ", 300);
-    nano.type_bytes(&file);
-    nano.drain_typed();
-    assert!(nano.wait_for("File read completed", 3000), "READ took the file");
-    nano.enter("", 800);
+    read_file(&mut nano, &file);
     for cmd in ["LIST", "WRITE"] {
         nano.enter(cmd, 300);
         nano.enter("", 3000);
@@ -183,45 +213,38 @@ fn the_deepest_editor_paths_stay_within_the_ram_budget() {
     nano.drain_typed();
     nano.run_ms(800);
     nano.enter("STAT", 300);
-    assert!(contains(&nano.take_output(), b"scans/s"), "the run happened");
+    assert!(
+        contains(&nano.take_output(), b"scans/s"),
+        "the run happened"
+    );
     let (statics, stack) = ram_in_use(&nano);
     println!("RAM after the deep paths: static {statics} + stack {stack} bytes");
-    assert!(statics + stack <= 1536, "SPEC §11: {} bytes", statics + stack);
-}
-
-/// xorshift32: reproducible noise without a dependency.
-struct Noise(u32);
-
-impl Noise {
-    fn next(&mut self) -> u32 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 17;
-        self.0 ^= self.0 << 5;
-        self.0
-    }
+    assert!(
+        statics + stack <= 1536,
+        "SPEC §11: {} bytes",
+        statics + stack
+    );
 }
 
 #[test]
 fn ten_minutes_of_input_and_uart_noise_change_nothing_and_hang_nothing() {
     // Y0 follows A0, Y1 follows A1; KEY is reachable.
     let mut prog = Program::blank();
-    for (line, word) in ["A0.", ".Y0", "A1.", ".Y1", "KEY", "END"].iter().enumerate() {
+    for (line, word) in ["A0.", ".Y0", "A1.", ".Y1", "KEY", "END"]
+        .iter()
+        .enumerate()
+    {
         prog.uf[line] = opcodes::lookup(word.as_bytes()).expect("a command");
     }
     prog.presets = [7; 16];
-    let mut file = Vec::new();
-    ihex::write_hex(&image::encode(&prog), &mut |c| file.push(c));
+    let file = hex_of(&prog);
 
     let mut nano = Nano::boot();
     assert!(nano.wait_for("*** User File 0 ***", 2000));
-    nano.enter("READ", 300);
-    nano.type_bytes(&file);
-    nano.drain_typed();
-    assert!(nano.wait_for("File read completed", 3000));
-    nano.enter("", 800);
+    read_file(&mut nano, &file);
     nano.enter("EX0", 500);
 
-    let mut noise = Noise(0x2545_F491);
+    let mut noise = Rng(0x2545_F491);
     let mut switches = [false; 6];
     // 10 simulated minutes in 100 ms steps: switches change at random, and the UART gets
     // random bytes at the full rate simavr's UART takes (170 per step) except `/`, which would stop
@@ -241,8 +264,18 @@ fn ten_minutes_of_input_and_uart_noise_change_nothing_and_hang_nothing() {
         nano.run_ms(100);
         if step % 100 == 99 {
             let y = nano.outputs();
-            assert_eq!(y & 1 != 0, !switches[0], "Y0 follows A0 at {} s", (step + 1) / 10);
-            assert_eq!(y & 2 != 0, !switches[1], "Y1 follows A1 at {} s", (step + 1) / 10);
+            assert_eq!(
+                y & 1 != 0,
+                !switches[0],
+                "Y0 follows A0 at {} s",
+                (step + 1) / 10
+            );
+            assert_eq!(
+                y & 2 != 0,
+                !switches[1],
+                "Y1 follows A1 at {} s",
+                (step + 1) / 10
+            );
         }
     }
     // Still running and still listening: `/` stops it.
@@ -256,31 +289,26 @@ fn ten_minutes_of_input_and_uart_noise_change_nothing_and_hang_nothing() {
     nano.drain_typed();
     nano.run_ms(800);
     // The program and presets are unchanged: WRITE sends the very file READ took.
-    nano.enter("WRITE", 300);
-    nano.take_output();
-    nano.type_bytes(b"\r");
-    nano.drain_typed();
-    assert!(nano.wait_for(":00000001FF", 2000));
-    nano.run_ms(20); // the record's CR LF
-    assert!(contains(&nano.take_output(), &file), "UF and presets unchanged");
+    assert!(
+        contains(&write_file(&mut nano), &file),
+        "UF and presets unchanged"
+    );
     nano.enter("", 800);
     nano.enter("STAT", 300);
     let out = nano.take_output();
-    assert!(contains(&out, b"rx overruns "), "STAT reports receive overruns");
+    assert!(
+        contains(&out, b"rx overruns "),
+        "STAT reports receive overruns"
+    );
 }
 
 #[test]
 fn write_read_store_power_cycle_load_write_is_bit_exact() {
     let prog = old_program();
-    let mut file = Vec::new();
-    ihex::write_hex(&image::encode(&prog), &mut |c| file.push(c));
+    let file = hex_of(&prog);
     let mut nano = Nano::boot();
     assert!(nano.wait_for("*** User File 0 ***", 2000));
-    nano.enter("READ", 300);
-    nano.type_bytes(&file);
-    nano.drain_typed();
-    assert!(nano.wait_for("File read completed", 3000));
-    nano.enter("", 800);
+    read_file(&mut nano, &file);
     nano.enter("STORE", 1500);
     assert!(contains(&nano.take_output(), b"stored in EEPROM"));
     nano.power_cycle();
@@ -290,11 +318,8 @@ fn write_read_store_power_cycle_load_write_is_bit_exact() {
     assert!(nano.screen().contains("000 ....."), "{}", nano.screen());
     nano.enter("LOAD", 800);
     assert!(contains(&nano.take_output(), b"loaded from EEPROM"));
-    nano.enter("WRITE", 300);
-    nano.take_output();
-    nano.type_bytes(b"\r");
-    nano.drain_typed();
-    assert!(nano.wait_for(":00000001FF", 2000));
-    nano.run_ms(20); // the record's CR LF
-    assert!(contains(&nano.take_output(), &file), "the same file, byte for byte");
+    assert!(
+        contains(&write_file(&mut nano), &file),
+        "the same file, byte for byte"
+    );
 }

@@ -1,28 +1,15 @@
 //! Intel HEX for images (SPEC §10, docs/FORMAT.md): the writer's exact text, bit-exact
 //! round trips, and every way the streaming reader refuses a file.
 
+mod rng;
+
+use rng::{random_program, Rng};
 use utile::core::engine::Program;
 use utile::core::ihex::{write_hex, HexError, HexEvent, HexReader};
 use utile::core::image::{self, ImageError, IMAGE_LEN};
 
-struct Rng(u32);
-impl Rng {
-    fn next(&mut self) -> u32 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 17;
-        self.0 ^= self.0 << 5;
-        self.0
-    }
-    fn byte(&mut self) -> u8 {
-        (self.next() >> 24) as u8
-    }
-}
-
 fn random_image(rng: &mut Rng) -> [u8; IMAGE_LEN] {
-    let mut p = Program::blank();
-    p.uf.iter_mut().for_each(|b| *b = rng.byte());
-    p.presets.iter_mut().for_each(|b| *b = rng.byte());
-    image::encode(&p)
+    image::encode(&random_program(rng))
 }
 
 fn hex_text(img: &[u8]) -> String {

@@ -1,28 +1,10 @@
 //! Stored-image format (docs/FORMAT.md): encode/decode round trips and every decode error.
 
+mod rng;
+
+use rng::{random_program, Rng};
 use utile::core::engine::Program;
 use utile::core::image::{self, ImageError, IMAGE_LEN, MAGIC, VERSION};
-
-/// A small deterministic generator (xorshift32), so failures reproduce.
-struct Rng(u32);
-impl Rng {
-    fn next(&mut self) -> u32 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 17;
-        self.0 ^= self.0 << 5;
-        self.0
-    }
-    fn byte(&mut self) -> u8 {
-        (self.next() >> 24) as u8
-    }
-}
-
-fn random_program(rng: &mut Rng) -> Program {
-    let mut p = Program::blank();
-    p.uf.iter_mut().for_each(|b| *b = rng.byte());
-    p.presets.iter_mut().for_each(|b| *b = rng.byte());
-    p
-}
 
 /// A CRC-16/CCITT-FALSE written differently (table-free, MSB-first over a bit stream),
 /// to check the image's CRC independently.
