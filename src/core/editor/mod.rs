@@ -522,11 +522,9 @@ impl Editor {
     }
 
     /// KEY saw `/`: show `Strike any key -->`; the next [`Editor::key`] returns to the editor.
-    pub fn on_break<B: Board>(&mut self, eng: &mut Engine, b: &mut B) {
+    pub fn on_break<B: Board>(&mut self, _eng: &mut Engine, b: &mut B) {
         // One instance of the drawing code: every entry point goes through `Tracked`.
         let b = &mut Tracked { b, sent: false };
-        // No END runs in the editor: retire expired timers here instead.
-        eng.retire_timers(b);
         let now = b.now_ms();
         self.stats.run_ms = now.wrapping_sub(self.run_start_ms);
         self.screen = Screen::Break;
