@@ -6,6 +6,8 @@
 //! and exists only on the AVR.
 #![cfg_attr(not(test), no_std)]
 #![deny(unsafe_code)]
+// The HAL's threaded scan is `global_asm!`, still unstable on the AVR.
+#![cfg_attr(target_arch = "avr", feature(asm_experimental_arch))]
 
 #[cfg(not(target_arch = "avr"))]
 extern crate std;

@@ -16,10 +16,11 @@ mod firmware {
     use avr_device::interrupt::CriticalSection;
     use utile::core::board::Board;
     use utile::core::editor::{Editor, Mode};
-    use utile::core::engine::{Engine, Flow};
+    use utile::core::engine::Engine;
     use utile::core::stats::ScanStats;
     use utile::core::store;
     use utile::hal;
+    use utile::hal::scan::{self, Exit, RunState};
 
     /// Byte that makes a `hang-test` build stop feeding the watchdog (FS, Ctrl-\).
     #[cfg(feature = "hang-test")]
@@ -47,10 +48,15 @@ mod firmware {
         }
     }
 
+    // A `scan-check` build never reaches the editor below (the check never returns).
+    #[cfg_attr(feature = "scan-check", allow(unreachable_code))]
     #[avr_device::entry]
     fn main() -> ! {
         let (mut board, boot) = hal::init();
         let eng = hal::kept::take_engine(boot.cold, &mut board);
+        // Test-only build: check the threaded scan against the core, then idle.
+        #[cfg(feature = "scan-check")]
+        hal::scan_check::run(eng, &mut board);
         // SAFETY: the only reference to EDITOR, taken once; no interrupt handler uses it.
         let editor = unsafe { &mut *core::ptr::addr_of_mut!(EDITOR) };
 
@@ -81,36 +87,39 @@ mod firmware {
         }
     }
 
-    /// RUN mode until KEY breaks out: scans back to back. The statistics are a local, so
-    /// the per-scan bookkeeping stays in registers; a scan is measured END to END.
+    /// RUN mode until KEY breaks out. The threaded scan (`hal::scan`) runs scan after scan
+    /// and comes back only for KEY's received bytes, pending displays (every 16th scan) and
+    /// each 65,536th scan; STAT's figures come from its bookkeeping.
     #[inline(always)]
     fn run(eng: &mut Engine, editor: &mut Editor, board: &mut hal::Nano) {
-        let mut stats = ScanStats::new();
-        // Scans since the last 65,536; a 16-bit local stays in registers where the 32-bit
-        // count would be kept on the stack.
-        let mut scans: u16 = 0;
-        let mut last_end = board.stats_ticks();
+        let mut st = RunState::new(board.stats_ticks());
+        let mut wraps: u16 = 0;
         loop {
             board.feed_watchdog();
-            let flow = eng.scan(board);
-            let now = board.stats_ticks();
-            stats.record_time(now.wrapping_sub(last_end));
-            last_end = now;
-            scans = scans.wrapping_add(1);
-            if scans == 0 {
-                stats.count = stats.count.wrapping_add(0x1_0000);
-            }
-            if flow == Flow::Break {
-                stats.count = stats.count.wrapping_add(u32::from(scans));
-                editor.stats = stats;
-                editor.on_break(eng, board);
-                return;
-            }
-            // Displays are paced at 100 ms: looking every 16th scan is plenty.
-            if scans as u8 & 0x0F == 0 && editor.has_output(eng) {
-                editor.after_scan(eng, board);
+            let want = editor.has_output(eng);
+            match scan::run(eng, &mut st, want) {
+                Exit::Key => {
+                    // KEY takes one received byte; only `/` stops the program.
+                    if board.rx() == Some(b'/') {
+                        break;
+                    }
+                }
+                Exit::Scans => {
+                    if editor.has_output(eng) {
+                        editor.after_scan(eng, board);
+                    }
+                }
+                Exit::Wrap => wraps = wraps.wrapping_add(1),
+                Exit::Refused => break,
             }
         }
+        editor.stats = ScanStats {
+            min: st.min,
+            max: st.max,
+            count: (u32::from(wraps) << 16) | u32::from(st.scans),
+            run_ms: 0,
+        };
+        editor.on_break(eng, board);
     }
 
     // SAFETY (all three handlers): an AVR interrupt handler runs with interrupts disabled

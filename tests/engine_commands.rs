@@ -155,11 +155,11 @@ fn port_and_stack_display_requests() {
     e.bs = 0x81;
     for (name, want) in [("PPA", 0x15), ("PPY", 1), ("PPU", 2), ("PPV", 3)] {
         e.exec(op(name), &mut b);
-        assert_eq!(e.port_view, Some(want), "{name}");
+        assert_eq!(e.port_view(), Some(want), "{name}");
         assert_eq!(e.bs, 0x81, "{name} leaves the stack");
     }
     e.exec(op("PBS"), &mut b);
-    assert_eq!(e.bs_view, Some(0x81));
+    assert_eq!(e.bs_view(), Some(0x81));
     assert!(
         b.tx_log.is_empty(),
         "the engine never writes to the UART itself"
@@ -381,8 +381,8 @@ fn ex0_clears_runtime_state_but_keeps_the_program_and_presets() {
     e.set = 4;
     e.reset = 5;
     e.q = 6;
-    e.port_view = Some(1);
-    e.bs_view = Some(2);
+    e.request_port_view(1);
+    e.request_bs_view(2);
     b.press(0);
     b.advance_ms(10);
     e.clear_runtime(&mut b);
@@ -390,7 +390,7 @@ fn ex0_clears_runtime_state_but_keeps_the_program_and_presets() {
         (e.bs, e.py, e.pu, e.pv, e.set, e.reset, e.q, e.tq),
         (0, 0, 0, 0, 0, 0, 0, 0)
     );
-    assert_eq!((e.port_view, e.bs_view), (None, None));
+    assert_eq!((e.port_view(), e.bs_view()), (None, None));
     assert_eq!(e.prog, p);
     assert_eq!(b.outputs, 0, "outputs driven off");
     assert!(!b.take_trailing(1), "no edge left over");

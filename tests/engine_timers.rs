@@ -42,7 +42,10 @@ impl Rig {
     fn tr(&mut self, m: u8, v: bool) {
         self.pop_into(POP_TR + m, v);
     }
+    /// TQm as the next command sees it: the editor retires due timers while idle, as a scan
+    /// does when it starts.
     fn tq(&mut self, m: u8) -> bool {
+        self.e.retire_timers(&mut self.b);
         self.e.bs = 0;
         self.e.exec(PUSH_TQ + m, &mut self.b);
         self.e.bs & 1 != 0

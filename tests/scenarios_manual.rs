@@ -57,7 +57,7 @@ fn example_5_port_bytes_py_is_the_complement_of_pa() {
         assert_eq!(r.out_at(t) & 0xF0, 0xC0, "at {t}");
     }
     // PPA asked for the PA byte to be shown.
-    assert_eq!(r.engine.port_view, Some(0x3F));
+    assert_eq!(r.engine.port_view(), Some(0x3F));
     // The bit stack holds !!PA after the last scan, as on the manual's screen (1 1 0 0 0 0 0 0).
     assert_eq!(r.engine.bs, 0xC0);
 }

@@ -107,6 +107,28 @@ impl Debouncer {
     pub fn toggles(&self) -> u8 {
         self.toggles
     }
+
+    /// Leading-edge bits not taken yet (bit n = ALn), without clearing them.
+    pub fn leading(&self) -> u8 {
+        self.leading
+    }
+
+    /// Trailing-edge bits not taken yet (bit n = ATn), without clearing them.
+    pub fn trailing(&self) -> u8 {
+        self.trailing
+    }
+
+    /// Pose the sticky edge bits directly (bits 0..5), as if those edges had been seen.
+    /// For checks that compare two scans from the same input state (`scan-check`).
+    pub fn set_edges(&mut self, leading: u8, trailing: u8) {
+        self.leading = leading & INPUT_MASK;
+        self.trailing = trailing & INPUT_MASK;
+    }
+
+    /// Pose the toggle bits directly (bits 0..5); for the same checks as [`Self::set_edges`].
+    pub fn set_toggles(&mut self, toggles: u8) {
+        self.toggles = toggles & INPUT_MASK;
+    }
 }
 
 /// Everything the 1 ms tick keeps: time, inputs, clocks.
@@ -160,6 +182,26 @@ impl Ticker {
     pub fn clocks(&self) -> u8 {
         self.clocks
     }
+
+    /// Pose the clock bits directly (bit 0 CLKA, bit 1 CLKB, bit 2 CLKC); the half-period
+    /// counts are left as they are. For checks that pose a whole input state (`scan-check`).
+    pub fn set_clocks(&mut self, clocks: u8) {
+        self.clocks = clocks & 0x07;
+    }
+}
+
+/// Byte offsets in a [`Ticker`] of what the firmware's threaded scan reads directly: the ms
+/// clock (4 bytes, little-endian) and the sticky edge bits.
+pub mod offsets {
+    use super::{Debouncer, Ticker};
+    use core::mem::offset_of;
+
+    /// The ms clock.
+    pub const MS: usize = offset_of!(Ticker, ms);
+    /// The leading-edge bits (ALn).
+    pub const LEADING: usize = offset_of!(Ticker, inputs) + offset_of!(Debouncer, leading);
+    /// The trailing-edge bits (ATn).
+    pub const TRAILING: usize = offset_of!(Ticker, inputs) + offset_of!(Debouncer, trailing);
 }
 
 #[cfg(test)]

@@ -17,7 +17,7 @@ const MAGIC: u32 = 0x5554_694C;
 
 /// What survives a warm reset.
 #[repr(C)]
-struct Kept {
+pub(super) struct Kept {
     magic: u32,
     sum_uf: u32,
     sum_presets: u32,
@@ -29,7 +29,7 @@ struct Kept {
 /// C runtime neither copies nor clears `.noinit`, and `cargo fw` leaves it out of the hex.
 /// The runtime fields are rewritten at boot before any use (see [`take_engine`]).
 #[link_section = ".noinit"]
-static mut KEPT: MaybeUninit<Kept> = MaybeUninit::zeroed();
+pub(super) static mut KEPT: MaybeUninit<Kept> = MaybeUninit::zeroed();
 
 /// The engine, with the program kept over a warm reset (when `cold` is false and the seal
 /// matches) or a blank program, and its runtime state cleared. Call exactly once, at boot.
@@ -38,9 +38,8 @@ static mut KEPT: MaybeUninit<Kept> = MaybeUninit::zeroed();
 /// 272-byte program on the stack.
 pub fn take_engine<B: Board>(cold: bool, board: &mut B) -> &'static mut Engine {
     let kept = addr_of_mut!(KEPT).cast::<Kept>();
-    // SAFETY: called once at boot; no interrupt handler touches KEPT. Before a reference
-    // to the engine is made, its only fields with invalid bit patterns (the two `Option`s)
-    // are written; all other fields are integers or byte arrays, valid whatever RAM holds.
+    // SAFETY: called once at boot; no interrupt handler touches KEPT. Every field of the
+    // engine is an integer or a byte array, valid whatever RAM holds.
     unsafe {
         let uf = addr_of_mut!((*kept).engine.prog.uf);
         let presets = addr_of_mut!((*kept).engine.prog.presets);
@@ -53,13 +52,21 @@ pub fn take_engine<B: Board>(cold: bool, board: &mut B) -> &'static mut Engine {
             uf.cast::<u8>().write_bytes(BLANK, LINES);
             presets.cast::<u8>().write_bytes(0, UNITS);
         }
-        addr_of_mut!((*kept).engine.port_view).write(None);
-        addr_of_mut!((*kept).engine.bs_view).write(None);
         let engine = &mut *addr_of_mut!((*kept).engine);
         engine.clear_runtime(board);
         reseal(&engine.prog);
         engine
     }
+}
+
+/// Offset of the engine in [`KEPT`]: the threaded scan (`scan.rs`) addresses its fields from
+/// there.
+pub(super) const ENGINE_AT: usize = core::mem::offset_of!(Kept, engine);
+
+/// The engine that [`take_engine`] hands out (the only one the threaded scan may run).
+pub(super) fn engine_ptr() -> *const Engine {
+    // Only the address is taken.
+    addr_of!(KEPT).cast::<Kept>().wrapping_byte_add(ENGINE_AT).cast::<Engine>()
 }
 
 /// Fletcher-style checksum (two 16-bit running sums). A bitwise CRC-16 of the program

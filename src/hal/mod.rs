@@ -8,6 +8,9 @@
 //! Y7 = PB5; D8 = PB0 autostart jumper, D9 = PB1 out_sense jumper (both pulled up, active low).
 
 pub mod kept;
+pub mod scan;
+#[cfg(feature = "scan-check")]
+pub mod scan_check;
 pub mod serial;
 
 use core::cell::UnsafeCell;
@@ -68,6 +71,9 @@ pub(crate) fn regs() -> Regs {
 }
 
 /// A value shared with interrupt handlers, reachable only with interrupts disabled.
+/// Transparent, so the threaded scan (`scan.rs`) finds a field at the cell's address plus
+/// the field's offset in `T`.
+#[repr(transparent)]
 pub(crate) struct IsrCell<T>(UnsafeCell<T>);
 
 // SAFETY: the AVR has one core; access goes through `with`, which needs a critical section.
@@ -100,21 +106,21 @@ const D8_BIT: u8 = 0x01;
 const D9_BIT: u8 = 0x02;
 
 /// The output image as it reaches the pins.
-struct Outputs {
+pub(crate) struct Outputs {
     /// Output image PY from the core (never inverted).
     py: u8,
     /// 0xFF while D9 is grounded (outputs inverted at the pins), else 0.
     invert: u8,
 }
 
-static TICKER: IsrCell<Ticker> = IsrCell::new(Ticker::new(INPUT_MASK));
+pub(crate) static TICKER: IsrCell<Ticker> = IsrCell::new(Ticker::new(INPUT_MASK));
 
 /// Copies of the ticker's one-byte outputs (debounced levels, toggles, clocks), published
 /// by the tick. A one-byte load is atomic on the AVR, so the scan reads them without a
 /// critical section: each `An.` saves the SREG save, `cli` and restore.
-static LEVEL: AtomicU8 = AtomicU8::new(INPUT_MASK);
-static TOGGLES: AtomicU8 = AtomicU8::new(0);
-static CLOCKS: AtomicU8 = AtomicU8::new(0);
+pub(crate) static LEVEL: AtomicU8 = AtomicU8::new(INPUT_MASK);
+pub(crate) static TOGGLES: AtomicU8 = AtomicU8::new(0);
+pub(crate) static CLOCKS: AtomicU8 = AtomicU8::new(0);
 
 /// Publish the ticker's byte outputs (inside the critical section that changed them).
 #[inline(always)]
@@ -123,10 +129,14 @@ fn publish(t: &Ticker) {
     TOGGLES.store(t.inputs.toggles(), Ordering::Relaxed);
     CLOCKS.store(t.clocks(), Ordering::Relaxed);
 }
-static OUTPUTS: IsrCell<Outputs> = IsrCell::new(Outputs { py: 0, invert: 0 });
+pub(crate) static OUTPUTS: IsrCell<Outputs> = IsrCell::new(Outputs { py: 0, invert: 0 });
+/// Offset of [`Outputs`]' image in [`OUTPUTS`] (for the threaded scan's END).
+pub(crate) const OUTPUTS_PY_AT: usize = core::mem::offset_of!(Outputs, py);
+/// Offset of [`Outputs`]' out_sense mask in [`OUTPUTS`].
+pub(crate) const OUTPUTS_INVERT_AT: usize = core::mem::offset_of!(Outputs, invert);
 
 /// The last output image the main program wrote (only the main program writes it).
-static LAST_PY: AtomicU8 = AtomicU8::new(0);
+pub(crate) static LAST_PY: AtomicU8 = AtomicU8::new(0);
 
 /// The out_sense mask for the present level of D9.
 #[inline(always)]

@@ -71,13 +71,21 @@ pub const RX_SIZE: usize = 64;
 /// Transmit ring size.
 pub const TX_SIZE: usize = 128;
 
-struct Rx {
+pub(crate) struct Rx {
     ring: Ring<RX_SIZE>,
     /// Bytes lost (ring full or USART data overrun), saturating.
     overruns: u16,
 }
 
-static RX: IsrCell<Rx> = IsrCell::new(Rx {
+/// Where the threaded scan's KEY finds the receive ring's indices: `RX` plus these offsets
+/// (a byte each; KEY only compares them, and one-byte loads are atomic).
+pub(crate) const RX_HEAD_AT: usize =
+    core::mem::offset_of!(Rx, ring) + core::mem::offset_of!(Ring<RX_SIZE>, head);
+/// See [`RX_HEAD_AT`].
+pub(crate) const RX_TAIL_AT: usize =
+    core::mem::offset_of!(Rx, ring) + core::mem::offset_of!(Ring<RX_SIZE>, tail);
+
+pub(crate) static RX: IsrCell<Rx> = IsrCell::new(Rx {
     ring: Ring::new(),
     overruns: 0,
 });

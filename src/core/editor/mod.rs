@@ -484,7 +484,7 @@ impl Editor {
     /// request. The main loop asks first, so an idle scan pays only these tests.
     #[inline(always)]
     pub fn has_output(&self, eng: &Engine) -> bool {
-        self.render < STEPS || eng.bs_view.is_some() || eng.port_view.is_some()
+        self.render < STEPS || eng.port_view().is_some() || eng.bs_view().is_some()
     }
 
     /// After every scan in RUN mode: pending PPx/PBS displays (at most one per 100 ms each)
@@ -499,22 +499,22 @@ impl Editor {
             }
             return;
         }
-        if eng.bs_view.is_none() && eng.port_view.is_none() {
+        if eng.bs_view().is_none() && eng.port_view().is_none() {
             return;
         }
         let now = b.now_ms();
         // goto (7 bytes) + 15 bit characters.
         const VIEW_LEN: u8 = 22;
-        if let Some(v) = eng.bs_view {
+        if let Some(v) = eng.bs_view() {
             if now.wrapping_sub(self.bs_ms) >= VIEW_PERIOD_MS && b.tx_room() >= VIEW_LEN {
-                eng.bs_view = None;
+                eng.take_bs_view();
                 self.bs_ms = now;
                 self.draw_bs(b, v);
             }
         }
-        if let Some(v) = eng.port_view {
+        if let Some(v) = eng.port_view() {
             if now.wrapping_sub(self.port_ms) >= VIEW_PERIOD_MS && b.tx_room() >= VIEW_LEN {
-                eng.port_view = None;
+                eng.take_port_view();
                 self.port_ms = now;
                 self.draw_port(b, v);
             }
@@ -700,11 +700,11 @@ impl Editor {
 
     /// Bring the bit stack and port displays up to date after an executed command.
     fn show_values<B: Board>(&mut self, eng: &mut Engine, b: &mut B) {
-        eng.bs_view = None;
+        eng.take_bs_view();
         if eng.bs != self.shown_bs {
             self.draw_bs(b, eng.bs);
         }
-        if let Some(v) = eng.port_view.take() {
+        if let Some(v) = eng.take_port_view() {
             if self.shown_port != Some(v) {
                 self.draw_port(b, v);
             }

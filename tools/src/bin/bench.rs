@@ -2,7 +2,7 @@
 //! simavr and prints a Markdown table beside the original assembly firmware's figures.
 //!
 //! Usage: `bench [--quick | --long] [--scans N] [SECTION...]` with sections `scan`,
-//! `latency`, `timers`, `autostart`, `size`, `stack`, `uart`, `store` (default: all).
+//! `opcodes` (cycles per command line), `latency`, `timers`, `autostart`, `size`, `stack`, `uart`, `store` (default: all).
 //! Timer runs up to 60 s of simulated time run in simavr, longer ones on the host core;
 //! `--quick` lowers that to 10 s and uses 1000 scans, `--long` raises it to 600 s.
 //! Not a test: nothing is asserted; an unmeasurable row says why.
@@ -112,6 +112,58 @@ fn scan_rows(rows: &mut Vec<Row>, elf: &Path, scans: usize) {
             }
             Err(e) => row(rows, what, format!("not yet measurable: {e}"), orig, goal),
         }
+    }
+}
+
+/// Cycles one line of each command costs: a program of `LINES_PER_CASE` copies (of a
+/// command, or of a two-command pair), minus `END` alone, divided by the copies.
+fn opcode_rows(rows: &mut Vec<Row>, elf: &Path) {
+    const COPIES: usize = 120;
+    let scans = 200;
+    let base = match bench::measure_scans(elf, &bench::program(&["END"]), scans, 300) {
+        Ok(r) => r.without_isr.median,
+        Err(e) => {
+            row(rows, "cycles per command line", format!("not measurable: {e}"), "", "");
+            return;
+        }
+    };
+    // (what, the repeated words, presets of all timers, the original's figure)
+    let cases: [(&str, &[&str], u8, &str); 20] = [
+        ("NOP", &["NOP"], 0, "17"),
+        ("A0.", &["A0."], 0, "24"),
+        ("AL0. (no edge)", &["AL0."], 0, "n/a"),
+        ("AD0.", &["AD0."], 0, "n/a"),
+        ("Y0. / U0. / V0.", &["U0."], 0, "n/a"),
+        ("Q0.", &["Q0."], 0, "n/a"),
+        ("TQ0.", &["TQ0."], 0, "n/a"),
+        ("CLKA.", &["CLKA."], 0, "n/a"),
+        (".Y0 / .U0 / .V0", &[".Y0"], 0, "26"),
+        (".S0 / .R0", &[".S0"], 0, "n/a"),
+        (".TR0 with 0", &[".TR0"], 0, "n/a"),
+        (".TK0 with 0", &["CLR", ".TK0"], 0, "n/a"),
+        ("SET + .TK0 (T0 preset 10: restarts T0)", &["SET", ".TK0"], 10, "n/a"),
+        ("SET + .TK4 (1 s unit)", &["SET", ".TK4"], 10, "n/a"),
+        ("SET + .TKF (400 s unit)", &["SET", ".TKF"], 10, "n/a"),
+        ("AND / OR / XOR", &["AND"], 0, "n/a"),
+        ("! ", &["!"], 0, "n/a"),
+        ("DUP", &["DUP"], 0, "n/a"),
+        ("KEY (nothing received)", &["KEY"], 0, "n/a"),
+        ("PPA", &["PPA"], 0, "n/a"),
+    ];
+    for (what, words, preset, orig) in cases {
+        let mut list: Vec<&str> = Vec::new();
+        let copies = COPIES / words.len();
+        for _ in 0..copies {
+            list.extend_from_slice(words);
+        }
+        list.push("END");
+        let mut prog = bench::program(&list);
+        prog.presets = [preset; 16];
+        let text = match bench::measure_scans(elf, &prog, scans, 300) {
+            Ok(r) => format!("{:.1}", (r.without_isr.median - base) / copies as f64),
+            Err(e) => format!("not measurable: {e}"),
+        };
+        row(rows, format!("cycles per line: {what}"), text, orig, "");
     }
 }
 
@@ -233,6 +285,9 @@ fn main() {
     }
     if want("scan") {
         scan_rows(&mut rows, &elf, scans);
+    }
+    if want("opcodes") {
+        opcode_rows(&mut rows, &elf);
     }
     if want("latency") {
         latency_rows(&mut rows, &elf);

@@ -145,11 +145,32 @@ fn fw(args: &[String]) -> Result<(), String> {
         "       {} of {RAM_TOTAL} bytes left for the stack; static + stack must stay <= {RAM_BUDGET} (stack measured in simavr)",
         RAM_TOTAL.saturating_sub(ram)
     );
+    if let Some((table, gap)) = scan_table_gap(&out_elf) {
+        println!("       scan dispatch table at 0x{table:04X}; {gap} bytes of alignment gap in front of it");
+    }
     println!("built in {:.1} s", started.elapsed().as_secs_f64());
     if flash > flash_budget || ram > static_budget {
         return Err("over budget".into());
     }
     Ok(())
+}
+
+/// Address of the threaded scan's dispatch table (src/hal/scan.S) and the bytes of padding
+/// its 512-byte alignment left after the cold code in front of it.
+fn scan_table_gap(elf: &Path) -> Option<(u64, u64)> {
+    let out = Command::new("avr-nm").arg(elf).output().ok()?;
+    let text = String::from_utf8_lossy(&out.stdout);
+    let addr = |name: &str| {
+        text.lines().find_map(|l| {
+            let mut w = l.split_whitespace();
+            let a = w.next()?;
+            let _kind = w.next()?;
+            (w.next()? == name).then(|| u64::from_str_radix(a, 16).ok())?
+        })
+    };
+    let table = addr("utile_scan_table")?;
+    let cold_end = addr("utile_scan_cold_end")?;
+    Some((table, table.saturating_sub(cold_end)))
 }
 
 fn percent(used: u64, budget: u64) -> f64 {
