@@ -19,6 +19,14 @@ pub const INPUT_MASK: u8 = 0x3F;
 /// Half-periods of CLKA, CLKB and CLKC in milliseconds.
 pub const CLOCK_HALF_MS: [u16; 3] = [200, 600, 1800];
 
+/// The clocks' common step: CLKA's half-period, a third of CLKB's, a ninth of CLKC's.
+const CLOCK_STEP_MS: u8 = 200;
+const _: () = assert!(
+    CLOCK_HALF_MS[0] == CLOCK_STEP_MS as u16
+        && CLOCK_HALF_MS[1] == 3 * CLOCK_STEP_MS as u16
+        && CLOCK_HALF_MS[2] == 9 * CLOCK_STEP_MS as u16
+);
+
 /// Debounced inputs with sticky edge bits and toggle bits.
 #[derive(Clone, Debug, Default)]
 pub struct Debouncer {
@@ -138,7 +146,10 @@ pub struct Ticker {
     /// The input pre-processor.
     pub inputs: Debouncer,
     clocks: u8,
-    clock_left: [u16; 3],
+    /// Milliseconds left in the present 200 ms step of the clocks.
+    clock_ms: u8,
+    /// 200 ms steps since CLKC last changed (0..=8): CLKB changes every 3rd, CLKC every 9th.
+    clock_step: u8,
 }
 
 impl Ticker {
@@ -154,7 +165,8 @@ impl Ticker {
             ms,
             inputs: Debouncer::new(raw),
             clocks: 0,
-            clock_left: CLOCK_HALF_MS,
+            clock_ms: CLOCK_STEP_MS,
+            clock_step: 0,
         }
     }
 
@@ -162,14 +174,21 @@ impl Ticker {
     pub fn tick(&mut self, raw: u8) {
         self.ms = self.ms.wrapping_add(1);
         self.inputs.sample(raw);
-        let mut bit = 1u8;
-        for (left, half) in self.clock_left.iter_mut().zip(CLOCK_HALF_MS) {
-            *left = left.saturating_sub(1);
-            if *left == 0 {
-                *left = half;
-                self.clocks ^= bit;
+        // One 8-bit countdown for all three clocks (their half-periods are 1, 3 and 9 steps
+        // of 200 ms): the 1 ms interrupt pays a decrement and a test most of the time.
+        self.clock_ms = self.clock_ms.wrapping_sub(1);
+        if self.clock_ms == 0 {
+            self.clock_ms = CLOCK_STEP_MS;
+            self.clock_step = self.clock_step.wrapping_add(1);
+            let mut flip = 0x01;
+            if matches!(self.clock_step, 3 | 6 | 9) {
+                flip |= 0x02;
             }
-            bit <<= 1;
+            if self.clock_step >= 9 {
+                flip |= 0x04;
+                self.clock_step = 0;
+            }
+            self.clocks ^= flip;
         }
     }
 
