@@ -3,6 +3,26 @@
 /// Length of one statistics tick in nanoseconds (Timer1 at 16 MHz / 8 = 0.5 µs).
 pub const TICK_NS: u32 = 500;
 
+/// `n / d` (0 when `d` is 0) by shift and subtract. STAT's few divisions use this instead
+/// of the compiler's 32-bit division routine, which costs over 1 KB of AVR flash; speed
+/// does not matter there (once per STAT).
+#[inline(never)]
+pub fn div(n: u32, d: u32) -> u32 {
+    if d == 0 {
+        return 0;
+    }
+    let (mut q, mut r) = (0u32, 0u32);
+    for i in (0..32).rev() {
+        r = (r << 1) | ((n >> i) & 1);
+        q <<= 1;
+        if r >= d {
+            r -= d;
+            q |= 1;
+        }
+    }
+    q
+}
+
 /// Minimum, maximum and mean scan time of the current (or last) run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ScanStats {
@@ -55,14 +75,33 @@ impl ScanStats {
         }
         let ticks_per_ms = 1_000_000 / TICK_NS;
         if self.run_ms < u32::MAX / ticks_per_ms {
-            self.run_ms * ticks_per_ms / self.count
+            div(self.run_ms * ticks_per_ms, self.count)
         } else {
-            self.run_ms / self.count.div_ceil(ticks_per_ms)
+            div(self.run_ms, div(self.count + ticks_per_ms - 1, ticks_per_ms))
         }
     }
 
     /// Convert ticks to whole microseconds.
     pub fn ticks_to_us(ticks: u32) -> u32 {
-        ticks * TICK_NS / 1000
+        div(ticks * TICK_NS, 1000)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::div;
+
+    #[test]
+    fn div_matches_the_operator() {
+        let mut x: u32 = 0x1234_5678;
+        for _ in 0..20_000 {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            let d = (x.rotate_left(7) >> (x % 32)).max(1);
+            assert_eq!(div(x, d), x / d, "{x} / {d}");
+        }
+        assert_eq!(div(u32::MAX, 1), u32::MAX);
+        assert_eq!(div(7, 0), 0);
     }
 }

@@ -26,7 +26,7 @@ use super::engine::{Engine, LINES, UNITS};
 use super::ihex::{write_hex_with, HexError, HexEvent, HexReader};
 use super::image::{decode_into, image_byte, image_crc, ImageError, IMAGE_LEN};
 use super::opcodes::{self, END, KEY, NOP};
-use super::stats::ScanStats;
+use super::stats::{self, ScanStats};
 use super::store;
 use keys::{Event, Key, KeyDecoder};
 use term::{bits, ceol, goto, normal, num, num_width, raw, reverse};
@@ -1050,9 +1050,9 @@ impl Editor {
         let rate = if s.run_ms == 0 {
             0
         } else if s.count < u32::MAX / 1000 {
-            s.count * 1000 / s.run_ms
+            stats::div(s.count * 1000, s.run_ms)
         } else {
-            s.count / (s.run_ms / 1000).max(1)
+            stats::div(s.count, stats::div(s.run_ms, 1000).max(1))
         };
         goto(b, ROW_INFO, 1);
         text::STAT_MIN.send(b);
