@@ -272,7 +272,7 @@ fn a_timer_runs_correctly_across_the_wrap_of_the_ms_clock() {
 
 #[test]
 fn an_unread_timer_never_revives_after_the_clock_wraps_while_running() {
-    // TQ4 is never read by the program; END retires it.
+    // TQ4 is never read by the program; the sweep at the start of each scan retires it.
     let mut p = program(&["U0.", ".TK4", "END"]);
     p.presets[4] = 1;
     let mut r = Run::start_at(p, 0x3F, u32::MAX - 5_000);
@@ -280,7 +280,7 @@ fn an_unread_timer_never_revives_after_the_clock_wraps_while_running() {
     r.wait(10);
     r.engine.pu = 0;
     r.wait(2_000);
-    assert_eq!(r.engine.tq, 0, "retired by the END sweep");
+    assert_eq!(r.engine.tq, 0, "retired by the sweep at the start of a scan");
     // 2^31 ms later (24.9 days) an unretired deadline would read as 'in the future'.
     let later = r.now().wrapping_add(1 << 31).wrapping_add(500);
     r.board.ticker = Ticker::with_time(0x3F, later);
@@ -288,6 +288,29 @@ fn an_unread_timer_never_revives_after_the_clock_wraps_while_running() {
     let mut b = r.board.clone();
     r.engine.exec(PUSH_TQ + 4, &mut b);
     assert_eq!(r.engine.bs & 1, 0);
+}
+
+#[test]
+fn a_due_timer_falls_when_the_next_scan_starts_and_tq_reads_the_flag_until_then() {
+    // T0 = 1 (0.1 s); the program copies TQ0 to Y0.
+    let mut p = program(&["TQ0.", ".Y0", "END"]);
+    p.presets[0] = 1;
+    let mut b = SimBoard::new();
+    let mut e = Engine::new(p);
+    e.bs = 1;
+    e.exec(POP_TK, &mut b);
+    b.advance_ms(99);
+    e.scan(&mut b);
+    assert_eq!(e.py & 1, 1, "running 1 ms before its time");
+    b.advance_ms(1);
+    // The deadline has come, but no scan has started since: TQ0. reads the timer's flag.
+    let mut probe = e.clone();
+    probe.bs = 0;
+    probe.exec(PUSH_TQ, &mut b);
+    assert_eq!(probe.bs & 1, 1, "TQ0. is the flag; only a scan start or the editor retires");
+    e.scan(&mut b);
+    assert_eq!(e.tq & 1, 0, "the scan that starts at the deadline retires T0 first");
+    assert_eq!(e.py & 1, 0, "so that scan already reads TQ0 = 0");
 }
 
 #[test]

@@ -77,7 +77,12 @@ impl ScanStats {
         if self.run_ms < u32::MAX / ticks_per_ms {
             div(self.run_ms * ticks_per_ms, self.count)
         } else {
-            div(self.run_ms, div(self.count + ticks_per_ms - 1, ticks_per_ms))
+            // Scans per tick, rounded up (count + 1999 could overflow near u32::MAX).
+            let mut per_tick = div(self.count, ticks_per_ms);
+            if per_tick * ticks_per_ms < self.count {
+                per_tick += 1;
+            }
+            div(self.run_ms, per_tick)
         }
     }
 
@@ -89,7 +94,15 @@ impl ScanStats {
 
 #[cfg(test)]
 mod tests {
-    use super::div;
+    use super::{div, ScanStats};
+
+    #[test]
+    fn mean_of_a_very_long_run_matches_the_rounded_up_formula() {
+        for count in [1u32, 1999, 2000, 2001, u32::MAX - 1, u32::MAX] {
+            let s = ScanStats { min: 0, max: 0, count, run_ms: u32::MAX - 7 };
+            assert_eq!(s.mean(), (u32::MAX - 7) / count.div_ceil(2000), "count {count}");
+        }
+    }
 
     #[test]
     fn div_matches_the_operator() {
