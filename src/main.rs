@@ -1,8 +1,14 @@
 //! The uTile firmware: boot, then the main loop that runs the editor (EDIT mode) or scans the
-//! user's program (RUN mode). Everything else is in the library: `utile::core` (logic,
-//! editor) and `utile::hal` (the ATmega328P).
+//! user's program (RUN mode). The logic and the editor are the `utile_core` crate; [`hal`]
+//! is the thin hardware layer of the ATmega328P, and `hal/scan.S` the threaded RUN-mode scan.
 #![cfg_attr(target_arch = "avr", no_std, no_main)]
 #![cfg_attr(target_arch = "avr", feature(abi_avr_interrupt))]
+// The HAL's threaded scan is emitted from an `asm!`, still unstable on the AVR.
+#![cfg_attr(target_arch = "avr", feature(asm_experimental_arch))]
+#![deny(missing_docs)]
+
+#[cfg(target_arch = "avr")]
+mod hal;
 
 /// On the host the firmware is an empty program, so `cargo test --workspace` builds.
 #[cfg(not(target_arch = "avr"))]
@@ -14,13 +20,13 @@ use panic_halt as _;
 #[cfg(target_arch = "avr")]
 mod firmware {
     use avr_device::interrupt::CriticalSection;
-    use utile::core::board::Board;
-    use utile::core::editor::{Editor, Mode};
-    use utile::core::engine::Engine;
-    use utile::core::stats::ScanStats;
-    use utile::core::store;
-    use utile::hal;
-    use utile::hal::scan::{self, Exit, RunState};
+    use utile_core::board::Board;
+    use utile_core::editor::{Editor, Mode};
+    use utile_core::engine::Engine;
+    use utile_core::stats::ScanStats;
+    use utile_core::store;
+    use crate::hal;
+    use crate::hal::scan::{self, Exit, RunState};
 
     /// Byte that makes a `hang-test` build stop feeding the watchdog (FS, Ctrl-\).
     #[cfg(feature = "hang-test")]

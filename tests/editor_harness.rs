@@ -3,9 +3,9 @@
 //! it has no tests.
 #![allow(dead_code, clippy::new_without_default)]
 
-use utile::core::editor::{Editor, Mode};
-use utile::core::engine::{Engine, Flow};
-use utile::sim::SimBoard;
+use utile_core::editor::{Editor, Mode};
+use utile_core::engine::{Engine, Flow};
+use utile_kit::sim::SimBoard;
 
 /// The editor, its engine and board, and a terminal.
 pub struct Rig {

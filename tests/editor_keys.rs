@@ -4,7 +4,7 @@
 mod harness;
 
 use harness::Rig;
-use utile::core::opcodes::{lookup, END, NOP};
+use utile_core::opcodes::{lookup, END, NOP};
 
 fn filled() -> Rig {
     let mut r = Rig::new();

@@ -5,8 +5,8 @@
 mod harness;
 
 use harness::Rig;
-use utile::core::editor::Mode;
-use utile::core::opcodes::{self, BLANK, END, KEY, NOP};
+use utile_core::editor::Mode;
+use utile_core::opcodes::{self, BLANK, END, KEY, NOP};
 
 const DASHES: &str =
     "--------------------------------------------------------------------------------";
@@ -573,8 +573,8 @@ fn byte_budgets() {
 
 #[test]
 fn editor_ram_size() {
-    let ed = std::mem::size_of::<utile::core::editor::Editor>();
-    let reader = std::mem::size_of::<utile::core::ihex::HexReader>();
+    let ed = std::mem::size_of::<utile_core::editor::Editor>();
+    let reader = std::mem::size_of::<utile_core::ihex::HexReader>();
     eprintln!("Editor {ed} bytes on the host, of which HexReader {reader}");
     // Everything but READ's staging reader stays under 100 bytes.
     assert!(ed < reader + 100, "{ed}");

@@ -4,7 +4,7 @@
 mod harness;
 
 use harness::Rig;
-use utile::core::opcodes::{lookup, END};
+use utile_core::opcodes::{lookup, END};
 
 fn with_program() -> Rig {
     let mut r = Rig::new();

@@ -2,10 +2,10 @@
 
 mod common_scenario;
 use common_scenario::*;
-use utile::core::board::Board;
-use utile::core::engine::{Engine, Flow, LINES};
-use utile::core::opcodes::{self, lookup, BLANK, END, NOP};
-use utile::sim::SimBoard;
+use utile_core::board::Board;
+use utile_core::engine::{Engine, Flow, LINES};
+use utile_core::opcodes::{self, lookup, BLANK, END, NOP};
+use utile_kit::sim::SimBoard;
 
 fn op(name: &str) -> u8 {
     lookup(name.as_bytes()).unwrap_or_else(|| panic!("{name}"))

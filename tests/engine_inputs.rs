@@ -6,9 +6,9 @@ mod rng;
 
 use common_scenario::*;
 use rng::Rng;
-use utile::core::board::Board;
-use utile::core::ticker::{Debouncer, Ticker};
-use utile::sim::SimBoard;
+use utile_core::board::Board;
+use utile_core::ticker::{Debouncer, Ticker};
+use utile_kit::sim::SimBoard;
 
 /// Feed `level` for `ms` samples of 1 ms to input 0 (others high).
 fn feed(d: &mut Debouncer, level: bool, ms: u32) {

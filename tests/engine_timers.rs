@@ -3,11 +3,11 @@
 
 mod common_scenario;
 use common_scenario::*;
-use utile::core::engine::{Engine, TIMER_UNIT_MS, UNITS};
-use utile::core::opcodes::{END, POP_TK, POP_TR, PUSH_TQ};
-use utile::core::ticker::Ticker;
-use utile::core::Program;
-use utile::sim::SimBoard;
+use utile_core::engine::{Engine, TIMER_UNIT_MS, UNITS};
+use utile_core::opcodes::{END, POP_TK, POP_TR, PUSH_TQ};
+use utile_core::ticker::Ticker;
+use utile_core::Program;
+use utile_kit::sim::SimBoard;
 
 /// An engine driven command by command, as from the editor or a scan.
 struct Rig {

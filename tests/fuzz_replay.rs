@@ -1,5 +1,5 @@
 //! Replays the fuzz corpus (`fuzz/corpus/<target>/`) through the same harnesses the
-//! cargo-fuzz targets call (`utile::fuzzing`), so the README's test command checks every
+//! cargo-fuzz targets call (`utile_kit::fuzzing`), so the README's test command checks every
 //! seed and every crash input ever saved, without libFuzzer.
 //!
 //! The seeds are made by `write_seed_corpus` (ignored; run it with
@@ -8,11 +8,11 @@
 use std::num::NonZeroU16;
 use std::path::{Path, PathBuf};
 
-use utile::core::engine::Program;
-use utile::core::ihex::write_hex;
-use utile::core::image::{encode, IMAGE_LEN};
-use utile::fuzzing::{self, sample_program, TARGETS};
-use utile::sim::SimBoard;
+use utile_core::engine::Program;
+use utile_core::ihex::write_hex;
+use utile_core::image::{encode, IMAGE_LEN};
+use utile_kit::fuzzing::{self, sample_program, TARGETS};
+use utile_kit::sim::SimBoard;
 
 fn corpus_dir(target: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -97,7 +97,7 @@ fn the_checks_can_fail() {
     // A running program without KEY cannot be stopped by the recovery keys: reported as
     // such, not as a lock-up.
     let mut endless = Program::blank();
-    endless.uf[0] = utile::core::opcodes::END;
+    endless.uf[0] = utile_core::opcodes::END;
     let mut rig = fuzzing::Rig::autostart(&endless).expect("autostart");
     assert_eq!(rig.recover_and_fill(), Ok(false));
     assert!(fuzzing::image_decode(&[0u8; IMAGE_LEN]).is_ok());
@@ -275,11 +275,11 @@ fn write_seed_corpus() {
     write("image", "short", &img[..IMAGE_LEN - 1]);
 
     let mut board = SimBoard::new();
-    utile::core::store::store(&prog, &mut board).unwrap();
+    utile_core::store::store(&prog, &mut board).unwrap();
     let one_slot: Vec<u8> = board.eeprom[..560].to_vec();
     let mut p2 = prog.clone();
     p2.presets[3] = 9;
-    utile::core::store::store(&p2, &mut board).unwrap();
+    utile_core::store::store(&p2, &mut board).unwrap();
     let two_slots = cat(&[&board.eeprom[..280], &board.eeprom[0x200..0x200 + 280]]);
     let mut damaged = two_slots.clone();
     damaged[300] ^= 0x40;

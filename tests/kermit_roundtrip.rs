@@ -16,9 +16,9 @@ use std::sync::{Arc, Mutex};
 use std::thread;
 use std::time::{Duration, Instant};
 
-use utile::core::engine::Program;
-use utile::core::ihex::{write_hex, HexEvent, HexReader};
-use utile::core::image;
+use utile_core::engine::Program;
+use utile_core::ihex::{write_hex, HexEvent, HexReader};
+use utile_core::image;
 
 fn have(cmd: &str, arg: &str) -> bool {
     Command::new(cmd)
@@ -444,8 +444,8 @@ fn download_fill_upload_on_the_virtual_nano() {
     let _ = nano.kill();
     let _ = nano.wait();
     let a = parse_file(&dir.join("a.hex"));
-    assert_eq!(a.uf[0], utile::core::opcodes::SET);
-    assert_eq!(a.uf[2], utile::core::opcodes::END);
+    assert_eq!(a.uf[0], utile_core::opcodes::SET);
+    assert_eq!(a.uf[2], utile_core::opcodes::END);
     let blank = parse_file(&dir.join("blank.hex"));
     assert_ne!(blank, a, "FILL cleared the program");
     assert_eq!(

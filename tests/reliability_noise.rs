@@ -1,13 +1,13 @@
 //! UART noise on the host editor (SPEC §12, issue 8): random bytes at the full 19200 baud
 //! (1.92 bytes per simulated ms) for minutes, in the editor and while a program with KEY
-//! runs. The harness (`utile::fuzzing::Rig`) checks after every byte that the UF and presets
+//! runs. The harness (`utile_kit::fuzzing::Rig`) checks after every byte that the UF and presets
 //! changed only through an accepted command and that the screen output stays on 80×24;
 //! afterwards a clean FILL must work (no lock-up).
 
-use utile::core::editor::Mode;
-use utile::core::engine::Program;
-use utile::core::opcodes::{lookup, END, KEY};
-use utile::fuzzing::{sample_program, Rig, Rng};
+use utile_core::editor::Mode;
+use utile_core::engine::Program;
+use utile_core::opcodes::{lookup, END, KEY};
+use utile_kit::fuzzing::{sample_program, Rig, Rng};
 
 /// Bytes per second at 19200 baud, 8N1.
 const BYTES_PER_S: u32 = 1920;

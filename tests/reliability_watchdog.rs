@@ -12,9 +12,9 @@ use std::path::PathBuf;
 use std::sync::Once;
 
 use common::{Nano, Rig, CYCLES_PER_MS};
-use utile::core::engine::Program;
-use utile::core::opcodes::{lookup, END};
-use utile::sim::SimBoard;
+use utile_core::engine::Program;
+use utile_core::opcodes::{lookup, END};
+use utile_kit::sim::SimBoard;
 
 /// The byte that makes a `hang-test` image stop feeding the watchdog (main.rs).
 const HANG_BYTE: u8 = 0x1C;
@@ -53,7 +53,7 @@ fn eeprom_with_program() -> &'static [u8] {
     }
     assert_eq!(prog.uf[5], END);
     let mut board = SimBoard::new();
-    utile::core::store::store(&prog, &mut board).expect("STORE");
+    utile_core::store::store(&prog, &mut board).expect("STORE");
     Box::leak(board.eeprom.clone().into_boxed_slice())
 }
 

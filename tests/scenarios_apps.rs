@@ -6,7 +6,7 @@
 
 mod common_scenario;
 use common_scenario::*;
-use utile::core::opcodes::{self, END};
+use utile_core::opcodes::{self, END};
 
 const ALL_HIGH: u8 = 0x3F;
 const D: u32 = DEBOUNCE_MS;
@@ -45,7 +45,7 @@ fn listings_match_the_printed_line_numbers() {
 // 11.1 Push-button switch and timer
 
 /// Start at the release of S0 (the leading edge of A0), off after T0 = 5 s.
-fn pushbutton_timer(prog: utile::core::Program, delay: u32) {
+fn pushbutton_timer(prog: utile_core::Program, delay: u32) {
     let mut r = Run::start(prog, ALL_HIGH);
     let tl = parse_timeline("100: press A0; 250: release A0");
     r.run(&tl, 250 + delay + 1000);
@@ -208,7 +208,7 @@ fn continuous_timers_on_seconds_timers() {
 // Intrusion alarm system
 
 /// The alarm with timer unit `unit` ms (T0 = 5, T1 = 3, T2 = 30 units).
-fn intrusion_alarm(prog: utile::core::Program, unit: u32) {
+fn intrusion_alarm(prog: utile_core::Program, unit: u32) {
     let (arm_delay, holdoff, alarm) = (5 * unit, 3 * unit, 30 * unit);
     let mut r = Run::start(prog, ALL_HIGH);
     // Disarmed: a broken contact does nothing.
@@ -311,7 +311,7 @@ fn intrusion_during_the_arm_delay_is_ignored() {
 /// Run the motor circuit. `level(pressed_or_tripped)` maps a contact state to the pin level.
 /// Timeline: start, stop, start, O/L trip while running, O/L clears, start (locked out),
 /// stop (reset), start.
-fn motor(prog: utile::core::Program, active_high: bool) {
+fn motor(prog: utile_core::Program, active_high: bool) {
     // Pin level of a push-button (true = pressed) and of the O/L contact (true = tripped).
     let button = |pressed: bool| pressed == active_high;
     let overload = |tripped: bool| tripped != active_high;

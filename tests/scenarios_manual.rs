@@ -3,9 +3,9 @@
 
 mod common_scenario;
 use common_scenario::*;
-use utile::core::engine::Engine;
-use utile::core::opcodes::lookup;
-use utile::sim::SimBoard;
+use utile_core::engine::Engine;
+use utile_core::opcodes::lookup;
+use utile_kit::sim::SimBoard;
 
 const ALL_HIGH: u8 = 0x3F;
 const D: u32 = DEBOUNCE_MS;

@@ -24,10 +24,10 @@ mod common_scenario;
 
 use common::{Nano, Rig, CYCLES_PER_MS};
 use common_scenario::{changes, clock, listing, parse_timeline, Act, DEBOUNCE_MS};
-use utile::core::engine::Program;
-use utile::core::ihex::{HexEvent, HexReader};
-use utile::core::image;
-use utile::core::opcodes::{self, END};
+use utile_core::engine::Program;
+use utile_core::ihex::{HexEvent, HexReader};
+use utile_core::image;
+use utile_core::opcodes::{self, END};
 
 const D: u32 = DEBOUNCE_MS;
 /// TCCR0B in the data space: Timer0's clock select, written once at boot.
@@ -110,7 +110,7 @@ impl Chip {
     /// Load the program through READ, as `utile asm` writes it.
     fn read(&mut self, prog: &Program) {
         let mut hex = Vec::new();
-        utile::core::ihex::write_hex(&image::encode(prog), &mut |b| hex.push(b));
+        utile_core::ihex::write_hex(&image::encode(prog), &mut |b| hex.push(b));
         self.nano.enter("READ", 0);
         assert!(self.nano.wait_for("Reading file", 1_000));
         self.nano.type_bytes(&hex);

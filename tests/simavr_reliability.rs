@@ -7,10 +7,10 @@ mod rng;
 
 use common::{contains, Nano, Rig, RAMSTART, STACK_PAINT};
 use rng::Rng;
-use utile::core::engine::Program;
-use utile::core::opcodes::{self, NOP};
-use utile::core::{ihex, image, store};
-use utile::sim::SimBoard;
+use utile_core::engine::Program;
+use utile_core::opcodes::{self, NOP};
+use utile_core::{ihex, image, store};
+use utile_kit::sim::SimBoard;
 
 /// The program every fault test starts from: stored in EEPROM, different from FILL's.
 fn old_program() -> Program {

@@ -10,11 +10,11 @@
 //! `cargo test` runs 2 simulated hours; the 24-hour run is `#[ignore]`d (see
 //! docs/RELIABILITY.md for the command and figures).
 
-use utile::core::engine::{Engine, Program, TIMER_UNIT_MS};
-use utile::core::opcodes::{lookup, END};
-use utile::core::ticker::Ticker;
-use utile::fuzzing::Rng;
-use utile::sim::SimBoard;
+use utile_core::engine::{Engine, Program, TIMER_UNIT_MS};
+use utile_core::opcodes::{lookup, END};
+use utile_core::ticker::Ticker;
+use utile_kit::fuzzing::Rng;
+use utile_kit::sim::SimBoard;
 
 /// The soak program, one command per line.
 const PROGRAM: &[&str] = &[

@@ -4,9 +4,9 @@
 mod rng;
 
 use rng::{random_program, Rng};
-use utile::core::engine::Program;
-use utile::core::ihex::{write_hex, HexError, HexEvent, HexReader};
-use utile::core::image::{self, ImageError, IMAGE_LEN};
+use utile_core::engine::Program;
+use utile_core::ihex::{write_hex, HexError, HexEvent, HexReader};
+use utile_core::image::{self, ImageError, IMAGE_LEN};
 
 fn random_image(rng: &mut Rng) -> [u8; IMAGE_LEN] {
     image::encode(&random_program(rng))

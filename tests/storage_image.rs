@@ -3,8 +3,8 @@
 mod rng;
 
 use rng::{random_program, Rng};
-use utile::core::engine::Program;
-use utile::core::image::{self, ImageError, IMAGE_LEN, MAGIC, VERSION};
+use utile_core::engine::Program;
+use utile_core::image::{self, ImageError, IMAGE_LEN, MAGIC, VERSION};
 
 /// A CRC-16/CCITT-FALSE written differently (table-free, MSB-first over a bit stream),
 /// to check the image's CRC independently.

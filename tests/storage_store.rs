@@ -5,10 +5,10 @@
 mod rng;
 
 use rng::{random_program, Rng};
-use utile::core::engine::Program;
-use utile::core::image;
-use utile::core::store::{self, LoadError, StoreError, SLOT_ADDR};
-use utile::sim::{EepromFault, SimBoard, Tear};
+use utile_core::engine::Program;
+use utile_core::image;
+use utile_core::store::{self, LoadError, StoreError, SLOT_ADDR};
+use utile_kit::sim::{EepromFault, SimBoard, Tear};
 
 /// A typical small program: a few lines, the rest blank.
 fn small_program() -> Program {

@@ -1,8 +1,8 @@
-//! Fuzz target `image`: `utile::fuzzing::image_decode` (invariants documented there).
+//! Fuzz target `image`: `utile_kit::fuzzing::image_decode` (invariants documented there).
 #![no_main]
 
 libfuzzer_sys::fuzz_target!(|data: &[u8]| {
-    if let Err(why) = utile::fuzzing::image_decode(data) {
+    if let Err(why) = utile_kit::fuzzing::image_decode(data) {
         panic!("invariant broken: {why}");
     }
 });

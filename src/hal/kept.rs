@@ -8,9 +8,9 @@
 use core::mem::MaybeUninit;
 use core::ptr::{addr_of, addr_of_mut};
 
-use crate::core::board::Board;
-use crate::core::engine::{Engine, Program, LINES, UNITS};
-use crate::core::opcodes::BLANK;
+use utile_core::board::Board;
+use utile_core::engine::{Engine, Program, LINES, UNITS};
+use utile_core::opcodes::BLANK;
 
 /// Marks a sealed program ("uTiL").
 const MAGIC: u32 = 0x5554_694C;

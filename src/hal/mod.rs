@@ -19,8 +19,8 @@ use core::sync::atomic::{AtomicU8, Ordering};
 use avr_device::atmega328p;
 use avr_device::interrupt::{self, CriticalSection};
 
-use crate::core::board::Board;
-use crate::core::ticker::{Ticker, INPUT_MASK};
+use utile_core::board::Board;
+use utile_core::ticker::{Ticker, INPUT_MASK};
 
 /// Write a whole register; every value this module writes is a documented bit pattern.
 macro_rules! wr {

@@ -10,8 +10,8 @@
 use core::sync::atomic::{AtomicU8, Ordering};
 
 use super::{kept, serial};
-use crate::core::engine::{offsets as eng, Engine, VIEW_BS, VIEW_PORT};
-use crate::core::ticker::offsets as tick;
+use utile_core::engine::{offsets as eng, Engine, VIEW_BS, VIEW_PORT};
+use utile_core::ticker::offsets as tick;
 
 /// Why [`run`] returned.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

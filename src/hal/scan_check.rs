@@ -22,9 +22,9 @@ use avr_progmem::wrapper::ProgMem;
 
 use super::scan::{self, Exit, RunState};
 use super::{drive_pins, publish, regs, serial, wr, Nano, LAST_PY, OUTPUTS, TICKER};
-use crate::core::engine::{offsets, Engine, Flow, Program, LINES, UNITS};
-use crate::core::opcodes::{is_valid, BLANK, END, NOP, POP_TK, SET};
-use crate::core::ticker::{Ticker, INPUT_MASK};
+use utile_core::engine::{offsets, Engine, Flow, Program, LINES, UNITS};
+use utile_core::opcodes::{is_valid, BLANK, END, NOP, POP_TK, SET};
+use utile_core::ticker::{Ticker, INPUT_MASK};
 
 /// Random programs checked.
 pub const TRIALS: u16 = 400;

@@ -10,10 +10,10 @@
 //! line or separated by `;`. `press` pulls the input low (a normally-open push-button to GND).
 #![allow(dead_code)]
 
-use utile::core::engine::{Engine, Program, LINES, UNITS};
-use utile::core::opcodes::{self, NOP};
-use utile::core::ticker::Ticker;
-use utile::sim::SimBoard;
+use utile_core::engine::{Engine, Program, LINES, UNITS};
+use utile_core::opcodes::{self, NOP};
+use utile_core::ticker::Ticker;
+use utile_kit::sim::SimBoard;
 
 /// Parse a listing (see the module docs). Unfilled lines are NOP (as after FILL).
 pub fn parse_listing(text: &str) -> Result<Program, String> {
@@ -271,4 +271,4 @@ pub fn clkc(t: u32) -> bool {
 }
 
 /// The debounce delay of the simulated ticker: an input change is seen this many ms later.
-pub const DEBOUNCE_MS: u32 = utile::core::ticker::DEBOUNCE_SAMPLES as u32;
+pub const DEBOUNCE_MS: u32 = utile_core::ticker::DEBOUNCE_SAMPLES as u32;

@@ -1,7 +1,7 @@
 //! A small deterministic generator for tests (xorshift32), so failures reproduce.
 #![allow(dead_code)] // each test file uses part of it
 
-use utile::core::engine::Program;
+use utile_core::engine::Program;
 
 /// xorshift32 with a fixed, non-zero seed.
 pub struct Rng(pub u32);

@@ -1,10 +1,8 @@
-/// `.utl` listings and hex images (the `utile` tool, issue 6).
-pub mod listing;
-/// `utile sim`: timelines, simulation on the core engine, VCD (issue 6).
-pub mod simulate;
-/// SVG timing diagrams (issue 6).
-pub mod diagram;
+//! The host tools' own parts: the virtual Nano's terminal, pty and rig (`cargo nano`) and
+//! the benchmarks (`./x bench`). What the tools share with the tests is in `utile_kit`.
+#![deny(missing_docs)]
+
 /// The virtual Nano (`cargo nano`): firmware in simavr, UART on a terminal or pty.
 pub mod vnano;
-/// Benchmarks of the real firmware image in simavr (`bench` binary, issue 7).
+/// Benchmarks of the real firmware image in simavr (`bench` binary).
 pub mod bench;

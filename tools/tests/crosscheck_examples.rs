@@ -29,9 +29,9 @@
 mod vnano_util;
 
 use std::path::{Path, PathBuf};
-use utile_tools::listing;
-use utile_tools::simulate::{self, Event};
-use utile_tools::vnano::{CpuState, Nano, RigPin};
+use utile_kit::listing;
+use utile_kit::simulate::{self, Event};
+use utile_kit::simavr::{CpuState, Nano, RigPin};
 
 /// CPU cycles per millisecond.
 const MS: u64 = 16_000;

@@ -2,10 +2,10 @@
 
 mod utile_support;
 
-use utile::core::engine::Program;
-use utile::core::opcodes::{self, BLANK, NOP};
+use utile_core::engine::Program;
+use utile_core::opcodes::{self, BLANK, NOP};
 use utile_support::*;
-use utile_tools::listing;
+use utile_kit::listing;
 
 /// `asm` of a listing must fail with exactly these `file:line: problem` lines.
 fn expect_errors(text: &str, expected: &[(usize, &str)]) {
@@ -268,12 +268,12 @@ fn asm_writes_the_image_as_write_sends_it() {
             "records in order from 0"
         );
         assert!(
-            len == 16 || addr + len == utile::core::image::IMAGE_LEN,
+            len == 16 || addr + len == utile_core::image::IMAGE_LEN,
             "16-byte records"
         );
         addr += len;
     }
-    assert_eq!(addr, utile::core::image::IMAGE_LEN);
+    assert_eq!(addr, utile_core::image::IMAGE_LEN);
     // The default output name is the listing's with .hex.
     let copy = write_scratch("default.utl", &std::fs::read_to_string(&src).unwrap());
     utile_ok(&["asm", &copy]);

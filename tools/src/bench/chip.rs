@@ -2,10 +2,10 @@
 //! steady line and the 3.4 ms EEPROM write time modelled, plus run loops that keep the
 //! rig's pins asserted and stop when a condition holds.
 
-use crate::vnano::nano::{CpuState, Nano, RxPacing, RX_FIXED_CYCLES_PER_BYTE};
+use utile_kit::simavr::{CpuState, Nano, RxPacing, RX_FIXED_CYCLES_PER_BYTE};
 use std::path::Path;
 
-pub use crate::vnano::nano::F_CPU;
+pub use utile_kit::simavr::F_CPU;
 
 /// Cycles per millisecond.
 pub const CYCLES_PER_MS: u64 = F_CPU / 1000;

@@ -8,11 +8,11 @@ pub mod chip;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use crate::vnano::nano::{CpuState, Nano, RigPin};
+use utile_kit::simavr::{CpuState, Nano, RigPin};
 use chip::{BenchRun, CYCLES_PER_MS, F_CPU, RETI, VECTORS_END};
-use utile::core::engine::{Engine, Program, LINES, TIMER_UNIT_MS};
-use utile::core::opcodes::{self, END, NOP};
-use utile::sim::SimBoard;
+use utile_core::engine::{Engine, Program, LINES, TIMER_UNIT_MS};
+use utile_core::opcodes::{self, END, NOP};
+use utile_kit::sim::SimBoard;
 
 /// The vector number of TIMER0_COMPA (the 1 ms tick) on the ATmega328P.
 pub const TICK_VECTOR: u32 = 14;
@@ -117,14 +117,14 @@ pub fn example(name: &str) -> Result<Program, String> {
         .join("../examples")
         .join(name);
     let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-    crate::listing::parse(name, &text).map_err(|e| e.to_string())
+    utile_kit::listing::parse(name, &text).map_err(|e| e.to_string())
 }
 
 /// The EEPROM contents after STORE of `prog` into an erased EEPROM (by the core itself).
 pub fn eeprom_with(prog: &Program, stores: usize) -> Vec<u8> {
     let mut board = SimBoard::new();
     for _ in 0..stores {
-        let _ = utile::core::store::store(prog, &mut board);
+        let _ = utile_core::store::store(prog, &mut board);
     }
     board.eeprom.clone()
 }
@@ -462,7 +462,7 @@ pub fn measure_stack(elf: &Path) -> Result<(usize, usize, Vec<String>), String> 
         *line = opcodes::lookup(b"A0.").unwrap_or(NOP) + (i % 6) as u8;
     }
     big.uf[LINES - 1] = END;
-    let hex = crate::listing::to_hex(&big);
+    let hex = utile_kit::listing::to_hex(&big);
     let mut log = Vec::new();
     let steps: Vec<(&str, Vec<u8>)> = vec![
         ("help", b"?\r".to_vec()),

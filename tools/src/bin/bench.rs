@@ -52,7 +52,7 @@ fn ms(s: &Spread) -> String {
 fn scan_rows(rows: &mut Vec<Row>, elf: &Path, scans: usize) {
     let cases: Vec<(
         &str,
-        Result<utile::core::engine::Program, String>,
+        Result<utile_core::engine::Program, String>,
         &str,
         &str,
     )> = vec![
@@ -229,7 +229,7 @@ fn timer_rows(rows: &mut Vec<Row>, elf: &Path, limit_ms: u64) {
     ];
     for (m, name) in units {
         for preset in [1u8, 10, 255] {
-            let unit_ms = utile::core::engine::TIMER_UNIT_MS[usize::from(m)] as u64;
+            let unit_ms = utile_core::engine::TIMER_UNIT_MS[usize::from(m)] as u64;
             let sim_ms = u64::from(preset) * unit_ms;
             let what = format!(
                 "timer error {name} preset {preset} ({} s)",

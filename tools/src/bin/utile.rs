@@ -11,7 +11,7 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use utile_tools::{diagram, listing, simulate};
+use utile_kit::{diagram, listing, simulate};
 
 const USAGE: &str = "usage:
   utile asm PROG.utl [-o PROG.hex]     listing -> Intel HEX image (as WRITE sends it)
@@ -32,7 +32,7 @@ fn write_file(path: &Path, bytes: &[u8]) -> Result<(), Failure> {
     std::fs::write(path, bytes).map_err(|e| format!("{}: {e}", path.display()))
 }
 
-fn load_listing(path: &Path) -> Result<utile::core::Program, Failure> {
+fn load_listing(path: &Path) -> Result<utile_core::Program, Failure> {
     let text = read_text(path)?;
     listing::parse(&path.display().to_string(), &text).map_err(|e| e.to_string())
 }

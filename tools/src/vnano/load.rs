@@ -3,9 +3,9 @@
 //! keys and the firmware's screen back while this happens (about 2 s of simulated time) and
 //! shows the screen from the editor's redraw after READ on: the program on the page.
 
-use utile::core::engine::Program;
+use utile_core::engine::Program;
 
-use crate::listing;
+use utile_kit::listing;
 
 /// The editor's page is drawn (boot, and back from READ).
 const PAGE: &[u8] = b"*** User File 0 ***";

@@ -4,9 +4,8 @@
 
 pub mod args;
 pub mod load;
-pub mod nano;
 pub mod pty;
 pub mod rig;
 pub mod term;
 
-pub use nano::{CpuState, Nano, RigPin};
+pub use utile_kit::simavr::{CpuState, Nano, RigPin};

@@ -2,7 +2,7 @@
 //! rig keys, the one-line status display, and a tracker of the firmware's VT100 output so
 //! the status line is only drawn between escape sequences.
 
-use super::nano::RigPin;
+use utile_kit::simavr::RigPin;
 
 /// The hot-key prefix in terminal mode: Ctrl-] (as telnet's escape key; uTile has no use
 /// for it). Press it twice to send one Ctrl-] to the firmware.

@@ -7,9 +7,9 @@
 use std::collections::VecDeque;
 use std::vec::Vec;
 
-use crate::core::board::Board;
-use crate::core::engine::{Engine, Flow};
-use crate::core::ticker::Ticker;
+use utile_core::board::Board;
+use utile_core::engine::{Engine, Flow};
+use utile_core::ticker::Ticker;
 
 /// Size of the simulated EEPROM.
 pub const EEPROM_SIZE: usize = 1024;

@@ -36,8 +36,11 @@ pub enum HexError {
 pub enum HexEvent {
     /// Keep feeding.
     More,
-    /// The end-of-file record arrived and every record was good; `len` bytes received.
-    Done { len: u16 },
+    /// The end-of-file record arrived and every record was good.
+    Done {
+        /// Bytes received.
+        len: u16,
+    },
     /// The file is bad.
     Error(HexError),
 }

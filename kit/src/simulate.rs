@@ -1,4 +1,4 @@
-//! `utile sim`: a program run by the firmware's own engine on a [`SimBoard`](utile::sim::SimBoard) with simulated
+//! `utile sim`: a program run by the firmware's own engine on a [`SimBoard`](crate::sim::SimBoard) with simulated
 //! time, against an input timeline; the result is a set of traces (one per signal).
 //!
 //! A timeline file holds one event per line, in time order:
@@ -17,11 +17,11 @@ use std::fmt::Write as _;
 use std::string::String;
 use std::vec::Vec;
 
-use utile::core::board::Board;
-use utile::core::engine::{Engine, Program, UNITS};
-use utile::core::opcodes::{END, POP_Y, PUSH_TQ, STORE_PY};
-use utile::core::ticker::INPUTS;
-use utile::sim::SimBoard;
+use utile_core::board::Board;
+use utile_core::engine::{Engine, Program, UNITS};
+use utile_core::opcodes::{END, POP_Y, PUSH_TQ, STORE_PY};
+use utile_core::ticker::INPUTS;
+use crate::sim::SimBoard;
 
 use crate::listing::{strip_comment, FileErrors, Problem};
 

@@ -18,10 +18,10 @@ use std::fmt;
 use std::string::String;
 use std::vec::Vec;
 
-use utile::core::engine::{Program, LINES, UNITS};
-use utile::core::ihex::{write_hex, HexError, HexEvent, HexReader};
-use utile::core::image::{self, ImageError};
-use utile::core::opcodes::{self, BLANK, NOP};
+use utile_core::engine::{Program, LINES, UNITS};
+use utile_core::ihex::{write_hex, HexError, HexEvent, HexReader};
+use utile_core::image::{self, ImageError};
+use utile_core::opcodes::{self, BLANK, NOP};
 
 /// One problem found in a text file, at a 1-based line of that file.
 #[derive(Clone, Debug, PartialEq, Eq)]

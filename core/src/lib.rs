@@ -2,6 +2,9 @@
 //!
 //! It compiles for the AVR (inside the firmware) and for the host (tests, the `utile` tool,
 //! simulations). Everything the core needs from the outside world goes through [`Board`].
+#![cfg_attr(not(test), no_std)]
+#![forbid(unsafe_code)]
+#![deny(missing_docs)]
 
 pub mod board;
 pub mod editor;

@@ -14,14 +14,14 @@ use std::format;
 use std::string::{String, ToString};
 use std::vec::Vec;
 
-use crate::core::editor::keys::{Event, Key, KeyDecoder, TIMEOUT_MS};
-use crate::core::editor::text;
-use crate::core::editor::{Editor, Mode, READ_TIMEOUT_MS};
-use crate::core::engine::{Engine, Flow, Program, LINES, UNITS};
-use crate::core::ihex::{self, HexEvent, HexReader};
-use crate::core::image::{self, IMAGE_LEN};
-use crate::core::opcodes::{self, END, NOP};
-use crate::core::store::{self, SLOT_ADDR, SLOT_LEN};
+use utile_core::editor::keys::{Event, Key, KeyDecoder, TIMEOUT_MS};
+use utile_core::editor::text;
+use utile_core::editor::{Editor, Mode, READ_TIMEOUT_MS};
+use utile_core::engine::{Engine, Flow, Program, LINES, UNITS};
+use utile_core::ihex::{self, HexEvent, HexReader};
+use utile_core::image::{self, IMAGE_LEN};
+use utile_core::opcodes::{self, END, NOP};
+use utile_core::store::{self, SLOT_ADDR, SLOT_LEN};
 use crate::sim::{EepromFault, SimBoard, Tear};
 
 /// What a harness says: `Ok` or the broken invariant.

@@ -1,0 +1,16 @@
+//! uTile's host kit: everything that runs the core or the firmware image on a PC.
+//!
+//! - [`sim`]: a simulated board (the firmware's tick, pins, EEPROM) for the core's engine
+//!   and editor;
+//! - [`listing`]: `.utl` listings and hex images;
+//! - [`simulate`] and [`diagram`]: timelines, simulation on the core, VCD and SVG;
+//! - [`fuzzing`]: the invariants of SPEC §12, shared by the fuzz targets and the tests;
+//! - [`simavr`]: the real firmware image on a simulated ATmega328P.
+#![deny(missing_docs)]
+
+pub mod diagram;
+pub mod fuzzing;
+pub mod listing;
+pub mod sim;
+pub mod simavr;
+pub mod simulate;
