@@ -1,0 +1,253 @@
+//! Drawing: the full screen in steps (so RUN mode can draw it piece by piece without
+//! waiting), the page of entries, the Bit Stack / Data / Port Byte displays, the status line.
+
+use super::*;
+
+/// The steps of a full redraw, in order (each sends at most [`STEP_MAX`] bytes).
+pub(super) const S_CLEAR: u8 = 0;
+pub(super) const S_TITLE: u8 = 1;
+pub(super) const S_DASH2: u8 = 2; // and 3
+pub(super) const S_LABELS: u8 = 4;
+pub(super) const S_BITNUMS: u8 = 5;
+pub(super) const S_BITNUMS_PORT: u8 = 6;
+pub(super) const S_UNDERLINE: u8 = 7;
+pub(super) const S_UNDERLINE_PORT: u8 = 8;
+pub(super) const S_BS: u8 = 9;
+pub(super) const S_DATA: u8 = 10;
+pub(super) const S_PORT: u8 = 11;
+pub(super) const S_DASH7: u8 = 12; // and 13
+pub(super) const S_ENTRY0: u8 = 14; // .. 45
+pub(super) const S_PROMPT: u8 = 46;
+pub(super) const S_DASH23: u8 = 47; // and 48
+pub(super) const S_STATUS_A: u8 = 49;
+pub(super) const S_STATUS_B: u8 = 50;
+/// Number of steps; a `render` value of this means the screen is complete.
+pub(super) const STEPS: u8 = 51;
+
+impl Editor {
+    /// Put the terminal cursor where the next typed character goes.
+    pub(super) fn park<B: Board>(&mut self, b: &mut B) {
+        if matches!(self.screen, Screen::Page | Screen::Ldt { .. }) {
+            goto(b, ROW_PROMPT, COL_INPUT + self.len.min(LINE_MAX));
+        }
+    }
+
+    /// The whole screen, now.
+    pub(super) fn full_redraw<B: Board>(&mut self, eng: &Engine, b: &mut B) {
+        for i in 0..STEPS {
+            self.step(i, eng, b);
+        }
+        self.render = STEPS;
+        self.message = false;
+        self.info = false;
+        self.len = 0;
+        self.overlong = false;
+    }
+
+    /// Back to the main screen from LIST, WRITE, READ.
+    pub(super) fn back_to_page<B: Board>(&mut self, eng: &Engine, b: &mut B) {
+        self.screen = Screen::Page;
+        self.full_redraw(eng, b);
+    }
+
+    /// Half of a dashed row.
+    pub(super) fn dashes<B: Board>(b: &mut B, row: u8, second_half: bool) {
+        if !second_half {
+            goto(b, row, 1);
+        }
+        text::DASHES40.send(b);
+    }
+
+    /// One step of the full redraw.
+    pub(super) fn step<B: Board>(&mut self, i: u8, eng: &Engine, b: &mut B) {
+        match i {
+            S_CLEAR => term::clear(b),
+            S_TITLE => {
+                goto(b, 1, COL_TITLE);
+                text::TITLE.send(b);
+            }
+            S_DASH2 | 3 => Self::dashes(b, 2, i != S_DASH2),
+            S_LABELS => {
+                goto(b, 3, COL_BS + 3);
+                text::BIT_STACK.send(b);
+                goto(b, 3, COL_PORT + 3);
+                text::PORT_BYTE.send(b);
+            }
+            S_BITNUMS => {
+                goto(b, 4, COL_BS);
+                text::BIT_NUMBERS.send(b);
+                goto(b, 4, COL_DATA);
+                text::DATA.send(b);
+            }
+            S_BITNUMS_PORT => {
+                goto(b, 4, COL_PORT);
+                text::BIT_NUMBERS.send(b);
+            }
+            S_UNDERLINE => {
+                goto(b, 5, COL_BS);
+                text::EQ15.send(b);
+                goto(b, 5, COL_DATA);
+                text::EQ5.send(b);
+            }
+            S_UNDERLINE_PORT => {
+                goto(b, 5, COL_PORT);
+                text::EQ15.send(b);
+            }
+            S_BS => self.draw_bs(b, eng.bs),
+            S_DATA => self.draw_data(b),
+            S_PORT => {
+                if let Some(v) = self.shown_port {
+                    self.draw_port(b, v);
+                }
+            }
+            S_DASH7 | 13 => Self::dashes(b, 7, i != S_DASH7),
+            S_PROMPT => {
+                goto(b, ROW_PROMPT, COL_PROMPT);
+                text::ENTER.send(b);
+            }
+            S_DASH23 | 48 => Self::dashes(b, 23, i != S_DASH23),
+            S_STATUS_A => {
+                goto(b, ROW_STATUS, COL_STATUS_A);
+                text::USER_FILE.send(b);
+            }
+            S_STATUS_B => {
+                if matches!(self.screen, Screen::Running | Screen::Break) {
+                    goto(b, ROW_STATUS, COL_STATUS_B);
+                    text::RUNNING.send(b);
+                }
+            }
+            _ => {
+                let k = i.wrapping_sub(S_ENTRY0);
+                if k < 32 {
+                    let line = (page_of(self.cursor) << 5) | k;
+                    self.entry(eng, b, line, false);
+                }
+            }
+        }
+    }
+
+    /// One page entry `NNN NAME`; the cursor line in reverse video. `pad` overwrites what a
+    /// longer name left behind.
+    pub(super) fn entry<B: Board>(&self, eng: &Engine, b: &mut B, line: u8, pad: bool) {
+        let (row, col) = entry_pos(line);
+        goto(b, row, col);
+        let rev = line == self.cursor && !matches!(self.screen, Screen::Ldt { .. });
+        if rev {
+            reverse(b);
+        }
+        num_width(b, u32::from(line), 3);
+        b.tx(b' ');
+        let op = eng.prog.uf[usize::from(line)];
+        let width = match opcodes::name(op) {
+            Some(n) => {
+                raw(b, n.as_bytes());
+                n.as_bytes().len()
+            }
+            None => {
+                text::DOTS.send(b);
+                5
+            }
+        };
+        if pad || rev {
+            for _ in width..opcodes::MAX_NAME {
+                b.tx(b' ');
+            }
+        }
+        if rev {
+            normal(b);
+        }
+    }
+
+    /// The whole current page over the old one.
+    pub(super) fn draw_page<B: Board>(&self, eng: &Engine, b: &mut B, pad: bool) {
+        let first = page_of(self.cursor) << 5;
+        for k in 0..32u8 {
+            self.entry(eng, b, first | k, pad);
+        }
+    }
+
+    pub(super) fn draw_bs<B: Board>(&mut self, b: &mut B, v: u8) {
+        goto(b, ROW_VALUES, COL_BS);
+        bits(b, v);
+        self.shown_bs = v;
+    }
+
+    pub(super) fn draw_port<B: Board>(&mut self, b: &mut B, v: u8) {
+        goto(b, ROW_VALUES, COL_PORT);
+        bits(b, v);
+        self.shown_port = Some(v);
+    }
+
+    pub(super) fn draw_data<B: Board>(&mut self, b: &mut B) {
+        goto(b, ROW_VALUES, COL_DATA);
+        num_width(b, u32::from(self.data), 5);
+    }
+
+    /// Bring the bit stack and port displays up to date after an executed command.
+    pub(super) fn show_values<B: Board>(&mut self, eng: &mut Engine, b: &mut B) {
+        eng.take_bs_view();
+        if eng.bs != self.shown_bs {
+            self.draw_bs(b, eng.bs);
+        }
+        if let Some(v) = eng.take_port_view() {
+            if self.shown_port != Some(v) {
+                self.draw_port(b, v);
+            }
+        }
+    }
+
+    /// Move the cursor line, redrawing two entries or the whole page.
+    pub(super) fn move_cursor<B: Board>(&mut self, eng: &Engine, b: &mut B, to: u8) {
+        let from = self.cursor;
+        self.cursor = to;
+        if page_of(from) != page_of(to) {
+            self.draw_page(eng, b, true);
+        } else if from != to {
+            self.entry(eng, b, from, true);
+            self.entry(eng, b, to, false);
+        }
+    }
+
+    /// A message on the status line (after `*** User File 0 ***`).
+    pub(super) fn message<B: Board>(&mut self, b: &mut B, t: Txt) {
+        let col = if matches!(self.screen, Screen::Ldt { .. }) {
+            COL_LDT_MSG
+        } else {
+            COL_STATUS_B
+        };
+        goto(b, ROW_STATUS, col);
+        t.send(b);
+        ceol(b);
+        self.message = true;
+    }
+
+    pub(super) fn clear_message<B: Board>(&mut self, b: &mut B) {
+        if self.message {
+            let col = if matches!(self.screen, Screen::Ldt { .. }) {
+                COL_LDT_MSG
+            } else {
+                COL_STATUS_B
+            };
+            goto(b, ROW_STATUS, col);
+            ceol(b);
+            self.message = false;
+        }
+        if self.info {
+            goto(b, ROW_INFO, 1);
+            ceol(b);
+            self.info = false;
+        }
+    }
+
+    /// Blank rows 8..21 (the page, STAT's row, and what help or LDT drew there).
+    pub(super) fn clear_area<B: Board>(&mut self, b: &mut B) {
+        goto(b, ROW_AREA, 1);
+        for r in 0..AREA_ROWS {
+            ceol(b);
+            if r + 1 < AREA_ROWS {
+                b.tx(b'\n');
+            }
+        }
+        self.info = false;
+    }
+}

@@ -1,0 +1,177 @@
+//! The main screen: cursor keys and a submitted line (command, interpreter word or
+//! number), INS/DEL, and redrawing what an edit changed.
+
+use super::*;
+
+impl Editor {
+    /// A key event on the main screen.
+    pub(super) fn page_event<B: Board>(
+        &mut self,
+        event: Event,
+        eng: &mut Engine,
+        b: &mut B,
+    ) -> Mode {
+        match event {
+            Event::Key(k) => {
+                self.page_key(k, eng, b);
+                Mode::Edit
+            }
+            Event::Char(c) => {
+                if self.line_char(c, b) {
+                    self.submit_page(eng, b)
+                } else {
+                    Mode::Edit
+                }
+            }
+            Event::None => Mode::Edit,
+        }
+    }
+
+    pub(super) fn page_key<B: Board>(&mut self, k: Key, eng: &mut Engine, b: &mut B) {
+        let c = self.cursor;
+        match k {
+            Key::Up => self.move_cursor(eng, b, c.wrapping_sub(1)),
+            Key::Down => self.move_cursor(eng, b, c.wrapping_add(1)),
+            Key::Right => self.move_cursor(eng, b, c.wrapping_add(32)),
+            Key::Left => self.move_cursor(eng, b, c.wrapping_sub(32)),
+            Key::Home => self.move_cursor(eng, b, self.home),
+            Key::Insert => self.insert_line(eng, b),
+            Key::Delete => self.delete_line(eng, b),
+        }
+    }
+
+    pub(super) fn submit_page<B: Board>(&mut self, eng: &mut Engine, b: &mut B) -> Mode {
+        let Some(n) = self.take_line(b) else {
+            return Mode::Edit;
+        };
+        match self.parse(n) {
+            Parsed::Empty => {}
+            Parsed::Number(v) => {
+                if v > 0xFFFF {
+                    self.message(b, text::TOO_BIG);
+                } else {
+                    self.data = v as u16;
+                    self.home = v.min(255) as u8;
+                    self.draw_data(b);
+                }
+            }
+            Parsed::Word => {
+                let word = &self.line[..usize::from(n.min(LINE_MAX))];
+                match word {
+                    b"?" => self.help(b),
+                    b"/" => self.full_redraw(eng, b),
+                    b"INS" => self.insert_line(eng, b),
+                    b"DEL" => self.delete_line(eng, b),
+                    b"RUN" => {
+                        eng.prog.uf[usize::from(self.cursor)] = END;
+                        self.entry(eng, b, self.cursor, true);
+                        eng.clear_runtime(b);
+                        return self.start_run(b);
+                    }
+                    b"EX0" => {
+                        eng.clear_runtime(b);
+                        return self.start_run(b);
+                    }
+                    b"FILL" => {
+                        eng.prog.uf = [NOP; LINES];
+                        self.cursor = 0;
+                        self.draw_page(eng, b, true);
+                    }
+                    b"VER" => self.message(b, text::VERSION),
+                    b"LDT" => self.ldt_enter(eng, b),
+                    b"LIST" => {
+                        self.screen = Screen::List { sent: false };
+                        term::clear(b);
+                        text::LIST_PROMPT.send(b);
+                        raw(b, b"\r\n");
+                    }
+                    b"STAT" => self.stat(b),
+                    b"STORE" => {
+                        self.message(b, text::STORING);
+                        let msg = match store::store(&eng.prog, b) {
+                            Ok(()) => text::STORED,
+                            Err(_) => text::STORE_FAILED,
+                        };
+                        self.message(b, msg);
+                    }
+                    b"LOAD" => match store::load_into(b, &mut eng.prog) {
+                        Ok(()) => {
+                            self.draw_page(eng, b, true);
+                            self.message(b, text::LOADED);
+                        }
+                        Err(_) => self.message(b, text::NO_STORED),
+                    },
+                    b"WRITE" => {
+                        self.screen = Screen::Write { sent: false };
+                        self.transfer_screen(b, 17, text::WRITE_PROMPT);
+                        goto(b, 11, 1);
+                    }
+                    b"READ" => {
+                        let now = b.now_ms();
+                        self.screen = Screen::Read(ReadState {
+                            reader: HexReader::new(),
+                            last_ms: now,
+                            phase: ReadPhase::Receiving,
+                        });
+                        self.transfer_screen(b, 25, text::READ_PROMPT);
+                        goto(b, ROW_STATUS, COL_STATUS_A);
+                    }
+                    _ => match opcodes::lookup(word) {
+                        Some(op) => self.executable(op, eng, b),
+                        None => self.message(b, text::UNRECOGNIZED),
+                    },
+                }
+            }
+        }
+        Mode::Edit
+    }
+
+    /// An executable command: run it now, store it at the cursor line, advance.
+    pub(super) fn executable<B: Board>(&mut self, op: u8, eng: &mut Engine, b: &mut B) {
+        // KEY would read (and lose) a typed-ahead byte; in the editor it has nothing to do.
+        if op != KEY {
+            let _ = eng.exec(op, b);
+        }
+        b.write_outputs(eng.py);
+        eng.prog.uf[usize::from(self.cursor)] = op;
+        // The old cursor line is redrawn with its new name (if still on the page).
+        self.move_cursor(eng, b, self.cursor.wrapping_add(1));
+        self.show_values(eng, b);
+    }
+
+    /// INS: lines from the cursor move down one, NOP at the cursor, line 255 is lost.
+    pub(super) fn insert_line<B: Board>(&mut self, eng: &mut Engine, b: &mut B) {
+        let c = usize::from(self.cursor);
+        let uf = &mut eng.prog.uf;
+        uf.copy_within(c..LINES - 1, c + 1);
+        uf[c] = NOP;
+        // Line i changed if it differs from what it held: now at i + 1.
+        self.redraw_changed(eng, b, |uf, i| i == 255 || uf[i] != uf[i + 1]);
+    }
+
+    /// DEL: lines below the cursor move up one, NOP at line 255.
+    pub(super) fn delete_line<B: Board>(&mut self, eng: &mut Engine, b: &mut B) {
+        let c = usize::from(self.cursor);
+        let uf = &mut eng.prog.uf;
+        uf.copy_within(c + 1..LINES, c);
+        uf[LINES - 1] = NOP;
+        let cur = c;
+        // Line i (> cursor) held what line i - 1 holds now.
+        self.redraw_changed(eng, b, |uf, i| i == cur || uf[i] != uf[i - 1]);
+    }
+
+    /// Redraw the entries of the shown page, from the cursor on, for which `changed` holds.
+    pub(super) fn redraw_changed<B: Board>(
+        &mut self,
+        eng: &Engine,
+        b: &mut B,
+        changed: impl Fn(&[u8; LINES], usize) -> bool,
+    ) {
+        let last = usize::from(self.cursor | 31);
+        for i in usize::from(self.cursor)..=last {
+            if changed(&eng.prog.uf, i) {
+                self.entry(eng, b, i as u8, true);
+            }
+        }
+    }
+}

@@ -1,0 +1,70 @@
+//! LIST and WRITE: the transfer screen and what they send.
+
+use super::*;
+
+impl Editor {
+    /// A key on the LIST or WRITE screen: CR sends, `/` aborts; after sending, CR returns.
+    pub(super) fn transfer_event<B: Board>(
+        &mut self,
+        sent: bool,
+        event: Event,
+        eng: &Engine,
+        b: &mut B,
+    ) -> Mode {
+        let is_list = matches!(self.screen, Screen::List { .. });
+        match event {
+            Event::Char(b'/') if !sent => self.back_to_page(eng, b),
+            Event::Char(b'\r' | b'\n') if sent => self.back_to_page(eng, b),
+            Event::Char(b'\r' | b'\n') => {
+                if is_list {
+                    Self::send_listing(eng, b);
+                    self.screen = Screen::List { sent: true };
+                } else {
+                    let prog = &eng.prog;
+                    let crc = image_crc(prog);
+                    write_hex_with(IMAGE_LEN, |i| image_byte(prog, crc, i), &mut |c| {
+                        b.feed_watchdog();
+                        b.tx(c);
+                    });
+                    self.screen = Screen::Write { sent: true };
+                }
+                self.echo_only = true;
+            }
+            _ => {}
+        }
+        Mode::Edit
+    }
+
+    pub(super) fn transfer_screen<B: Board>(&mut self, b: &mut B, col: u8, prompt: Txt) {
+        self.clear_area(b);
+        goto(b, 9, col);
+        prompt.send(b);
+        goto(b, ROW_STATUS, COL_STATUS_A);
+        text::TRANSFER.send(b);
+        ceol(b);
+        self.message = false;
+    }
+
+    /// LIST's text: `NNN NAME` per programmed line, `Tm = preset` per timer, `#` comments.
+    pub(super) fn send_listing<B: Board>(eng: &Engine, b: &mut B) {
+        raw(b, b"\r\n");
+        text::LIST_HEAD.send(b);
+        raw(b, b"\r\n");
+        for (line, &op) in eng.prog.uf.iter().enumerate() {
+            if let Some(n) = opcodes::name(op) {
+                num_width(b, line as u32, 3);
+                b.tx(b' ');
+                raw(b, n.as_bytes());
+                raw(b, b"\r\n");
+            }
+        }
+        for (m, &p) in eng.prog.presets.iter().enumerate() {
+            b.tx(b'T');
+            b.tx(term::hex_digit(m as u8));
+            text::PRESET_EQ.send(b);
+            num(b, u32::from(p));
+            raw(b, b"\r\n");
+        }
+        text::LIST_END.send(b);
+    }
+}
