@@ -150,17 +150,20 @@ impl World {
     /// Put the world in the ticker, in the bytes the tick publishes, and at the pins.
     fn pose(&self) {
         interrupt::free(|cs| {
-            TICKER.with(cs, |t| {
-                *t = Ticker::with_time(self.level, self.ms);
-                t.inputs.set_edges(self.leading, self.trailing);
-                t.inputs.set_toggles(self.toggles);
-                t.set_clocks(self.clocks);
-                publish(t);
-            });
-            OUTPUTS.with(cs, |o| {
-                o.py = self.py;
-                o.invert = self.invert;
-            });
+            // SAFETY (both): neither closure re-enters its cell.
+            unsafe {
+                TICKER.with(cs, |t| {
+                    *t = Ticker::with_time(self.level, self.ms);
+                    t.inputs.set_edges(self.leading, self.trailing);
+                    t.inputs.set_toggles(self.toggles);
+                    t.set_clocks(self.clocks);
+                    publish(t);
+                });
+                OUTPUTS.with(cs, |o| {
+                    o.py = self.py;
+                    o.invert = self.invert;
+                });
+            }
             drive_pins(cs, self.py ^ self.invert);
         });
         LAST_PY.store(self.py, Ordering::Relaxed);
@@ -181,9 +184,11 @@ struct Seen {
 impl Seen {
     fn now() -> Self {
         interrupt::free(|cs| {
+            // SAFETY (both): neither closure re-enters its cell.
             let (leading, trailing) =
-                TICKER.with(cs, |t| (t.inputs.leading(), t.inputs.trailing()));
-            let out_py = OUTPUTS.with(cs, |o| o.py);
+                unsafe { TICKER.with(cs, |t| (t.inputs.leading(), t.inputs.trailing())) };
+            // SAFETY: see above.
+            let out_py = unsafe { OUTPUTS.with(cs, |o| o.py) };
             let dp = regs();
             Self {
                 leading,
