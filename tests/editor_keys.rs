@@ -5,6 +5,7 @@ mod harness;
 
 use harness::Rig;
 use utile_core::opcodes::{lookup, END, NOP};
+use utile_kit::rng::Rng;
 
 fn filled() -> Rig {
     let mut r = Rig::new();
@@ -212,13 +213,10 @@ fn garbage_changes_nothing_and_the_screen_recovers() {
         r.wait_ms(100);
     }
     // Pseudo-random bytes without CR, LF or ESC: only characters to erase.
-    let mut x: u32 = 0x2545_F491;
+    let mut rng = Rng(0x2545_F491);
     let mut junk = Vec::new();
     for _ in 0..3000 {
-        x ^= x << 13;
-        x ^= x >> 17;
-        x ^= x << 5;
-        let c = (x >> 8) as u8;
+        let c = rng.byte();
         if !matches!(c, b'\r' | b'\n' | 0x1b) {
             junk.push(c);
         }

@@ -2,12 +2,10 @@
 //! bouncing press, sticky edge bits, no phantom edges after reset or EX0, and latency.
 
 mod common_scenario;
-mod rng;
-
 use common_scenario::*;
-use rng::Rng;
 use utile_core::board::Board;
 use utile_core::ticker::{Debouncer, Ticker};
+use utile_kit::rng::Rng;
 use utile_kit::sim::SimBoard;
 
 /// Feed `level` for `ms` samples of 1 ms to input 0 (others high).

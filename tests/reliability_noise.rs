@@ -7,7 +7,8 @@
 use utile_core::editor::Mode;
 use utile_core::engine::Program;
 use utile_core::opcodes::{lookup, END, KEY};
-use utile_kit::fuzzing::{sample_program, Rig, Rng};
+use utile_kit::fuzzing::{sample_program, Rig};
+use utile_kit::rng::Rng;
 
 /// Bytes per second at 19200 baud, 8N1.
 const BYTES_PER_S: u32 = 1920;

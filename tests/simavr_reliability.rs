@@ -3,13 +3,11 @@
 //! noise. Needs `out/m328-nano-utile.elf` (`cargo fw`).
 
 mod common;
-mod rng;
-
 use common::{contains, Nano, Rig, RAMSTART, STACK_PAINT};
-use rng::Rng;
 use utile_core::engine::Program;
 use utile_core::opcodes::{self, NOP};
 use utile_core::{ihex, image, store};
+use utile_kit::rng::Rng;
 use utile_kit::sim::SimBoard;
 
 /// The program every fault test starts from: stored in EEPROM, different from FILL's.

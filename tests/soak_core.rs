@@ -13,7 +13,7 @@
 use utile_core::engine::{Engine, Program, TIMER_UNIT_MS};
 use utile_core::opcodes::{lookup, END};
 use utile_core::ticker::Ticker;
-use utile_kit::fuzzing::Rng;
+use utile_kit::rng::Rng;
 use utile_kit::sim::SimBoard;
 
 /// The soak program, one command per line.

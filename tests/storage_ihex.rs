@@ -1,15 +1,13 @@
 //! Intel HEX for images (SPEC §10, docs/FORMAT.md): the writer's exact text, bit-exact
 //! round trips, and every way the streaming reader refuses a file.
 
-mod rng;
-
-use rng::{random_program, Rng};
 use utile_core::engine::Program;
 use utile_core::ihex::{write_hex, HexError, HexEvent, HexReader};
 use utile_core::image::{self, ImageError, IMAGE_LEN};
+use utile_kit::rng::Rng;
 
 fn random_image(rng: &mut Rng) -> [u8; IMAGE_LEN] {
-    image::encode(&random_program(rng))
+    image::encode(&rng.program())
 }
 
 fn hex_text(img: &[u8]) -> String {

@@ -2,12 +2,10 @@
 //! only changed bytes, read-back verification, and fault injection (a reset at every point
 //! of a STORE, flipped bytes, erased and random EEPROM).
 
-mod rng;
-
-use rng::{random_program, Rng};
 use utile_core::engine::Program;
 use utile_core::image;
 use utile_core::store::{self, LoadError, StoreError, SLOT_ADDR};
+use utile_kit::rng::Rng;
 use utile_kit::sim::{EepromFault, SimBoard, Tear};
 
 /// A typical small program: a few lines, the rest blank.
@@ -119,7 +117,7 @@ fn random_eeprom_has_no_image() {
         }
         assert_eq!(store::load(&mut b), Err(LoadError::NoValidImage));
         // And STORE works on top of any junk.
-        let p = random_program(&mut rng);
+        let p = rng.program();
         assert_eq!(store::store(&p, &mut b), Ok(()));
         assert_eq!(store::load(&mut b), Ok(p));
     }
@@ -131,7 +129,7 @@ fn store_then_load_round_trip_and_slots_alternate() {
     let mut b = SimBoard::new();
     let mut expect_slot = 0;
     for k in 1..=10u16 {
-        let p = random_program(&mut rng);
+        let p = rng.program();
         assert_eq!(store::store(&p, &mut b), Ok(()));
         assert_eq!(
             slot_image(&b, expect_slot),
@@ -241,21 +239,21 @@ fn reset_at_every_point_of_a_store() {
 
     // First STORE ever: nothing or the new program.
     let erased = SimBoard::new();
-    let p = random_program(&mut rng);
+    let p = rng.program();
     cases += reset_during_store(&erased, None, &p);
 
     for round in 0..12 {
         // Two programs already stored (both slots valid), then a third.
         let mut b = SimBoard::new();
-        let a = random_program(&mut rng);
-        let old = random_program(&mut rng);
+        let a = rng.program();
+        let old = rng.program();
         store::store(&a, &mut b).unwrap();
         if round % 3 != 0 {
             store::store(&old, &mut b).unwrap();
         }
         let old_now = store::load(&mut b).unwrap();
         let new = match round % 4 {
-            0 => random_program(&mut rng), // full rewrite
+            0 => rng.program(), // full rewrite
             1 => {
                 let mut n = old_now.clone();
                 n.uf[(rng.next() % 256) as usize] ^= 0x11; // one line
@@ -277,8 +275,8 @@ fn reset_at_every_point_of_a_store() {
 #[test]
 fn flipped_bytes_in_either_slot_fall_back_to_the_other() {
     let mut rng = Rng(31337);
-    let a = random_program(&mut rng);
-    let bp = random_program(&mut rng);
+    let a = rng.program();
+    let bp = rng.program();
     let mut base = SimBoard::new();
     store::store(&a, &mut base).unwrap(); // slot 0, older
     store::store(&bp, &mut base).unwrap(); // slot 1, newest
@@ -309,7 +307,7 @@ fn flipped_bytes_in_either_slot_fall_back_to_the_other() {
     // Damage the newest slot, then STORE: it must go into the damaged slot and keep `a`.
     let mut b = base.clone();
     b.eeprom[usize::from(SLOT_ADDR[1]) + 100] ^= 0xFF;
-    let c = random_program(&mut rng);
+    let c = rng.program();
     store::store(&c, &mut b).unwrap();
     assert_eq!(
         slot_image(&b, 0),
@@ -329,8 +327,8 @@ fn flipped_bytes_in_either_slot_fall_back_to_the_other() {
 #[test]
 fn failing_eeprom_is_reported_and_the_old_program_kept() {
     let mut rng = Rng(8);
-    let old = random_program(&mut rng);
-    let new = random_program(&mut rng);
+    let old = rng.program();
+    let new = rng.program();
     let mut base = SimBoard::new();
     store::store(&old, &mut base).unwrap(); // slot 0
                                             // Slot 1 byte 50 is stuck at its erased value, which differs from the new image.
@@ -348,7 +346,7 @@ fn failing_eeprom_is_reported_and_the_old_program_kept() {
 fn store_feeds_the_watchdog() {
     let mut rng = Rng(3);
     let mut d = SimBoard::new();
-    store::store(&random_program(&mut rng), &mut d).unwrap();
+    store::store(&rng.program(), &mut d).unwrap();
     assert!(d.watchdog_feeds >= 278, "fed {} times", d.watchdog_feeds);
     assert_eq!(
         d.max_writes_between_feeds, 1,

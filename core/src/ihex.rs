@@ -6,7 +6,8 @@
 //! blanks and other control characters between records are ignored, and so is anything
 //! before the first `:` (a captured file may start with screen output).
 
-use super::image::IMAGE_LEN;
+use crate::hex;
+use crate::image::IMAGE_LEN;
 
 /// Data bytes per record written by [`write_hex`].
 pub const RECORD_LEN: usize = 16;
@@ -45,26 +46,6 @@ pub enum HexEvent {
     Error(HexError),
 }
 
-/// The upper-case hex digit of the low nibble of `n`.
-fn hex_digit(n: u8) -> u8 {
-    let n = n & 0x0F;
-    if n < 10 {
-        b'0' + n
-    } else {
-        b'A' + (n - 10)
-    }
-}
-
-/// The value of a hex digit in either case.
-fn hex_value(c: u8) -> Option<u8> {
-    match c {
-        b'0'..=b'9' => Some(c - b'0'),
-        b'A'..=b'F' => Some(c - b'A' + 10),
-        b'a'..=b'f' => Some(c - b'a' + 10),
-        _ => None,
-    }
-}
-
 /// Send `image` as Intel HEX: data records of 16 bytes from address 0, upper-case, CR LF
 /// line ends, then the end-of-file record `:00000001FF` CR LF. The last data record is
 /// shorter when the length is not a multiple of 16 (278 = 17 × 16 + 6).
@@ -84,8 +65,8 @@ pub fn write_hex_with(len: usize, byte_at: impl Fn(usize) -> u8, out: &mut impl 
         let mut sum = count.wrapping_add(hi).wrapping_add(lo);
         out(b':');
         let mut byte = |b: u8| {
-            out(hex_digit(b >> 4));
-            out(hex_digit(b));
+            out(hex::digit(b >> 4));
+            out(hex::digit(b));
         };
         byte(count);
         byte(hi);
@@ -186,9 +167,9 @@ impl HexReader {
                 self.state = State::Between;
                 HexEvent::More
             }
-            State::AfterRecord if hex_value(byte).is_some() => self.fail(HexError::TooLong),
+            State::AfterRecord if hex::value(byte).is_some() => self.fail(HexError::TooLong),
             State::Between | State::AfterRecord => self.fail(HexError::BadChar),
-            State::Record => match hex_value(byte) {
+            State::Record => match hex::value(byte) {
                 None => self.fail(HexError::BadChar),
                 Some(v) => match self.high.take() {
                     None => {

@@ -9,6 +9,7 @@
 pub mod board;
 pub mod editor;
 pub mod engine;
+pub mod hex;
 pub mod ihex;
 pub mod modbus;
 pub mod image;

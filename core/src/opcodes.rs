@@ -16,6 +16,8 @@
 //!
 //! Every other byte is unassigned: it is shown as `.....` and runs as NOP.
 
+use crate::hex;
+
 /// No operation.
 pub const NOP: u8 = 0x00;
 /// End of scan: flip-flops update, outputs reach the pins, the next scan starts at line 0.
@@ -136,22 +138,102 @@ pub struct Family {
 
 /// Every numbered family, in opcode order.
 pub const FAMILIES: [Family; 16] = [
-    Family { base: PUSH_A, count: 6, prefix: "A", suffix: "." },
-    Family { base: PUSH_AL, count: 6, prefix: "AL", suffix: "." },
-    Family { base: PUSH_AT, count: 6, prefix: "AT", suffix: "." },
-    Family { base: PUSH_AD, count: 6, prefix: "AD", suffix: "." },
-    Family { base: PUSH_Y, count: 8, prefix: "Y", suffix: "." },
-    Family { base: PUSH_U, count: 8, prefix: "U", suffix: "." },
-    Family { base: PUSH_V, count: 8, prefix: "V", suffix: "." },
-    Family { base: PUSH_Q, count: 16, prefix: "Q", suffix: "." },
-    Family { base: PUSH_TQ, count: 16, prefix: "TQ", suffix: "." },
-    Family { base: POP_Y, count: 8, prefix: ".Y", suffix: "" },
-    Family { base: POP_U, count: 8, prefix: ".U", suffix: "" },
-    Family { base: POP_V, count: 8, prefix: ".V", suffix: "" },
-    Family { base: POP_S, count: 16, prefix: ".S", suffix: "" },
-    Family { base: POP_R, count: 16, prefix: ".R", suffix: "" },
-    Family { base: POP_TK, count: 16, prefix: ".TK", suffix: "" },
-    Family { base: POP_TR, count: 16, prefix: ".TR", suffix: "" },
+    Family {
+        base: PUSH_A,
+        count: 6,
+        prefix: "A",
+        suffix: ".",
+    },
+    Family {
+        base: PUSH_AL,
+        count: 6,
+        prefix: "AL",
+        suffix: ".",
+    },
+    Family {
+        base: PUSH_AT,
+        count: 6,
+        prefix: "AT",
+        suffix: ".",
+    },
+    Family {
+        base: PUSH_AD,
+        count: 6,
+        prefix: "AD",
+        suffix: ".",
+    },
+    Family {
+        base: PUSH_Y,
+        count: 8,
+        prefix: "Y",
+        suffix: ".",
+    },
+    Family {
+        base: PUSH_U,
+        count: 8,
+        prefix: "U",
+        suffix: ".",
+    },
+    Family {
+        base: PUSH_V,
+        count: 8,
+        prefix: "V",
+        suffix: ".",
+    },
+    Family {
+        base: PUSH_Q,
+        count: 16,
+        prefix: "Q",
+        suffix: ".",
+    },
+    Family {
+        base: PUSH_TQ,
+        count: 16,
+        prefix: "TQ",
+        suffix: ".",
+    },
+    Family {
+        base: POP_Y,
+        count: 8,
+        prefix: ".Y",
+        suffix: "",
+    },
+    Family {
+        base: POP_U,
+        count: 8,
+        prefix: ".U",
+        suffix: "",
+    },
+    Family {
+        base: POP_V,
+        count: 8,
+        prefix: ".V",
+        suffix: "",
+    },
+    Family {
+        base: POP_S,
+        count: 16,
+        prefix: ".S",
+        suffix: "",
+    },
+    Family {
+        base: POP_R,
+        count: 16,
+        prefix: ".R",
+        suffix: "",
+    },
+    Family {
+        base: POP_TK,
+        count: 16,
+        prefix: ".TK",
+        suffix: "",
+    },
+    Family {
+        base: POP_TR,
+        count: 16,
+        prefix: ".TR",
+        suffix: "",
+    },
 ];
 
 /// Longest command name (`CLKA.`, `.TK0`): 5 characters.
@@ -279,15 +361,6 @@ impl Name {
     }
 }
 
-/// Upper-case hex digit for a unit number 0..15.
-fn hex_digit(n: u8) -> u8 {
-    if n < 10 {
-        b'0' + n
-    } else {
-        b'A' + (n - 10)
-    }
-}
-
 /// The family an opcode belongs to, with its number (documentation and tools).
 pub fn family_of(op: u8) -> Option<(&'static Family, u8)> {
     FAMILIES
@@ -298,7 +371,10 @@ pub fn family_of(op: u8) -> Option<(&'static Family, u8)> {
 
 /// The command name of an opcode, or `None` for a blank or unassigned byte (shown `.....`).
 pub fn name(op: u8) -> Option<Name> {
-    let mut n = Name { buf: [0; MAX_NAME], len: 0 };
+    let mut n = Name {
+        buf: [0; MAX_NAME],
+        len: 0,
+    };
     let i = usize::from(op);
     if i < SINGLES.len() {
         for k in 0..MAX_NAME {
@@ -312,7 +388,7 @@ pub fn name(op: u8) -> Option<Name> {
     }
     let (fam, num) = find_family(op)?;
     fam.prefix().iter().for_each(|&c| n.push(c));
-    n.push(hex_digit(num));
+    n.push(hex::digit(num));
     fam.suffix().iter().for_each(|&c| n.push(c));
     Some(n)
 }
@@ -320,16 +396,6 @@ pub fn name(op: u8) -> Option<Name> {
 /// True if the byte is an assigned opcode (not blank, not reserved).
 pub fn is_valid(op: u8) -> bool {
     usize::from(op) < SINGLES.len() || find_family(op).is_some()
-}
-
-/// Value of one hex digit, either case.
-fn hex_value(c: u8) -> Option<u8> {
-    match c {
-        b'0'..=b'9' => Some(c - b'0'),
-        b'a'..=b'f' => Some(c - b'a' + 10),
-        b'A'..=b'F' => Some(c - b'A' + 10),
-        _ => None,
-    }
 }
 
 /// Case-insensitive equality of ASCII bytes.
@@ -358,7 +424,7 @@ pub fn lookup(word: &[u8]) -> Option<u8> {
         if !eq_fold(head, p) || !eq_fold(tail, s) {
             return None;
         }
-        let n = hex_value(*digit.first()?)?;
+        let n = hex::value(*digit.first()?)?;
         (n < f.count()).then_some(f.base() + n)
     })
 }
@@ -389,12 +455,34 @@ mod tests {
     fn numbering_is_frozen() {
         // Part of the stored-image format: a change here breaks every saved program.
         let fixed: &[(&str, u8)] = &[
-            ("NOP", 0x00), ("END", 0x01), ("KEY", 0x02), ("AND", 0x03), ("!!", 0x07),
-            ("2DUP", 0x0D), ("PBS", 0x1B), ("CLKC.", 0x1E), ("A0.", 0x20), ("A5.", 0x25),
-            ("AL0.", 0x28), ("AT3.", 0x33), ("AD5.", 0x3D), ("Y7.", 0x47), ("U0.", 0x48),
-            ("V7.", 0x57), ("QF.", 0x67), ("TQ0.", 0x68), ("TQF.", 0x77), (".Y0", 0x80),
-            (".U7", 0x8F), (".V0", 0x90), (".S0", 0x98), (".RF", 0xB7), (".TK0", 0xB8),
-            (".TKF", 0xC7), (".TR0", 0xC8), (".TRF", 0xD7),
+            ("NOP", 0x00),
+            ("END", 0x01),
+            ("KEY", 0x02),
+            ("AND", 0x03),
+            ("!!", 0x07),
+            ("2DUP", 0x0D),
+            ("PBS", 0x1B),
+            ("CLKC.", 0x1E),
+            ("A0.", 0x20),
+            ("A5.", 0x25),
+            ("AL0.", 0x28),
+            ("AT3.", 0x33),
+            ("AD5.", 0x3D),
+            ("Y7.", 0x47),
+            ("U0.", 0x48),
+            ("V7.", 0x57),
+            ("QF.", 0x67),
+            ("TQ0.", 0x68),
+            ("TQF.", 0x77),
+            (".Y0", 0x80),
+            (".U7", 0x8F),
+            (".V0", 0x90),
+            (".S0", 0x98),
+            (".RF", 0xB7),
+            (".TK0", 0xB8),
+            (".TKF", 0xC7),
+            (".TR0", 0xC8),
+            (".TRF", 0xD7),
         ];
         for &(n, op) in fixed {
             assert_eq!(lookup(n.as_bytes()), Some(op), "{n}");
@@ -403,7 +491,9 @@ mod tests {
 
     #[test]
     fn near_misses_are_rejected() {
-        for w in ["A6.", "A0", "AL6.", ".Y8", "Q0", "QG.", ".TK", "TQ10.", "", "NOPE", "A.", "Y0..", ".S"] {
+        for w in [
+            "A6.", "A0", "AL6.", ".Y8", "Q0", "QG.", ".TK", "TQ10.", "", "NOPE", "A.", "Y0..", ".S",
+        ] {
             assert_eq!(lookup(w.as_bytes()), None, "{w}");
         }
         assert_eq!(name(BLANK), None);

@@ -14,6 +14,8 @@ use std::format;
 use std::string::{String, ToString};
 use std::vec::Vec;
 
+use crate::rng::Rng;
+use crate::sim::{EepromFault, SimBoard, Tear};
 use utile_core::editor::keys::{Event, Key, KeyDecoder, TIMEOUT_MS};
 use utile_core::editor::text;
 use utile_core::editor::{Editor, Mode, READ_TIMEOUT_MS};
@@ -22,48 +24,12 @@ use utile_core::ihex::{self, HexEvent, HexReader};
 use utile_core::image::{self, IMAGE_LEN};
 use utile_core::opcodes::{self, END, NOP};
 use utile_core::store::{self, SLOT_ADDR, SLOT_LEN};
-use crate::sim::{EepromFault, SimBoard, Tear};
 
 /// What a harness says: `Ok` or the broken invariant.
 pub type Verdict = Result<(), String>;
 
 /// Size of the firmware's receive ring (`hal::serial::RX_SIZE`): bytes past it are lost.
 pub const RX_RING: usize = 64;
-
-/// A tiny xorshift64* generator: deterministic, seedable, no dependencies.
-#[derive(Clone, Debug)]
-pub struct Rng(u64);
-
-impl Rng {
-    /// A generator from `seed` (any value, 0 included).
-    pub fn new(seed: u64) -> Self {
-        // splitmix64 of the seed: neighbouring seeds give unrelated streams, never 0.
-        let mut z = seed.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        Self((z ^ (z >> 31)) | 1)
-    }
-
-    /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        let mut x = self.0;
-        x ^= x >> 12;
-        x ^= x << 25;
-        x ^= x >> 27;
-        self.0 = x;
-        x.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-
-    /// A random number in `0..n` (`n` > 0).
-    pub fn below(&mut self, n: u32) -> u32 {
-        (((self.next_u64() >> 32) * u64::from(n)) >> 32) as u32
-    }
-
-    /// A random byte.
-    pub fn byte(&mut self) -> u8 {
-        (self.next_u64() >> 56) as u8
-    }
-}
 
 // ---------------------------------------------------------------------------------------
 // The terminal: where the editor's output puts the cursor.

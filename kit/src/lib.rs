@@ -4,6 +4,7 @@
 //!   and editor;
 //! - [`listing`]: `.utl` listings and hex images;
 //! - [`simulate`] and [`diagram`]: timelines, simulation on the core, VCD and SVG;
+//! - [`rng`]: the one random generator of the host code;
 //! - [`fuzzing`]: the invariants of SPEC §12, shared by the fuzz targets and the tests;
 //! - [`simavr`]: the real firmware image on a simulated ATmega328P.
 #![deny(missing_docs)]
@@ -11,6 +12,7 @@
 pub mod diagram;
 pub mod fuzzing;
 pub mod listing;
+pub mod rng;
 pub mod sim;
 pub mod simavr;
 pub mod simulate;

@@ -19,6 +19,7 @@ use std::string::String;
 use std::vec::Vec;
 
 use utile_core::engine::{Program, LINES, UNITS};
+use utile_core::hex;
 use utile_core::ihex::{write_hex, HexError, HexEvent, HexReader};
 use utile_core::image::{self, ImageError};
 use utile_core::opcodes::{self, BLANK, NOP};
@@ -65,10 +66,10 @@ pub(crate) fn strip_comment(line: &str) -> &str {
 
 /// The value of a one-character hex digit (either case).
 fn hex_digit(s: &str) -> Option<u8> {
-    if s.len() != 1 {
-        return None;
+    match s.as_bytes() {
+        &[c] => hex::value(c),
+        _ => None,
     }
-    u8::from_str_radix(s, 16).ok()
 }
 
 /// Parse a listing. `file` names it in error messages.

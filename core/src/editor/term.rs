@@ -3,6 +3,8 @@
 //! Numbers are printed by subtracting powers of ten (no division on the AVR).
 
 use super::super::board::Board;
+/// An upper-case hex digit (the one helper, [`crate::hex::digit`]).
+pub use crate::hex::digit as hex_digit;
 
 /// Send raw bytes.
 pub fn raw<B: Board>(b: &mut B, bytes: &[u8]) {
@@ -92,15 +94,5 @@ pub fn bits<B: Board>(b: &mut B, v: u8) {
         if i != 0 {
             b.tx(b' ');
         }
-    }
-}
-
-/// An upper-case hex digit.
-pub fn hex_digit(n: u8) -> u8 {
-    let n = n & 0x0F;
-    if n < 10 {
-        b'0' + n
-    } else {
-        b'A' + (n - 10)
     }
 }
