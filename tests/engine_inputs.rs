@@ -162,7 +162,7 @@ fn no_phantom_edges_after_reset_or_ex0() {
         program(&["AD0.", ".Y0", "AL1.", ".Y1", "AT2.", ".Y2", "END"]),
         0x3F,
     );
-    let tl = parse_timeline("100: press A0; 200: release A0; 300: press A2");
+    let tl = timeline("100ms press A0\n200ms release A0\n300ms press A2");
     r.run(&tl, 400);
     assert!(r.y_at(0, 399));
     r.board.press(1);
@@ -171,7 +171,7 @@ fn no_phantom_edges_after_reset_or_ex0() {
     r.wait(100);
     assert!(!r.y_at(0, r.now() - 1), "toggles cleared by EX0");
     assert_eq!(r.out_at(r.now() - 1), 0, "no edge seen after EX0");
-    let tl = parse_timeline(&format!("{}: release A1", r.now() + 10));
+    let tl = timeline(&format!("{}ms release A1", r.now() + 10));
     let until = r.now() + 100;
     r.run(&tl, until);
     let y1 = r.changes_in(1, until - 100, until);

@@ -47,7 +47,7 @@ fn listings_match_the_printed_line_numbers() {
 /// Start at the release of S0 (the leading edge of A0), off after T0 = 5 s.
 fn pushbutton_timer(prog: utile_core::Program, delay: u32) {
     let mut r = Run::start(prog, ALL_HIGH);
-    let tl = parse_timeline("100: press A0; 250: release A0");
+    let tl = timeline("100ms press A0\n250ms release A0");
     r.run(&tl, 250 + delay + 1000);
     let edge = 250 + D;
     expect_changes(&r, 0, &[(edge, true), (edge + delay, false)], 10);
@@ -74,10 +74,13 @@ fn pushbutton_timer_on_a_seconds_timer_as_the_update_notice_suggests() {
 #[test]
 fn pushbutton_timer_second_press_stops_it_early_and_a_third_restarts() {
     let mut r = Run::start(listing("app_11_1_pushbutton_timer"), ALL_HIGH);
-    let tl = parse_timeline(
-        "100: press A0; 200: release A0
-         2000: press A0; 2100: release A0
-         7000: press A0; 7100: release A0",
+    let tl = timeline(
+        "100ms press A0
+         200ms release A0
+         2000ms press A0
+         2100ms release A0
+         7000ms press A0
+         7100ms release A0",
     );
     r.run(&tl, 13_000);
     expect_changes(
@@ -118,9 +121,15 @@ fn pushbutton_timer_ignores_contact_bounce() {
 #[test]
 fn any_of_n_switches_changes_the_output() {
     let mut r = Run::start(listing("app_11_2_n_switches"), ALL_HIGH);
-    let tl = parse_timeline(
-        "100: low A0; 300: low A2; 500: low A3; 700: high A0; 900: low A1; 1100: high A3;
-         1300: high A2; 1500: high A1",
+    let tl = timeline(
+        "100ms set A0 low
+         300ms set A2 low
+         500ms set A3 low
+         700ms set A0 high
+         900ms set A1 low
+         1100ms set A3 high
+         1300ms set A2 high
+         1500ms set A1 high",
     );
     r.run(&tl, 1700);
     let times = [100, 300, 500, 700, 900, 1100, 1300, 1500];
@@ -140,9 +149,11 @@ fn any_of_n_switches_changes_the_output() {
 #[test]
 fn pushbutton_lighting_toggles_the_light_and_flashes_the_locator_while_off() {
     let mut r = Run::start(listing("app_11_3_pushbutton_lighting"), ALL_HIGH);
-    let tl = parse_timeline(
-        "2000: press A0; 2100: release A0
-         5000: press A0; 5150: release A0",
+    let tl = timeline(
+        "2000ms press A0
+         2100ms release A0
+         5000ms press A0
+         5150ms release A0",
     );
     r.run(&tl, 8_000);
     let (on, off) = (2100 + D, 5150 + D);
@@ -212,10 +223,10 @@ fn intrusion_alarm(prog: utile_core::Program, unit: u32) {
     let (arm_delay, holdoff, alarm) = (5 * unit, 3 * unit, 30 * unit);
     let mut r = Run::start(prog, ALL_HIGH);
     // Disarmed: a broken contact does nothing.
-    let mut tl = parse_timeline("500: press A3; 560: release A3");
+    let mut tl = timeline("500ms press A3\n560ms release A3");
     // Arm: S0 held 200 ms; the arm delay runs from the release.
     let arm_rel = 1000 + 200 + D;
-    tl.extend(parse_timeline("1000: press A0; 1200: release A0"));
+    tl.extend(timeline("1000ms press A0\n1200ms release A0"));
     let armed = arm_rel + arm_delay;
     // Intrusion (contact broken 50 ms) well after arming; no reset.
     let intr = armed + 1000;
@@ -273,10 +284,13 @@ fn intrusion_alarm_on_seconds_timers_as_the_update_notice_suggests() {
 #[test]
 fn intrusion_alarm_reset_during_hold_off_prevents_the_alarm() {
     let mut r = Run::start(listing("app_intrusion_alarm"), ALL_HIGH);
-    let tl = parse_timeline(
-        "100: press A0; 200: release A0     # armed after 0.5 s
-         1500: press A3; 1600: release A3   # intrusion: 0.3 s hold-off
-         1700: press A1; 1800: release A1   # reset within the hold-off",
+    let tl = timeline(
+        "100ms press A0
+         200ms release A0      # armed after 0.5 s
+         1500ms press A3
+         1600ms release A3     # intrusion: 0.3 s hold-off
+         1700ms press A1
+         1800ms release A1     # reset within the hold-off",
     );
     r.run(&tl, 6_000);
     assert!(
@@ -296,9 +310,11 @@ fn intrusion_alarm_reset_during_hold_off_prevents_the_alarm() {
 #[test]
 fn intrusion_during_the_arm_delay_is_ignored() {
     let mut r = Run::start(listing("app_intrusion_alarm"), ALL_HIGH);
-    let tl = parse_timeline(
-        "100: press A0; 200: release A0     # arm delay until about 705 ms
-         300: press A3; 400: release A3     # contact broken while leaving the area",
+    let tl = timeline(
+        "100ms press A0
+         200ms release A0      # arm delay until about 705 ms
+         300ms press A3
+         400ms release A3      # contact broken while leaving the area",
     );
     r.run(&tl, 4_000);
     assert!(r.changes(1).is_empty() && r.changes(3).is_empty());
@@ -413,7 +429,7 @@ fn motor_as_printed_on_pulled_up_inputs_does_not_start_from_the_start_button() {
     // The manual's listing with NO buttons to GND: start does nothing, the motor only runs
     // while stop is held and the O/L lamp lights — the reason for the adapted listing.
     let mut r = Run::start(listing("app_motor_start_stop"), 0x3F & !(1 << 3));
-    let tl = parse_timeline("1000: press A0; 1100: release A0; 2000: press A1; 2100: release A1");
+    let tl = timeline("1000ms press A0\n1100ms release A0\n2000ms press A1\n2100ms release A1");
     r.run(&tl, 3000);
     assert!(r.changes_in(3, 0, 2000).is_empty());
     assert!(r.y_at(1, 2050));

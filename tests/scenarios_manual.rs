@@ -12,11 +12,23 @@ const D: u32 = DEBOUNCE_MS;
 
 /// Press S0..S3 one after the other (200 ms each, 100 ms apart), then all four together.
 fn press_each_then_all() -> Vec<(u32, Act)> {
-    parse_timeline(
-        "100: press A0; 300: release A0; 400: press A1; 600: release A1
-         700: press A2; 900: release A2; 1000: press A3; 1200: release A3
-         1300: press A0; 1300: press A1; 1300: press A2; 1300: press A3
-         1500: release A0; 1500: release A1; 1500: release A2; 1500: release A3",
+    timeline(
+        "100ms press A0
+         300ms release A0
+         400ms press A1
+         600ms release A1
+         700ms press A2
+         900ms release A2
+         1000ms press A3
+         1200ms release A3
+         1300ms press A0
+         1300ms press A1
+         1300ms press A2
+         1300ms press A3
+         1500ms release A0
+         1500ms release A1
+         1500ms release A2
+         1500ms release A3",
     )
 }
 
@@ -65,9 +77,15 @@ fn example_5_port_bytes_py_is_the_complement_of_pa() {
 #[test]
 fn example_6_trailing_edges_set_and_reset_the_flip_flop_on_press() {
     let mut r = Run::start(listing("ex06_trailing_edges"), ALL_HIGH);
-    let tl = parse_timeline(
-        "100: press A0; 300: release A0; 500: press A1; 700: release A1
-         900: press A0; 1000: press A1; 1100: release A0; 1200: release A1",
+    let tl = timeline(
+        "100ms press A0
+         300ms release A0
+         500ms press A1
+         700ms release A1
+         900ms press A0
+         1000ms press A1
+         1100ms release A0
+         1200ms release A1",
     );
     r.run(&tl, 1500);
     // Q0 is read before END, so LED0 follows one scan after the edge.
@@ -87,7 +105,7 @@ fn example_6_trailing_edges_set_and_reset_the_flip_flop_on_press() {
 #[test]
 fn example_6_leading_edges_respond_on_release() {
     let mut r = Run::start(listing("ex06_leading_edges"), ALL_HIGH);
-    let tl = parse_timeline("100: press A0; 300: release A0; 500: press A1; 700: release A1");
+    let tl = timeline("100ms press A0\n300ms release A0\n500ms press A1\n700ms release A1");
     r.run(&tl, 1000);
     expect_changes(&r, 0, &[(300 + D, true), (700 + D, false)], 1);
 }
@@ -95,10 +113,17 @@ fn example_6_leading_edges_respond_on_release() {
 #[test]
 fn example_6_toggle_bits_flip_each_led_per_press_and_release() {
     let mut r = Run::start(listing("ex06_toggles"), ALL_HIGH);
-    let tl = parse_timeline(
-        "100: press A0; 200: release A0; 300: press A0; 400: release A0
-         500: press A2; 600: release A2; 700: press A0; 800: release A0
-         900: press A3; 950: release A3",
+    let tl = timeline(
+        "100ms press A0
+         200ms release A0
+         300ms press A0
+         400ms release A0
+         500ms press A2
+         600ms release A2
+         700ms press A0
+         800ms release A0
+         900ms press A3
+         950ms release A3",
     );
     r.run(&tl, 1200);
     expect_changes(
@@ -115,9 +140,13 @@ fn example_6_toggle_bits_flip_each_led_per_press_and_release() {
 /// Truth-table run of examples 7, 8, 9: S0/S1 in all four combinations.
 fn two_switch_table(name: &str, f: fn(bool, bool) -> bool) {
     let mut r = Run::start(listing(name), ALL_HIGH);
-    let tl = parse_timeline(
-        "100: press A0; 200: release A0; 300: press A1; 400: press A0
-         500: release A1; 600: release A0",
+    let tl = timeline(
+        "100ms press A0
+         200ms release A0
+         300ms press A1
+         400ms press A0
+         500ms release A1
+         600ms release A0",
     );
     r.run(&tl, 800);
     let s0 = |t: u32| (100 + D..200 + D).contains(&t) || (400 + D..600 + D).contains(&t);

@@ -1,63 +1,70 @@
-//! Scenario helper for the engine tests: a program as text (one command per line), an input
-//! timeline, and the output pins over time, run on [`SimBoard`] with simulated milliseconds.
+//! Scenario helper for the engine tests: a program, an input timeline, and the output pins
+//! over time, run on [`SimBoard`] with simulated milliseconds.
 //!
-//! Listing format (also used by `tests/data/*.txt`, for the host tools):
-//! - one command per line, stored from line 0 on (any case, `core::opcodes::lookup` names);
-//! - `Tm = value` sets the preset of timer m (hex digit 0..F, value 0..255);
-//! - `#` starts a comment; blank lines are ignored.
-//!
-//! Timeline format: `ms: press An` / `ms: release An` / `ms: high An` / `ms: low An`, one per
-//! line or separated by `;`. `press` pulls the input low (a normally-open push-button to GND).
+//! Programs are `.utl` listings read by the kit's one listing parser
+//! ([`utile_kit::listing::parse`], format in docs/UTILE-TOOL.md): the manual's ch. 11
+//! programs from `examples/`, the manual's smaller examples and test-only programs from
+//! `tests/data/`. Timelines use the `utile sim` syntax (docs/UTILE-TOOL.md,
+//! [`utile_kit::simulate::parse_timeline`]): `100ms press A0`, `1.5s release A0`,
+//! `2s set A3 low`, one event per line. `press` pulls the input low (a normally-open
+//! push-button to GND).
 #![allow(dead_code)]
 
-use utile_core::engine::{Engine, Program, LINES, UNITS};
-use utile_core::opcodes::{self, NOP};
+use utile_core::engine::{Engine, Program};
+use utile_core::opcodes;
 use utile_core::ticker::Ticker;
 use utile_kit::sim::SimBoard;
+use utile_kit::{listing as utl, simulate};
 
-/// Parse a listing (see the module docs). Unfilled lines are NOP (as after FILL).
-pub fn parse_listing(text: &str) -> Result<Program, String> {
-    let mut prog = Program::blank();
-    prog.uf = [NOP; LINES];
-    let mut line = 0usize;
-    for (i, raw) in text.lines().enumerate() {
-        let l = raw.split('#').next().unwrap_or("").trim();
-        if l.is_empty() {
-            continue;
-        }
-        if let Some((lhs, rhs)) = l.split_once('=') {
-            let lhs = lhs.trim();
-            let m = lhs
-                .strip_prefix('T')
-                .or_else(|| lhs.strip_prefix('t'))
-                .and_then(|d| u8::from_str_radix(d, 16).ok())
-                .filter(|&m| usize::from(m) < UNITS)
-                .ok_or_else(|| format!("line {}: bad timer name {lhs:?}", i + 1))?;
-            let v: u8 = rhs
-                .trim()
-                .parse()
-                .map_err(|_| format!("line {}: bad preset {rhs:?}", i + 1))?;
-            prog.presets[usize::from(m)] = v;
-            continue;
-        }
-        let op = opcodes::lookup(l.as_bytes())
-            .ok_or_else(|| format!("line {}: unknown command {l:?}", i + 1))?;
-        *prog.uf.get_mut(line).ok_or("more than 256 commands")? = op;
-        line += 1;
-    }
-    Ok(prog)
+/// The manual's ch. 11 programs by the names the tests use: the file in `examples/` and
+/// the presets the manual prints (timer units of 0.1 s on T0..T3), where the example
+/// scales them to the times the manual describes.
+const MANUAL_APPS: [(&str, &str, &[(usize, u8)]); 7] = [
+    ("app_11_1_pushbutton_timer", "11.1-push-button-timer", &[]),
+    (
+        "app_continuous_timers",
+        "11.1b-continuous-timers",
+        &[(0, 4), (1, 1)],
+    ),
+    ("app_11_2_n_switches", "11.2-n-switches", &[]),
+    (
+        "app_intrusion_alarm",
+        "11.2b-intrusion-alarm",
+        &[(0, 5), (1, 3), (2, 30)],
+    ),
+    (
+        "app_11_3_pushbutton_lighting",
+        "11.3-push-button-lighting",
+        &[],
+    ),
+    ("app_motor_start_stop", "11.3b-motor-starter", &[]),
+    ("app_sump_pump", "11.4-sump-pump", &[]),
+];
+
+/// Parse a `.utl` listing; `file` names it in the panic message.
+fn parse_utl(file: &str, text: &str) -> Program {
+    utl::parse(file, text).unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// A program from `tests/data/<name>.txt`.
+/// A program by name: a manual ch. 11 program (see [`MANUAL_APPS`]: `examples/<file>.utl`
+/// with the manual's printed presets), else `tests/data/<name>.utl`.
 pub fn listing(name: &str) -> Program {
-    let path = format!("{}/tests/data/{name}.txt", env!("CARGO_MANIFEST_DIR"));
+    let root = env!("CARGO_MANIFEST_DIR");
+    let (path, presets) = match MANUAL_APPS.iter().find(|a| a.0 == name) {
+        Some(&(_, file, presets)) => (format!("{root}/examples/{file}.utl"), presets),
+        None => (format!("{root}/tests/data/{name}.utl"), &[][..]),
+    };
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
-    parse_listing(&text).unwrap_or_else(|e| panic!("{path}: {e}"))
+    let mut prog = parse_utl(&path, &text);
+    for &(m, v) in presets {
+        prog.presets[m] = v;
+    }
+    prog
 }
 
-/// A program from a list of command names (rest NOP, presets 0).
+/// A program from a list of command names from line 0 on (rest NOP, presets 0).
 pub fn program(cmds: &[&str]) -> Program {
-    parse_listing(&cmds.join("\n")).unwrap()
+    parse_utl("program", &format!("FILL\n{}", cmds.join("\n")))
 }
 
 /// Replace every use of timer `from` (`.TK` `.TR` `TQ.`) by timer `to` — the manual's update
@@ -82,29 +89,41 @@ pub enum Act {
     Release(u8),
 }
 
-/// Parse a timeline such as `"100: press A0; 300: release A0"`.
+/// Parse a timeline in the `utile sim` syntax (see the module docs): its events as
+/// (ms, action), in time order.
+pub fn timeline(text: &str) -> Vec<(u32, Act)> {
+    let tl = simulate::parse_timeline("timeline", text).unwrap_or_else(|e| panic!("{e}"));
+    tl.events
+        .iter()
+        .map(|e| {
+            let act = if e.high {
+                Act::Release(e.input)
+            } else {
+                Act::Press(e.input)
+            };
+            (e.ms, act)
+        })
+        .collect()
+}
+
+/// The old `ms: action An` timeline syntax (`"100: press A0; 300: release A0"`), kept only
+/// for `tests/simavr_apps.rs` until its timelines move to [`timeline`]'s syntax.
 pub fn parse_timeline(text: &str) -> Vec<(u32, Act)> {
     let mut out = Vec::new();
     for item in text.split(['\n', ';']) {
-        let item = item.split('#').next().unwrap().trim();
+        let item = item.split('#').next().unwrap_or("").trim();
         if item.is_empty() {
             continue;
         }
         let (t, rest) = item
             .split_once(':')
             .unwrap_or_else(|| panic!("no time in {item:?}"));
-        let t: u32 = t.trim().trim_start_matches("at").trim().parse().unwrap();
-        let mut words = rest.split_whitespace();
-        let verb = words.next().unwrap().to_ascii_lowercase();
-        let pin = words.next().unwrap().to_ascii_uppercase();
-        let n: u8 = pin.trim_start_matches('A').parse().unwrap();
-        assert!(n < 6, "no input {pin}");
-        let act = match verb.as_str() {
-            "press" | "low" => Act::Press(n),
-            "release" | "high" => Act::Release(n),
-            v => panic!("unknown action {v}"),
+        let line = match rest.split_whitespace().collect::<Vec<_>>()[..] {
+            [verb, pin] if verb.eq_ignore_ascii_case("low") => format!("set {pin} low"),
+            [verb, pin] if verb.eq_ignore_ascii_case("high") => format!("set {pin} high"),
+            _ => rest.to_string(),
         };
-        out.push((t, act));
+        out.extend(timeline(&format!("{}ms {line}", t.trim())));
     }
     out.sort_by_key(|&(t, _)| t);
     out
