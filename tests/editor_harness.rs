@@ -8,16 +8,21 @@ use utile_core::engine::{Engine, Flow};
 use utile_kit::sim::SimBoard;
 
 /// The editor, its engine and board, and a terminal.
-pub struct Rig {
+pub struct Session {
+    /// The engine and its program (the UF the editor edits).
     pub eng: Engine,
+    /// The editor.
     pub ed: Editor,
+    /// The simulated board: UART logs, pins, EEPROM.
     pub b: SimBoard,
+    /// The VT100 screen model fed with everything the editor sent.
     pub vt: vt100::Parser,
+    /// EDIT or RUN, as the firmware's main loop would be.
     pub mode: Mode,
     fed: usize,
 }
 
-impl Rig {
+impl Session {
     /// Power-up in EDIT mode with a blank UF.
     pub fn new() -> Self {
         let mut r = Self::bare();

@@ -3,12 +3,12 @@
 #[path = "editor_harness.rs"]
 mod harness;
 
-use harness::Rig;
+use harness::Session;
 use utile_core::opcodes::{lookup, END, NOP};
 use utile_kit::rng::Rng;
 
-fn filled() -> Rig {
-    let mut r = Rig::new();
+fn filled() -> Session {
+    let mut r = Session::new();
     r.enter("fill");
     r
 }

@@ -4,7 +4,7 @@
 #[path = "editor_harness.rs"]
 mod harness;
 
-use harness::Rig;
+use harness::Session;
 use utile_core::editor::Mode;
 use utile_core::opcodes::{self, BLANK, END, KEY, NOP};
 
@@ -13,7 +13,7 @@ const DASHES: &str =
 
 #[test]
 fn power_up_screen() {
-    let r = Rig::new();
+    let r = Session::new();
     assert_eq!(r.row(1).trim(), "<<<< Nano - u T I L E - ATmega328 >>>>");
     assert_eq!(r.row(2), DASHES);
     assert!(r.row(3).contains("Bit Stack") && r.row(3).contains("Port Byte"));
@@ -48,10 +48,10 @@ fn power_up_screen() {
 
 #[test]
 fn fill_then_example_1_end_and_ex0() {
-    let mut r = Rig::new();
+    let mut r = Session::new();
     r.enter("fill");
     for k in 0..32 {
-        assert_eq!(r.entry(k), format!("{:03} NOP", k), "slot {k}");
+        assert_eq!(r.entry(k), format!("{k:03} NOP"), "slot {k}");
     }
     assert!(r.eng.prog.uf.iter().all(|&op| op == NOP));
     assert_eq!(r.reversed_slots(), vec![0]);
@@ -80,7 +80,7 @@ fn fill_then_example_1_end_and_ex0() {
 
 #[test]
 fn example_2_run_puts_end_at_the_cursor() {
-    let mut r = Rig::new();
+    let mut r = Session::new();
     r.enter("fill");
     r.enter("run");
     assert_eq!(r.mode, Mode::Run);
@@ -96,7 +96,7 @@ fn example_2_run_puts_end_at_the_cursor() {
 
 #[test]
 fn example_3_key_break_out_and_back() {
-    let mut r = Rig::new();
+    let mut r = Session::new();
     r.enter("fill");
     r.enter("KEY");
     assert_eq!(r.eng.prog.uf[0], KEY);
@@ -131,7 +131,7 @@ fn example_3_key_break_out_and_back() {
 
 #[test]
 fn help_screen_and_back() {
-    let mut r = Rig::new();
+    let mut r = Session::new();
     r.enter("fill");
     r.enter("?");
     let t = r.text();
@@ -235,7 +235,7 @@ fn help_screen_and_back() {
 
 #[test]
 fn ldt_screen_values_highlight_and_exit() {
-    let mut r = Rig::new();
+    let mut r = Session::new();
     r.enter("fill");
     r.enter("ldt");
     assert_eq!(
@@ -315,7 +315,7 @@ fn ldt_screen_values_highlight_and_exit() {
 
 #[test]
 fn messages_unrecognized_too_big_too_long_ver() {
-    let mut r = Rig::new();
+    let mut r = Session::new();
     r.enter("fill");
     let uf = r.eng.prog.uf;
 
@@ -375,7 +375,7 @@ fn messages_unrecognized_too_big_too_long_ver() {
 
 #[test]
 fn set_then_dot_y7_drives_output_7_at_once() {
-    let mut r = Rig::new();
+    let mut r = Session::new();
     r.enter("Z.");
     r.enter("fill");
     r.enter("SET");
@@ -396,7 +396,7 @@ fn set_then_dot_y7_drives_output_7_at_once() {
 
 #[test]
 fn ppx_and_pbs_show_in_the_editor_and_while_running() {
-    let mut r = Rig::new();
+    let mut r = Session::new();
     r.enter("fill");
     r.enter("F.");
     r.enter(".PU");
@@ -428,7 +428,7 @@ fn ppx_and_pbs_show_in_the_editor_and_while_running() {
 
 #[test]
 fn boot_running_draws_later_in_pieces_without_waiting() {
-    let mut r = Rig::bare();
+    let mut r = Session::bare();
     r.eng.prog.uf[0] = KEY;
     r.eng.prog.uf[1] = END;
     r.ed.boot_running(&r.eng, &mut r.b);
@@ -455,7 +455,7 @@ fn boot_running_draws_later_in_pieces_without_waiting() {
 
 #[test]
 fn break_before_the_screen_is_drawn_redraws_it_whole() {
-    let mut r = Rig::bare();
+    let mut r = Session::bare();
     r.eng.prog.uf[0] = KEY;
     r.ed.boot_running(&r.eng, &mut r.b);
     r.mode = Mode::Run;
@@ -471,7 +471,7 @@ fn break_before_the_screen_is_drawn_redraws_it_whole() {
 
 #[test]
 fn stat_reports_the_last_run() {
-    let mut r = Rig::new();
+    let mut r = Session::new();
     r.enter("fill");
     r.enter("KEY");
     r.enter("run");
@@ -492,7 +492,7 @@ fn stat_reports_the_last_run() {
 
 #[test]
 fn list_sends_a_listing() {
-    let mut r = Rig::new();
+    let mut r = Session::new();
     r.enter("A0.");
     r.enter(".Y0");
     r.enter("END");
@@ -518,7 +518,7 @@ fn list_sends_a_listing() {
 
 #[test]
 fn blank_lines_and_unassigned_bytes_show_dots() {
-    let mut r = Rig::bare();
+    let mut r = Session::bare();
     r.eng.prog.uf[3] = 0x1F;
     r.eng.prog.uf[4] = BLANK;
     r.eng.prog.uf[5] = 0xE0;
@@ -532,7 +532,7 @@ fn blank_lines_and_unassigned_bytes_show_dots() {
 /// Redraw costs at 19200 baud (reported; the budgets are SPEC §8's).
 #[test]
 fn byte_budgets() {
-    let mut r = Rig::bare();
+    let mut r = Session::bare();
     let t0 = r.sent();
     r.ed.boot(&r.eng, &mut r.b);
     let boot = r.sent() - t0;

@@ -3,11 +3,11 @@
 #[path = "editor_harness.rs"]
 mod harness;
 
-use harness::Rig;
+use harness::Session;
 use utile_core::opcodes::{lookup, END};
 
-fn with_program() -> Rig {
-    let mut r = Rig::new();
+fn with_program() -> Session {
+    let mut r = Session::new();
     r.enter("fill");
     r.enter("A0.");
     r.enter(".Y0");
@@ -18,7 +18,7 @@ fn with_program() -> Rig {
 }
 
 /// WRITE's output: the hex text between the CR that starts it and the end record.
-fn write_file(r: &mut Rig) -> Vec<u8> {
+fn write_file(r: &mut Session) -> Vec<u8> {
     r.enter("write");
     assert!(r
         .text()
@@ -158,7 +158,7 @@ fn write_aborts_on_slash_without_sending() {
 
 #[test]
 fn store_and_load() {
-    let mut r = Rig::new();
+    let mut r = Session::new();
     // Nothing stored yet: LOAD says so and changes nothing.
     r.enter("fill");
     r.enter("load");

@@ -10,12 +10,12 @@ use utile_core::Program;
 use utile_kit::sim::SimBoard;
 
 /// An engine driven command by command, as from the editor or a scan.
-struct Rig {
+struct Stepper {
     e: Engine,
     b: SimBoard,
 }
 
-impl Rig {
+impl Stepper {
     fn new(m: u8, preset: u8) -> Self {
         Self::at(m, preset, 1000)
     }
@@ -84,7 +84,7 @@ fn every_timer_at_presets_1_2_255_falls_within_10_ms_of_preset_times_unit() {
     for m in 0..UNITS as u8 {
         let unit = TIMER_UNIT_MS[usize::from(m)];
         for preset in [1u8, 2, 255] {
-            let mut r = Rig::new(m, preset);
+            let mut r = Stepper::new(m, preset);
             assert!(!r.tq(m));
             let t0 = r.now();
             r.tk(m, true);
@@ -109,7 +109,7 @@ fn retrigger_restarts_the_time_from_the_last_trigger() {
     for m in [0u8, 5, 13, 15] {
         let unit = TIMER_UNIT_MS[usize::from(m)];
         let span = 2 * unit;
-        let mut r = Rig::new(m, 2);
+        let mut r = Stepper::new(m, 2);
         r.tk(m, true);
         r.tk(m, false);
         r.jump(span / 2);
@@ -144,7 +144,7 @@ fn time_runs_from_the_last_scan_with_the_trigger_at_1() {
 
 #[test]
 fn reset_clears_at_once_and_statement_order_decides_when_both_are_1() {
-    let mut r = Rig::new(6, 10);
+    let mut r = Stepper::new(6, 10);
     r.tk(6, true);
     r.tk(6, false);
     r.advance(500);
@@ -155,7 +155,7 @@ fn reset_clears_at_once_and_statement_order_decides_when_both_are_1() {
     assert!(!r.tq(6), "a reset timer never comes back");
 
     // .TK then .TR in the same scan: reset wins.
-    let mut r = Rig::new(6, 10);
+    let mut r = Stepper::new(6, 10);
     r.tk(6, true);
     r.tr(6, true);
     assert!(!r.tq(6));
@@ -165,7 +165,7 @@ fn reset_clears_at_once_and_statement_order_decides_when_both_are_1() {
     assert!(!r.tq(6));
 
     // .TR then .TK: the trigger restarts it, for the full time.
-    let mut r = Rig::new(6, 10);
+    let mut r = Stepper::new(6, 10);
     let t0 = r.now();
     r.tr(6, true);
     r.tk(6, true);
@@ -203,7 +203,7 @@ fn reset_input_held_keeps_the_timer_off_while_it_is_triggered_before_it() {
 #[test]
 fn preset_0_disables_the_timer() {
     for m in 0..UNITS as u8 {
-        let mut r = Rig::new(m, 0);
+        let mut r = Stepper::new(m, 0);
         r.tk(m, true);
         assert!(!r.tq(m), "T{m:X}");
         r.advance(10);
@@ -260,7 +260,7 @@ fn a_self_retriggering_timer_does_not_drift() {
 
 #[test]
 fn a_timer_runs_correctly_across_the_wrap_of_the_ms_clock() {
-    let mut r = Rig::at(4, 1, u32::MAX - 300);
+    let mut r = Stepper::at(4, 1, u32::MAX - 300);
     let t0 = r.now();
     r.tk(4, true);
     r.tk(4, false);
@@ -280,7 +280,10 @@ fn an_unread_timer_never_revives_after_the_clock_wraps_while_running() {
     r.wait(10);
     r.engine.pu = 0;
     r.wait(2_000);
-    assert_eq!(r.engine.tq, 0, "retired by the sweep at the start of a scan");
+    assert_eq!(
+        r.engine.tq, 0,
+        "retired by the sweep at the start of a scan"
+    );
     // 2^31 ms later (24.9 days) an unretired deadline would read as 'in the future'.
     let later = r.now().wrapping_add(1 << 31).wrapping_add(500);
     r.board.ticker = Ticker::with_time(0x3F, later);
@@ -307,15 +310,23 @@ fn a_due_timer_falls_when_the_next_scan_starts_and_tq_reads_the_flag_until_then(
     let mut probe = e.clone();
     probe.bs = 0;
     probe.exec(PUSH_TQ, &mut b);
-    assert_eq!(probe.bs & 1, 1, "TQ0. is the flag; only a scan start or the editor retires");
+    assert_eq!(
+        probe.bs & 1,
+        1,
+        "TQ0. is the flag; only a scan start or the editor retires"
+    );
     e.scan(&mut b);
-    assert_eq!(e.tq & 1, 0, "the scan that starts at the deadline retires T0 first");
+    assert_eq!(
+        e.tq & 1,
+        0,
+        "the scan that starts at the deadline retires T0 first"
+    );
     assert_eq!(e.py & 1, 0, "so that scan already reads TQ0 = 0");
 }
 
 #[test]
 fn retire_timers_covers_the_editor_where_no_end_runs() {
-    let mut r = Rig::new(7, 1);
+    let mut r = Stepper::new(7, 1);
     r.tk(7, true);
     r.tk(7, false);
     r.advance(1_500);
@@ -327,7 +338,7 @@ fn retire_timers_covers_the_editor_where_no_end_runs() {
 
 #[test]
 fn end_alone_does_not_change_running_timers() {
-    let mut r = Rig::new(9, 3);
+    let mut r = Stepper::new(9, 3);
     r.tk(9, true);
     r.tk(9, false);
     for _ in 0..100 {

@@ -57,22 +57,23 @@ fn the_terminal_model_agrees_with_vt100() {
     let size = |n| NonZeroU16::new(n).expect("non-zero");
     for f in files("editor") {
         let data = std::fs::read(&f).expect("read corpus file");
-        let rig = fuzzing::editor_rig(&data).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
+        let main_loop =
+            fuzzing::editor_loop(&data).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
         let mut p = vt100::Parser::new(size(24), size(80), 0);
-        p.process(&rig.transcript);
+        p.process(&main_loop.transcript);
         let (row, col) = p.screen().cursor_position();
-        let want_col = rig.term.col.min(80);
+        let want_col = main_loop.term.col.min(80);
         assert_eq!(
             (row + 1, col + 1),
-            (u16::from(rig.term.row), u16::from(want_col)),
+            (u16::from(main_loop.term.row), u16::from(want_col)),
             "{}",
             f.display()
         );
         assert!(
-            rig.term.violation.is_none(),
+            main_loop.term.violation.is_none(),
             "{}: {:?}",
             f.display(),
-            rig.term.violation
+            main_loop.term.violation
         );
     }
 }
@@ -98,8 +99,8 @@ fn the_checks_can_fail() {
     // such, not as a lock-up.
     let mut endless = Program::blank();
     endless.uf[0] = utile_core::opcodes::END;
-    let mut rig = fuzzing::Rig::autostart(&endless).expect("autostart");
-    assert_eq!(rig.recover_and_fill(), Ok(false));
+    let mut main_loop = fuzzing::MainLoop::autostart(&endless).expect("autostart");
+    assert_eq!(main_loop.recover_and_fill(), Ok(false));
     assert!(fuzzing::image_decode(&[0u8; IMAGE_LEN]).is_ok());
     assert!(fuzzing::ihex(b":00000001FF").is_ok());
 }

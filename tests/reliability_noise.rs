@@ -1,13 +1,13 @@
 //! UART noise on the host editor (SPEC §12, issue 8): random bytes at the full 19200 baud
 //! (1.92 bytes per simulated ms) for minutes, in the editor and while a program with KEY
-//! runs. The harness (`utile_kit::fuzzing::Rig`) checks after every byte that the UF and presets
+//! runs. The harness (`utile_kit::fuzzing::MainLoop`) checks after every byte that the UF and presets
 //! changed only through an accepted command and that the screen output stays on 80×24;
 //! afterwards a clean FILL must work (no lock-up).
 
 use utile_core::editor::Mode;
 use utile_core::engine::Program;
 use utile_core::opcodes::{lookup, END, KEY};
-use utile_kit::fuzzing::{sample_program, Rig};
+use utile_kit::fuzzing::{sample_program, MainLoop};
 use utile_kit::rng::Rng;
 
 /// Bytes per second at 19200 baud, 8N1.
@@ -86,7 +86,7 @@ impl Noise {
 }
 
 /// Feed `seconds` of noise at the full rate; returns (ms in EDIT, ms in RUN).
-fn run_noise(rig: &mut Rig, noise: &mut Noise, seconds: u32) -> (u32, u32) {
+fn run_noise(main_loop: &mut MainLoop, noise: &mut Noise, seconds: u32) -> (u32, u32) {
     let (mut edit, mut run) = (0, 0);
     let mut acc = 0u32;
     for _ in 0..seconds * 1000 {
@@ -94,14 +94,14 @@ fn run_noise(rig: &mut Rig, noise: &mut Noise, seconds: u32) -> (u32, u32) {
         while acc >= 1000 {
             acc -= 1000;
             let b = noise.byte();
-            rig.receive(b).unwrap_or_else(|e| panic!("{e}"));
+            main_loop.receive(b).unwrap_or_else(|e| panic!("{e}"));
         }
-        if rig.mode == Mode::Edit {
+        if main_loop.mode == Mode::Edit {
             edit += 1;
         } else {
             run += 1;
         }
-        rig.tick().unwrap_or_else(|e| panic!("{e}"));
+        main_loop.tick().unwrap_or_else(|e| panic!("{e}"));
     }
     (edit, run)
 }
@@ -117,37 +117,37 @@ fn key_before_end(p: &Program) -> bool {
 fn five_minutes_of_noise_in_the_editor_lose_nothing_and_typing_works_afterwards() {
     let (mut total_edit, mut total_run, mut resets, mut changed) = (0, 0, 0, 0);
     for seed in 1..=5u64 {
-        let mut rig = Rig::boot(sample_program());
-        rig.scans_per_ms = 4;
+        let mut main_loop = MainLoop::boot(sample_program());
+        main_loop.scans_per_ms = 4;
         let mut noise = Noise::new(seed, true);
         // 60 s of noise at the full rate, with a 300 ms pause every 5 s (a READ that noise
         // started drains until 200 ms of silence, by design).
         for second in 0..60 {
-            let (edit, run) = run_noise(&mut rig, &mut noise, 1);
+            let (edit, run) = run_noise(&mut main_loop, &mut noise, 1);
             total_edit += edit;
             total_run += run;
             if second % 5 == 4 {
-                rig.run_ms(300).unwrap_or_else(|e| panic!("{e}"));
+                main_loop.run_ms(300).unwrap_or_else(|e| panic!("{e}"));
             }
-            if rig.mode == Mode::Run && !key_before_end(&rig.eng.prog) {
+            if main_loop.mode == Mode::Run && !key_before_end(&main_loop.eng.prog) {
                 // Noise typed RUN over a UF whose scan never reaches KEY: that program
                 // runs until a reset, which keeps the UF (warm reset).
                 resets += 1;
-                rig = Rig::boot(rig.eng.prog.clone());
-                rig.scans_per_ms = 4;
+                main_loop = MainLoop::boot(main_loop.eng.prog.clone());
+                main_loop.scans_per_ms = 4;
             }
         }
-        if rig.eng.prog != sample_program() {
+        if main_loop.eng.prog != sample_program() {
             changed += 1;
         }
-        match rig.recover_and_fill() {
+        match main_loop.recover_and_fill() {
             Ok(true) => {}
             Ok(false) => {
                 assert!(
-                    !key_before_end(&rig.eng.prog),
+                    !key_before_end(&main_loop.eng.prog),
                     "seed {seed}: '/' did not stop RUN"
                 );
-                let mut after_reset = Rig::boot(rig.eng.prog.clone());
+                let mut after_reset = MainLoop::boot(main_loop.eng.prog.clone());
                 assert_eq!(after_reset.recover_and_fill(), Ok(true), "seed {seed}");
             }
             Err(e) => panic!("seed {seed}: {e}"),
@@ -170,8 +170,8 @@ fn noise_while_running_is_discarded_and_the_program_keeps_working() {
     for (line, w) in prog.uf.iter_mut().zip(words) {
         *line = lookup(w).expect("a command of the manual");
     }
-    let mut rig = Rig::autostart(&prog).expect("autostart");
-    rig.scans_per_ms = 4;
+    let mut main_loop = MainLoop::autostart(&prog).expect("autostart");
+    main_loop.scans_per_ms = 4;
     let mut rng = Rng::new(7);
     let mut typing = Noise::new(7, false);
     let mut acc = 0u32;
@@ -181,38 +181,42 @@ fn noise_while_running_is_discarded_and_the_program_keeps_working() {
         while acc >= 1000 {
             acc -= 1000;
             let b = typing.byte();
-            rig.receive(b).unwrap_or_else(|e| panic!("{e}"));
+            main_loop.receive(b).unwrap_or_else(|e| panic!("{e}"));
         }
         if rng.below(500) == 0 {
             let high = rng.below(2) == 0;
-            rig.board.set_input(0, high);
+            main_loop.board.set_input(0, high);
         }
         // The scan of this ms sees the debounced A0 as it is now.
-        let a0 = rig.board.ticker.inputs.level() & 1 != 0;
-        rig.tick().unwrap_or_else(|e| panic!("{e}"));
-        assert_eq!(rig.mode, Mode::Run, "stopped at {ms} ms without '/'");
-        assert_eq!(rig.board.output(0), a0, "Y0 follows A0 at {ms} ms");
+        let a0 = main_loop.board.ticker.inputs.level() & 1 != 0;
+        main_loop.tick().unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(main_loop.mode, Mode::Run, "stopped at {ms} ms without '/'");
+        assert_eq!(main_loop.board.output(0), a0, "Y0 follows A0 at {ms} ms");
     }
     assert_eq!(
-        rig.eng.prog, prog,
+        main_loop.eng.prog, prog,
         "noise while running never changes the UF"
     );
-    assert!(rig.overruns == 0, "4 scans per ms read every byte");
+    assert!(main_loop.overruns == 0, "4 scans per ms read every byte");
     // A clean '/' stops it; a key returns to the editor; FILL works.
-    assert_eq!(rig.recover_and_fill(), Ok(true));
+    assert_eq!(main_loop.recover_and_fill(), Ok(true));
 }
 
 #[test]
 fn a_full_receive_ring_loses_bytes_but_not_the_editor() {
     // A program without KEY: bytes pile up and the ring overflows; after a reset the
-    // editor (a fresh rig with the same UF, as a warm reset keeps it) works.
+    // editor (a fresh main_loop with the same UF, as a warm reset keeps it) works.
     let mut prog = Program::blank();
     prog.uf[0] = END;
-    let mut rig = Rig::autostart(&prog).expect("autostart");
-    run_noise(&mut rig, &mut Noise::new(3, true), 2);
-    assert_eq!(rig.mode, Mode::Run);
-    assert!(rig.overruns > 3000, "{} bytes lost", rig.overruns);
-    assert_eq!(rig.recover_and_fill(), Ok(false));
-    let mut after_reset = Rig::boot(rig.eng.prog.clone());
+    let mut main_loop = MainLoop::autostart(&prog).expect("autostart");
+    run_noise(&mut main_loop, &mut Noise::new(3, true), 2);
+    assert_eq!(main_loop.mode, Mode::Run);
+    assert!(
+        main_loop.overruns > 3000,
+        "{} bytes lost",
+        main_loop.overruns
+    );
+    assert_eq!(main_loop.recover_and_fill(), Ok(false));
+    let mut after_reset = MainLoop::boot(main_loop.eng.prog.clone());
     assert_eq!(after_reset.recover_and_fill(), Ok(true));
 }

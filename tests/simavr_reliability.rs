@@ -250,12 +250,12 @@ fn ten_minutes_of_input_and_uart_noise_change_nothing_and_hang_nothing() {
     for step in 0..6000u32 {
         // simavr's UART takes a byte every 11 bit times: about 174 bytes per 100 ms.
         let burst: Vec<u8> = (0..170)
-            .map(|_| (noise.next() >> 7) as u8)
+            .map(|_| (noise.next_u32() >> 7) as u8)
             .filter(|&c| c != b'/')
             .collect();
         nano.type_bytes(&burst);
-        if noise.next().is_multiple_of(4) {
-            let n = (noise.next() % 6) as u8;
+        if noise.next_u32().is_multiple_of(4) {
+            let n = (noise.next_u32() % 6) as u8;
             switches[usize::from(n)] ^= true;
             nano.switch(n, switches[usize::from(n)]);
         }

@@ -256,7 +256,7 @@ fn reset_at_every_point_of_a_store() {
             0 => rng.program(), // full rewrite
             1 => {
                 let mut n = old_now.clone();
-                n.uf[(rng.next() % 256) as usize] ^= 0x11; // one line
+                n.uf[(rng.next_u32() % 256) as usize] ^= 0x11; // one line
                 n
             }
             2 => {

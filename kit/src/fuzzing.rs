@@ -6,7 +6,7 @@
 //! (a panic inside the code under test is a failure too). The fuzz targets turn an `Err`
 //! into a panic so libFuzzer saves the input.
 //!
-//! The firmware's main loop (`src/main.rs`) is reproduced by [`Rig`]: bytes go to
+//! The firmware's main loop (`src/main.rs`) is reproduced by [`MainLoop`]: bytes go to
 //! `Editor::key` in EDIT mode, `Editor::idle` runs while nothing arrives, RUN mode scans
 //! and calls `after_scan`, and KEY's `/` ends in `on_break`.
 
@@ -197,7 +197,7 @@ fn deleted(old: &[u8; LINES], c: usize) -> [u8; LINES] {
 /// The firmware's main loop around an [`Editor`] and an [`Engine`] on a [`SimBoard`],
 /// checking after every step that the program changed only through an accepted command
 /// and that the screen output stays on the 80×24 screen.
-pub struct Rig {
+pub struct MainLoop {
     /// The simulated board (its `rx_queue` plays the firmware's receive ring).
     pub board: SimBoard,
     /// The engine with the UF and presets.
@@ -223,7 +223,7 @@ pub struct Rig {
     list_end: Vec<u8>,
 }
 
-impl Rig {
+impl MainLoop {
     fn with(board: SimBoard, eng: Engine) -> Self {
         Self {
             board,
@@ -244,10 +244,10 @@ impl Rig {
 
     /// Power-up in EDIT mode with `prog` in RAM (as after a warm reset).
     pub fn boot(prog: Program) -> Self {
-        let mut rig = Self::with(SimBoard::new(), Engine::new(prog));
-        rig.editor.boot(&rig.eng, &mut rig.board);
-        rig.collect(false);
-        rig
+        let mut main_loop = Self::with(SimBoard::new(), Engine::new(prog));
+        main_loop.editor.boot(&main_loop.eng, &mut main_loop.board);
+        main_loop.collect(false);
+        main_loop
     }
 
     /// Autostart: `prog` is STOREd into the EEPROM, loaded back and run (D8 grounded).
@@ -259,12 +259,14 @@ impl Rig {
         if &loaded != prog {
             return Err("LOAD after STORE returned another program".into());
         }
-        let mut rig = Self::with(board, Engine::new(loaded));
-        rig.eng.clear_runtime(&mut rig.board);
-        rig.editor.boot_running(&rig.eng, &mut rig.board);
-        rig.mode = Mode::Run;
-        rig.collect(false);
-        Ok(rig)
+        let mut main_loop = Self::with(board, Engine::new(loaded));
+        main_loop.eng.clear_runtime(&mut main_loop.board);
+        main_loop
+            .editor
+            .boot_running(&main_loop.eng, &mut main_loop.board);
+        main_loop.mode = Mode::Run;
+        main_loop.collect(false);
+        Ok(main_loop)
     }
 
     /// Check and forget what was sent since the last call.
@@ -515,29 +517,29 @@ pub fn sample_program() -> Program {
 /// The first byte chooses the start (editor or autostart) and seeds the time gaps; every
 /// other byte is received by the firmware.
 pub fn editor(data: &[u8]) -> Verdict {
-    editor_rig(data).map(|_| ())
+    editor_loop(data).map(|_| ())
 }
 
-/// [`editor`], returning the rig afterwards (the replay test checks its transcript).
-pub fn editor_rig(data: &[u8]) -> Result<Rig, String> {
+/// [`editor`], returning the main_loop afterwards (the replay test checks its transcript).
+pub fn editor_loop(data: &[u8]) -> Result<MainLoop, String> {
     let Some((&first, bytes)) = data.split_first() else {
-        return Ok(Rig::boot(Program::blank()));
+        return Ok(MainLoop::boot(Program::blank()));
     };
-    let mut rig = if first & 0x80 != 0 {
-        Rig::autostart(&sample_program())?
+    let mut main_loop = if first & 0x80 != 0 {
+        MainLoop::autostart(&sample_program())?
     } else if first & 0x40 != 0 {
-        Rig::boot(sample_program())
+        MainLoop::boot(sample_program())
     } else {
-        Rig::boot(Program::blank())
+        MainLoop::boot(Program::blank())
     };
-    rig.keep_transcript = true;
+    main_loop.keep_transcript = true;
     if first & 0x20 != 0 {
         // Deferred RUN drawing under a busy transmitter.
-        rig.board.tx_room_value = 47;
+        main_loop.board.tx_room_value = 47;
     }
     let mut rng = Rng::new(u64::from(first));
     for &b in bytes {
-        rig.receive(b)?;
+        main_loop.receive(b)?;
         let gap = match rng.below(64) {
             0 => TIMEOUT_MS + 1,
             1 => 250,
@@ -545,20 +547,20 @@ pub fn editor_rig(data: &[u8]) -> Result<Rig, String> {
             3..=33 => 1,
             _ => 0,
         };
-        rig.run_ms(gap)?;
+        main_loop.run_ms(gap)?;
     }
-    rig.run_ms(2)?;
-    rig.board.tx_room_value = 255;
-    rig.recover_and_fill()?;
-    Ok(rig)
+    main_loop.run_ms(2)?;
+    main_loop.board.tx_room_value = 255;
+    main_loop.recover_and_fill()?;
+    Ok(main_loop)
 }
 
 /// The line parser: the input is split at `\n` into lines of printable characters, each
 /// typed and ended with CR. A model of the main screen and of LDT predicts the UF, the
 /// presets, the cursor line and the Data display after every line; they must match exactly.
 pub fn lines(data: &[u8]) -> Verdict {
-    let mut rig = Rig::boot(sample_program());
-    let mut model = rig.eng.prog.clone();
+    let mut main_loop = MainLoop::boot(sample_program());
+    let mut model = main_loop.eng.prog.clone();
     let mut cursor: u8 = 0;
     let mut data_shown: u16 = 0;
     let mut ldt: Option<u8> = None;
@@ -581,8 +583,8 @@ pub fn lines(data: &[u8]) -> Verdict {
         let overlong = typed.len() > 8;
         let number = (!word.is_empty() && word.iter().all(u8::is_ascii_digit))
             .then(|| word.iter().fold(0u32, |v, &d| v * 10 + u32::from(d - b'0')));
-        rig.type_bytes(&typed)?;
-        rig.type_bytes(b"\r")?;
+        main_loop.type_bytes(&typed)?;
+        main_loop.type_bytes(b"\r")?;
         let mut after_cr: &[u8] = b"";
         let mut left_read = false;
         let mut stop = false;
@@ -623,13 +625,13 @@ pub fn lines(data: &[u8]) -> Verdict {
                 b"LIST" | b"WRITE" => after_cr = b"/",
                 b"READ" => after_cr = b"/",
                 b"STORE" => {
-                    let stored = store::load(&mut rig.board.clone());
+                    let stored = store::load(&mut main_loop.board.clone());
                     if stored.as_ref() != Ok(&model) {
                         return Err(format!("after STORE, LOAD gives {stored:?}"));
                     }
                 }
                 b"LOAD" => {
-                    if let Ok(p) = store::load(&mut rig.board.clone()) {
+                    if let Ok(p) = store::load(&mut main_loop.board.clone()) {
                         model = p;
                     }
                 }
@@ -641,20 +643,20 @@ pub fn lines(data: &[u8]) -> Verdict {
                 }
             }
             if word.as_slice() == b"READ" {
-                rig.type_bytes(after_cr)?;
-                rig.run_ms(300)?;
+                main_loop.type_bytes(after_cr)?;
+                main_loop.run_ms(300)?;
                 after_cr = b"\r";
                 left_read = true;
             }
         }
         if stop {
-            if rig.mode != Mode::Run {
+            if main_loop.mode != Mode::Run {
                 return Err(format!(
                     "{:?} did not start RUN mode",
                     String::from_utf8_lossy(&word)
                 ));
             }
-        } else if rig.mode != Mode::Edit {
+        } else if main_loop.mode != Mode::Edit {
             return Err(format!(
                 "line {:?} started RUN mode",
                 String::from_utf8_lossy(&typed)
@@ -670,20 +672,20 @@ pub fn lines(data: &[u8]) -> Verdict {
                 ))
             }
         };
-        check("the program", rig.eng.prog == model)?;
+        check("the program", main_loop.eng.prog == model)?;
         if stop {
             return Ok(());
         }
-        check("the cursor line", rig.editor.cursor() == cursor)?;
-        check("the Data display", rig.editor.data() == data_shown)?;
-        rig.type_bytes(after_cr)?;
+        check("the cursor line", main_loop.editor.cursor() == cursor)?;
+        check("the Data display", main_loop.editor.data() == data_shown)?;
+        main_loop.type_bytes(after_cr)?;
         if left_read {
             // READ ends (here aborted) with the cursor on line 0.
             cursor = 0;
         }
         check(
             "the program (after leaving the screen)",
-            rig.eng.prog == model,
+            main_loop.eng.prog == model,
         )?;
     }
     Ok(())

@@ -32,7 +32,7 @@ impl Rng {
     }
 
     /// The next 32 random bits (the high half of [`Rng::next_u64`], the better half).
-    pub fn next(&mut self) -> u32 {
+    pub fn next_u32(&mut self) -> u32 {
         (self.next_u64() >> 32) as u32
     }
 
@@ -43,7 +43,7 @@ impl Rng {
 
     /// A random number in `0..n` (`n` > 0), by multiply and shift.
     pub fn below(&mut self, n: u32) -> u32 {
-        ((u64::from(self.next()) * u64::from(n)) >> 32) as u32
+        ((u64::from(self.next_u32()) * u64::from(n)) >> 32) as u32
     }
 
     /// A random number in `0..n` (`n` > 0) for 64-bit spans (cycle counts).
@@ -54,7 +54,7 @@ impl Rng {
     /// A random number in `lo..=hi` (`lo` ≤ `hi`).
     pub fn range(&mut self, lo: u32, hi: u32) -> u32 {
         let span = u64::from(hi - lo) + 1;
-        lo + ((u64::from(self.next()) * span) >> 32) as u32
+        lo + ((u64::from(self.next_u32()) * span) >> 32) as u32
     }
 
     /// A program of random bytes: any opcode on any line, any preset.

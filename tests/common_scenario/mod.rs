@@ -16,10 +16,14 @@ use utile_core::ticker::Ticker;
 use utile_kit::sim::SimBoard;
 use utile_kit::{listing as utl, simulate};
 
+/// A manual program: the tests' name, its file in `examples/`, and the presets the manual
+/// prints as (timer, preset) where they differ from the example's.
+type ManualApp = (&'static str, &'static str, &'static [(usize, u8)]);
+
 /// The manual's ch. 11 programs by the names the tests use: the file in `examples/` and
 /// the presets the manual prints (timer units of 0.1 s on T0..T3), where the example
 /// scales them to the times the manual describes.
-const MANUAL_APPS: [(&str, &str, &[(usize, u8)]); 7] = [
+const MANUAL_APPS: [ManualApp; 7] = [
     ("app_11_1_pushbutton_timer", "11.1-push-button-timer", &[]),
     (
         "app_continuous_timers",
