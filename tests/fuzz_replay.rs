@@ -12,6 +12,7 @@ use utile_core::engine::Program;
 use utile_core::ihex::write_hex;
 use utile_core::image::{encode, IMAGE_LEN};
 use utile_kit::fuzzing::{self, sample_program, TARGETS};
+use utile_kit::listing;
 use utile_kit::sim::SimBoard;
 
 fn corpus_dir(target: &str) -> PathBuf {
@@ -109,12 +110,6 @@ fn the_checks_can_fail() {
 // The seed corpus.
 // ---------------------------------------------------------------------------------------
 
-fn hex_of(prog: &Program) -> Vec<u8> {
-    let mut text = Vec::new();
-    write_hex(&encode(prog), &mut |c| text.push(c));
-    text
-}
-
 fn cat(parts: &[&[u8]]) -> Vec<u8> {
     parts.concat()
 }
@@ -129,7 +124,7 @@ fn write(target: &str, name: &str, data: &[u8]) {
 #[ignore = "regenerates the committed seed corpus"]
 fn write_seed_corpus() {
     let prog = sample_program();
-    let hex = hex_of(&prog);
+    let hex = listing::to_hex(&prog);
     let lower = hex.to_ascii_lowercase();
     let mut bad_sum = hex.clone();
     bad_sum[10] = if bad_sum[10] == b'0' { b'1' } else { b'0' };

@@ -5,9 +5,12 @@ use avr_device::atmega328p;
 /// Write a whole register; every value this layer writes is a documented bit pattern.
 macro_rules! wr {
     ($reg:expr, $v:expr) => {
-        // SAFETY: the value is a valid bit pattern for this register (see the comment at the call).
         {
-            let _ = $reg.write(|w| unsafe { w.bits($v) });
+            let _ = $reg.write(|w| {
+                // SAFETY: the value is a valid bit pattern for this register (see the comment
+                // at the call).
+                unsafe { w.bits($v) }
+            });
         }
     };
 }
