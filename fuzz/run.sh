@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Bounded fuzzing of every uTile target (issue 8): `fuzz/run.sh [SECONDS] [TARGET...]`,
+# Bounded fuzzing of every uTile target (docs/RELIABILITY.md): `fuzz/run.sh [SECONDS] [TARGET...]`,
 # default 60 s per target, all targets. Needs cargo-fuzz (`cargo install cargo-fuzz --locked`)
 # and the pinned nightly. New inputs go to fuzz/work/<target>/ (not committed); the seed
 # corpus fuzz/corpus/<target>/ is only read. A crash is saved under fuzz/artifacts/<target>/

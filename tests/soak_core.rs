@@ -1,4 +1,4 @@
-//! Soak of the core (issue 8): a program with timers of every unit, a flip-flop and the three
+//! Soak of the core (docs/RELIABILITY.md, "Soak"): a program with timers of every unit, a flip-flop and the three
 //! clocks runs on `SimBoard` against random inputs (bounces and glitches included), one scan
 //! per simulated millisecond, while a reference model predicts every output of every scan:
 //! - a timer's TQ is 1 exactly from a scan with its trigger 1 until preset × unit after
@@ -11,8 +11,9 @@
 //! docs/RELIABILITY.md for the command and figures).
 
 use utile_core::engine::{Engine, Program, TIMER_UNIT_MS};
-use utile_core::opcodes::{lookup, END};
+use utile_core::opcodes::END;
 use utile_core::ticker::Ticker;
+use utile_kit::listing;
 use utile_kit::rng::Rng;
 use utile_kit::sim::SimBoard;
 
@@ -47,10 +48,7 @@ struct Figures {
 }
 
 fn program() -> Program {
-    let mut p = Program::blank();
-    for (line, w) in p.uf.iter_mut().zip(PROGRAM) {
-        *line = lookup(w.as_bytes()).unwrap_or_else(|| panic!("{w} is a command"));
-    }
+    let mut p = listing::commands(PROGRAM);
     assert_eq!(p.uf[PROGRAM.len() - 1], END);
     for &(m, _, _, preset) in &TIMERS {
         p.presets[m] = preset;

@@ -215,6 +215,17 @@ pub fn parse(file: &str, text: &str) -> Result<Program, FileErrors> {
     Ok(prog)
 }
 
+/// A program from command names (any case), from line 0 on; the other lines NOP, as after
+/// FILL; presets 0. The listing of those commands, one per line, for tests and benches.
+///
+/// # Panics
+///
+/// If a name is not a command (the message says which).
+pub fn commands(names: &[&str]) -> Program {
+    let text = format!("FILL\n{}", names.join("\n"));
+    parse("commands", &text).unwrap_or_else(|e| panic!("{e}"))
+}
+
 /// The canonical listing of a program: `NNN NAME` for every non-blank line (NOP included),
 /// then `Tm = v` for every non-zero preset. Unassigned bytes are written `$XX`.
 pub fn print(prog: &Program) -> String {

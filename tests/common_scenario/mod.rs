@@ -68,7 +68,7 @@ pub fn listing(name: &str) -> Program {
 
 /// A program from a list of command names from line 0 on (rest NOP, presets 0).
 pub fn program(cmds: &[&str]) -> Program {
-    parse_utl("program", &format!("FILL\n{}", cmds.join("\n")))
+    utl::commands(cmds)
 }
 
 /// Replace every use of timer `from` (`.TK` `.TR` `TQ.`) by timer `to` — the manual's update

@@ -1,5 +1,5 @@
-//! Cross-check (issue 6): every example in `examples/` run two ways must give the same
-//! output changes:
+//! Cross-check (docs/UTILE-TOOL.md, "Cross-check against the real image"): every example in
+//! `examples/` run two ways must give the same output changes:
 //!
 //! 1. `utile sim`'s engine on the host ([`simulate::simulate_after_boot`], simulated time);
 //! 2. the real firmware image in simavr, the program loaded THROUGH READ over the UART (the

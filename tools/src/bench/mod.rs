@@ -11,6 +11,7 @@ use std::process::Command;
 use chip::{BenchRun, CYCLES_PER_MS, F_CPU, RETI, VECTORS_END};
 use utile_core::engine::{Engine, Program, LINES, TIMER_UNIT_MS};
 use utile_core::opcodes::{self, END, NOP};
+use utile_kit::listing;
 use utile_kit::rng::Rng;
 use utile_kit::sim::SimBoard;
 use utile_kit::simavr::{CpuState, Nano, RigPin};
@@ -60,12 +61,7 @@ impl Spread {
 
 /// A program from command names, line 0 onwards; the rest of the UF is NOP.
 pub fn program(words: &[&str]) -> Program {
-    let mut p = Program::blank();
-    p.uf = [NOP; LINES];
-    for (line, w) in p.uf.iter_mut().zip(words) {
-        *line = opcodes::lookup(w.as_bytes()).unwrap_or_else(|| panic!("unknown command {w}"));
-    }
-    p
+    listing::commands(words)
 }
 
 /// 255 NOP lines, then END on line 255.
