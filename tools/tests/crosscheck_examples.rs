@@ -26,12 +26,13 @@
 //! boot and READ per example); simavr runs the image at 1.5-2x real time in a debug test
 //! build, so the file takes about 70 s on two cores.
 
+mod utile_support;
 mod vnano_util;
 
-use std::path::{Path, PathBuf};
 use utile_kit::listing;
-use utile_kit::simulate::{self, Event};
 use utile_kit::simavr::{CpuState, Nano, RigPin};
+use utile_kit::simulate::{self, Event};
+use utile_support::{example_stems, examples_dir};
 
 /// CPU cycles per millisecond.
 const MS: u64 = 16_000;
@@ -56,10 +57,6 @@ const EXAMPLES: &[&str] = &[
     "11.3b-motor-starter",
     "11.4-sump-pump",
 ];
-
-fn examples_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples")
-}
 
 /// The simulated chip with the tick grid it keeps.
 struct Chip {
@@ -275,14 +272,7 @@ fn sump_pump_matches_the_real_image() {
 /// Every example file is covered above.
 #[test]
 fn every_example_is_cross_checked() {
-    let mut names: Vec<String> = std::fs::read_dir(examples_dir())
-        .unwrap()
-        .filter_map(|e| {
-            let p = e.unwrap().path();
-            (p.extension()? == "utl").then(|| p.file_stem().unwrap().to_string_lossy().into())
-        })
-        .collect();
-    names.sort();
+    let names = example_stems();
     let mut listed: Vec<String> = EXAMPLES.iter().map(|e| e.to_string()).collect();
     listed.sort();
     assert_eq!(names, listed);
