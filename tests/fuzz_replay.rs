@@ -13,6 +13,7 @@ use utile_core::ihex::write_hex;
 use utile_core::image::{encode, IMAGE_LEN};
 use utile_kit::fuzzing::{self, sample_program, TARGETS};
 use utile_kit::listing;
+use utile_kit::rng::Rng;
 use utile_kit::sim::SimBoard;
 
 fn corpus_dir(target: &str) -> PathBuf {
@@ -185,9 +186,10 @@ fn write_seed_corpus() {
         ("stat_ver", cat(&[b"\x00", b"stat\rver\r/\r"])),
         (
             "noise",
-            (0..200u32)
-                .map(|i| (i.wrapping_mul(2654435761) >> 13) as u8)
-                .collect(),
+            {
+                let mut rng = Rng::new(200);
+                (0..200).map(|_| rng.byte()).collect()
+            },
         ),
     ];
     for (name, data) in editor {
