@@ -2,8 +2,8 @@
 //! over time, run on [`SimBoard`] with simulated milliseconds.
 //!
 //! Programs are `.utl` listings read by the kit's one listing parser
-//! ([`utile_kit::listing::parse`], format in docs/UTILE-TOOL.md): the manual's ch. 11
-//! programs from `examples/`, the manual's smaller examples and test-only programs from
+//! ([`utile_kit::listing::parse`], format in docs/UTILE-TOOL.md): the manual's programs from
+//! `examples/` (ch. 11) and `examples/ch5-8/` (Examples 5-13), test-only programs from
 //! `tests/data/`. Timelines use the `utile sim` syntax (docs/UTILE-TOOL.md,
 //! [`utile_kit::simulate::parse_timeline`]): `100ms press A0`, `1.5s release A0`,
 //! `2s set A3 low`, one event per line. `press` pulls the input low (a normally-open
@@ -51,11 +51,13 @@ fn parse_utl(file: &str, text: &str) -> Program {
 }
 
 /// A program by name: a manual ch. 11 program (see [`MANUAL_APPS`]: `examples/<file>.utl`
-/// with the manual's printed presets), else `tests/data/<name>.utl`.
+/// with the manual's printed presets), one of the manual's Examples 5-13
+/// (`examples/ch5-8/exNN_*.utl`), else a test-only program, `tests/data/<name>.utl`.
 pub fn listing(name: &str) -> Program {
     let root = env!("CARGO_MANIFEST_DIR");
     let (path, presets) = match MANUAL_APPS.iter().find(|a| a.0 == name) {
         Some(&(_, file, presets)) => (format!("{root}/examples/{file}.utl"), presets),
+        None if name.starts_with("ex") => (format!("{root}/examples/ch5-8/{name}.utl"), &[][..]),
         None => (format!("{root}/tests/data/{name}.utl"), &[][..]),
     };
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
