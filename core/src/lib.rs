@@ -5,6 +5,13 @@
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
+// The workspace's lint list (root Cargo.toml) plus, for this crate only: the core runs on the
+// chip, where a panic stops the PLC (and `cargo fw` refuses an image with a panic path), so
+// outside its tests it never unwraps or panics.
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic, clippy::unreachable)
+)]
 
 pub mod board;
 pub mod editor;
