@@ -1,7 +1,7 @@
 //! The one random generator of the host code (tests, fuzz harnesses, soak runs, the bench):
 //! xorshift64*, deterministic and seedable, so a failure reproduces from its seed.
 //!
-//! The firmware's on-chip scan check (`src/hal/scan_check.rs`) keeps its own 32-bit
+//! The firmware's on-chip scan check (`src/hal/scan_check/`) keeps its own 32-bit
 //! generator: it runs on the ATmega328P, where this crate does not.
 
 use utile_core::engine::Program;
