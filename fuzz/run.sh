@@ -10,7 +10,7 @@ cd "$(dirname "$0")/.."
 secs=${1:-60}
 [ $# -gt 0 ] && shift
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(editor lines keys ihex hex_roundtrip image eeprom)
+[ ${#targets[@]} -gt 0 ] || targets=(editor lines keys ihex hex_roundtrip image eeprom modbus)
 command -v cargo-fuzz >/dev/null 2>&1 || cargo install cargo-fuzz --locked
 for t in "${targets[@]}"; do
     mkdir -p "fuzz/work/$t"

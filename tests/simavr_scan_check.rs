@@ -3,7 +3,7 @@
 //! (`out/m328-nano-utile-scan-check.elf`, or `$UTILE_SCAN_CHECK_ELF`) runs random programs
 //! that use every opcode, one scan in assembly and one in the core from the same state and
 //! the same posed world, compares the engines, edge bits, output image and pins, and
-//! reports on the UART (src/hal/scan_check.rs).
+//! reports on the UART (src/hal/scan_check/).
 //!
 //! The test asserts a PASS over the expected number of trials and scans, and that every
 //! coverage counter is non-zero, so the check really exercised outputs, flip-flops, timer
@@ -16,7 +16,7 @@ use std::time::Instant;
 
 use common::{Nano, Rig, CYCLES_PER_MS};
 
-/// `TRIALS` and `SCANS` in src/hal/scan_check.rs.
+/// `TRIALS` and `SCANS` in src/hal/scan_check/mod.rs.
 const TRIALS: u64 = 400;
 const SCANS: u64 = 6;
 

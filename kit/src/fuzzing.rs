@@ -963,7 +963,7 @@ pub fn eeprom(data: &[u8]) -> Verdict {
 pub type Harness = fn(&[u8]) -> Verdict;
 
 /// Every harness by the name its fuzz target and corpus directory use.
-pub const TARGETS: [(&str, Harness); 7] = [
+pub const TARGETS: [(&str, Harness); 8] = [
     ("editor", editor),
     ("lines", lines),
     ("keys", keys),
@@ -971,4 +971,5 @@ pub const TARGETS: [(&str, Harness); 7] = [
     ("hex_roundtrip", hex_roundtrip),
     ("image", image_decode),
     ("eeprom", eeprom),
+    ("modbus", crate::fuzz_modbus::modbus),
 ];

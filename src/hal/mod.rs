@@ -11,7 +11,7 @@
 //! | `serial.rs` | USART0 and its receive/transmit rings |
 //! | `kept.rs` | the program kept over a warm reset (`.noinit`) |
 //! | `scan.rs`, `scan.S` | the threaded RUN-mode scan |
-//! | `scan_check.rs` | the `scan-check` build: `scan.S` against `Engine::scan` on the chip |
+//! | `scan_check/` | the `scan-check` build: `scan.S` against `Engine::scan` on the chip |
 //! | `stack.rs` | stack painting for the high-water mark |
 //! | `regs.rs`, `isr_cell.rs` | register access, state shared with interrupts |
 //!

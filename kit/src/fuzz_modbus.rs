@@ -1,0 +1,180 @@
+//! The fuzz harness of the Modbus codec (`utile_core::modbus`): arbitrary bytes, gaps and
+//! frame ends into the receiver, every taken frame through the request handler against a map
+//! of SPEC §13's shape, and every reply checked as a master would check it.
+//!
+//! Invariants: no panic; no read or write outside the map (the map records any); an
+//! exception or a dropped frame changes nothing; every reply is a valid frame (CRC,
+//! address, function or function | 0x80, a length that agrees with its byte count).
+
+use std::format;
+use std::string::String;
+use std::vec::Vec;
+
+use utile_core::modbus::crc::crc16;
+use utile_core::modbus::frame::{Receiver, Verdict as FrameVerdict};
+use utile_core::modbus::map::{Map, Table};
+use utile_core::modbus::reply::Reply;
+use utile_core::modbus::request::{handle, Answer};
+
+use crate::fuzzing::Verdict;
+
+/// The slave address the harness answers as.
+const ADDRESS: u8 = 1;
+
+/// §13's map, recording any access outside it instead of trusting the codec.
+#[derive(Clone, Debug, PartialEq, Eq)]
+struct ShapedMap {
+    coils: [u16; 24],
+    holding: [u16; 26],
+    outside: Option<String>,
+}
+
+impl ShapedMap {
+    fn new() -> Self {
+        Self { coils: [0; 24], holding: [0; 26], outside: None }
+    }
+
+    fn note(&mut self, what: String) {
+        if self.outside.is_none() {
+            self.outside = Some(what);
+        }
+    }
+}
+
+impl Map for ShapedMap {
+    fn contains(&self, table: Table, addr: u16) -> bool {
+        match table {
+            Table::Coils => addr < 24,
+            Table::DiscreteInputs => addr < 6 || (8..50).contains(&addr),
+            Table::HoldingRegisters => addr < 26,
+            Table::InputRegisters => addr < 18 || (32..48).contains(&addr),
+        }
+    }
+    fn read(&mut self, table: Table, addr: u16) -> u16 {
+        if !self.contains(table, addr) {
+            self.note(format!("read of {table:?} {addr} outside the map"));
+            return 0;
+        }
+        match table {
+            Table::Coils => self.coils[usize::from(addr)],
+            Table::HoldingRegisters => self.holding[usize::from(addr)],
+            Table::DiscreteInputs => addr & 1,
+            Table::InputRegisters => addr.wrapping_mul(257),
+        }
+    }
+    fn accepts(&self, addr: u16, value: u16) -> bool {
+        match addr {
+            0..=15 => value <= 255,
+            16..=23 => true,
+            _ => value <= 1023,
+        }
+    }
+    fn write(&mut self, table: Table, addr: u16, value: u16) {
+        match table {
+            Table::Coils if addr < 24 && value <= 1 => self.coils[usize::from(addr)] = value,
+            Table::HoldingRegisters if addr < 26 && self.accepts(addr, value) => {
+                self.holding[usize::from(addr)] = value
+            }
+            _ => self.note(format!("write of {value} to {table:?} {addr} outside the map")),
+        }
+    }
+    fn running(&self) -> bool {
+        true
+    }
+    fn id_len(&self) -> u8 {
+        5
+    }
+    fn id_byte(&self, i: u8) -> u8 {
+        b"uTile".get(usize::from(i)).copied().unwrap_or(0)
+    }
+}
+
+/// Check one reply as a master would.
+fn check_reply(reply: &[u8], pdu: &[u8], answer: Answer) -> Verdict {
+    let function = pdu.first().copied().unwrap_or(0);
+    if reply.len() < 5 || crc16(reply) != 0 || reply[0] != ADDRESS {
+        return Err(format!("reply {reply:02X?} to {pdu:02X?} is not a valid frame"));
+    }
+    let f = reply[1];
+    let expected_len = match answer {
+        Answer::Exception { .. } => {
+            if f != function | 0x80 || !(1..=3).contains(&reply[2]) {
+                return Err(format!("exception {reply:02X?} to {pdu:02X?}"));
+            }
+            5
+        }
+        Answer::Echo { len } => {
+            if reply.get(1..1 + usize::from(len)) != pdu.get(..usize::from(len)) {
+                return Err(format!("echo {reply:02X?} of {pdu:02X?}"));
+            }
+            3 + usize::from(len)
+        }
+        Answer::Bits { .. } | Answer::Registers { .. } | Answer::ServerId => {
+            if f != function {
+                return Err(format!("reply {reply:02X?} to function {function:02X}"));
+            }
+            5 + usize::from(reply[2])
+        }
+    };
+    if reply.len() != expected_len {
+        return Err(format!("reply {reply:02X?} is {} bytes, its header says {expected_len}", reply.len()));
+    }
+    Ok(())
+}
+
+/// The harness: pairs of bytes (control, value). Control `& 3`: 0 a byte, 1 a byte after a
+/// 1.5-character gap, 2 the 3.5-character silence that ends a frame, 3 a frame built from
+/// the next `value` bytes with a correct CRC (so the handler is reached often).
+pub fn modbus(data: &[u8]) -> Verdict {
+    let mut rx = Receiver::new();
+    let mut map = ShapedMap::new();
+    let mut pairs = data.chunks_exact(2);
+    while let Some(pair) = pairs.next() {
+        let (control, value) = (pair[0], pair[1]);
+        match control & 3 {
+            0 => rx.push(value, false),
+            1 => rx.push(value, true),
+            3 => {
+                let body: Vec<u8> = pairs.by_ref().take(usize::from(value % 40)).map(|p| p[1]).collect();
+                let mut frame = std::vec![ADDRESS];
+                frame.extend_from_slice(&body);
+                frame.extend_from_slice(&crc16(&frame).to_le_bytes());
+                for b in frame {
+                    rx.push(b, false);
+                }
+            }
+            _ => {}
+        }
+        if control & 3 >= 2 {
+            let before = map.clone();
+            match rx.end() {
+                FrameVerdict::Frame { len } => {
+                    let frame = rx.frame().to_vec();
+                    if frame.len() != usize::from(len) || crc16(&frame) != 0 {
+                        return Err(format!("frame {frame:02X?} taken with a bad CRC"));
+                    }
+                    let pdu = &frame[1..frame.len() - 2];
+                    let answer = handle(pdu, &mut map);
+                    if matches!(answer, Answer::Exception { .. }) && map != before {
+                        return Err(format!("exception to {pdu:02X?} changed the map"));
+                    }
+                    let mut reply = Reply::new(ADDRESS, answer, &map);
+                    let bytes: Vec<u8> = std::iter::from_fn(|| reply.next_byte(&mut map, pdu)).collect();
+                    if bytes.len() > 256 {
+                        return Err(format!("reply of {} bytes", bytes.len()));
+                    }
+                    check_reply(&bytes, pdu, answer)?;
+                }
+                _ => {
+                    if map != before {
+                        return Err("a dropped frame changed the map".into());
+                    }
+                }
+            }
+            if let Some(why) = map.outside.take() {
+                return Err(why);
+            }
+        }
+    }
+    Ok(())
+}
