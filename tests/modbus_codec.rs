@@ -130,8 +130,14 @@ fn exception(map: &mut TestMap, pdu: &[u8]) -> (u8, u8) {
 #[test]
 fn crc_matches_the_specifications_examples() {
     // Modbus over serial line, the FC03 example: 11 03 00 6B 00 03 -> CRC 76 87 on the wire.
-    assert_eq!(crc16(&[0x11, 0x03, 0x00, 0x6B, 0x00, 0x03]).to_le_bytes(), [0x76, 0x87]);
-    assert_eq!(crc16(&[0x01, 0x03, 0x00, 0x00, 0x00, 0x0A]).to_le_bytes(), [0xC5, 0xCD]);
+    assert_eq!(
+        crc16(&[0x11, 0x03, 0x00, 0x6B, 0x00, 0x03]).to_le_bytes(),
+        [0x76, 0x87]
+    );
+    assert_eq!(
+        crc16(&[0x01, 0x03, 0x00, 0x00, 0x00, 0x0A]).to_le_bytes(),
+        [0xC5, 0xCD]
+    );
     let mut c = Crc16::new();
     c.update(0x01);
     assert_ne!(c.value(), Crc16::new().value());
@@ -193,9 +199,15 @@ fn read_coils_and_discrete_inputs_pack_bits_lsb_first() {
     m.coils[0] = true;
     m.coils[3] = true;
     m.coils[9] = true;
-    assert_eq!(pdu_of(&transact(&mut m, &[1, 0, 0, 0, 10])), &[1, 2, 0x09, 0x02]);
+    assert_eq!(
+        pdu_of(&transact(&mut m, &[1, 0, 0, 0, 10])),
+        &[1, 2, 0x09, 0x02]
+    );
     // Discrete inputs 8..17: every third address (9, 12, 15) is 1.
-    assert_eq!(pdu_of(&transact(&mut m, &[2, 0, 8, 0, 10])), &[2, 2, 0x92, 0x00]);
+    assert_eq!(
+        pdu_of(&transact(&mut m, &[2, 0, 8, 0, 10])),
+        &[2, 2, 0x92, 0x00]
+    );
     // The whole table from 8: 42 bits, 6 bytes.
     let r = transact(&mut m, &[2, 0, 8, 0, 42]);
     assert_eq!(r[2], 6);
@@ -206,7 +218,10 @@ fn read_registers_send_high_byte_first() {
     let mut m = TestMap::new();
     m.holding[24] = 0x0203;
     m.holding[25] = 1023;
-    assert_eq!(pdu_of(&transact(&mut m, &[3, 0, 24, 0, 2])), &[3, 4, 0x02, 0x03, 0x03, 0xFF]);
+    assert_eq!(
+        pdu_of(&transact(&mut m, &[3, 0, 24, 0, 2])),
+        &[3, 4, 0x02, 0x03, 0x03, 0xFF]
+    );
     let r = transact(&mut m, &[4, 0, 32, 0, 16]);
     assert_eq!(r[2], 32);
     assert_eq!(&r[3..7], &[0x10, 0x20, 0x10, 0x21]);
@@ -215,12 +230,18 @@ fn read_registers_send_high_byte_first() {
 #[test]
 fn writes_change_the_map_and_echo_the_request() {
     let mut m = TestMap::new();
-    assert_eq!(pdu_of(&transact(&mut m, &[5, 0, 8, 0xFF, 0])), &[5, 0, 8, 0xFF, 0]);
+    assert_eq!(
+        pdu_of(&transact(&mut m, &[5, 0, 8, 0xFF, 0])),
+        &[5, 0, 8, 0xFF, 0]
+    );
     assert!(m.coils[8]);
     transact(&mut m, &[5, 0, 8, 0, 0]);
     assert!(!m.coils[8]);
 
-    assert_eq!(pdu_of(&transact(&mut m, &[6, 0, 24, 0x01, 0xF4])), &[6, 0, 24, 0x01, 0xF4]);
+    assert_eq!(
+        pdu_of(&transact(&mut m, &[6, 0, 24, 0x01, 0xF4])),
+        &[6, 0, 24, 0x01, 0xF4]
+    );
     assert_eq!(m.holding[24], 500);
 
     // FC15: ten coils from 14, 0b11_0000_0101.
@@ -289,7 +310,10 @@ fn every_exception_changes_nothing() {
     }
     assert!(matches!(
         handle(&[3, 0, 0, 0, 0], &mut m),
-        Answer::Exception { function: 3, code: Exception::IllegalDataValue }
+        Answer::Exception {
+            function: 3,
+            code: Exception::IllegalDataValue
+        }
     ));
 }
 
@@ -328,9 +352,15 @@ fn the_largest_reads_fit_a_frame_and_the_limits_hold() {
     let a = handle(&[1, 0, 0, 0x07, 0xD0], &mut w);
     assert_eq!(Reply::new(9, a, &w).size(), 5 + 250);
     // The top of the address space: 0xFFFF plus one register is past it.
-    assert!(matches!(handle(&[3, 0xFF, 0xFF, 0, 1], &mut w), Answer::Registers { .. }));
+    assert!(matches!(
+        handle(&[3, 0xFF, 0xFF, 0, 1], &mut w),
+        Answer::Registers { .. }
+    ));
     assert!(matches!(
         handle(&[3, 0xFF, 0xFF, 0, 2], &mut w),
-        Answer::Exception { code: Exception::IllegalDataAddress, .. }
+        Answer::Exception {
+            code: Exception::IllegalDataAddress,
+            ..
+        }
     ));
 }

@@ -31,7 +31,11 @@ struct ShapedMap {
 
 impl ShapedMap {
     fn new() -> Self {
-        Self { coils: [0; 24], holding: [0; 26], outside: None }
+        Self {
+            coils: [0; 24],
+            holding: [0; 26],
+            outside: None,
+        }
     }
 
     fn note(&mut self, what: String) {
@@ -75,7 +79,9 @@ impl Map for ShapedMap {
             Table::HoldingRegisters if addr < 26 && self.accepts(addr, value) => {
                 self.holding[usize::from(addr)] = value
             }
-            _ => self.note(format!("write of {value} to {table:?} {addr} outside the map")),
+            _ => self.note(format!(
+                "write of {value} to {table:?} {addr} outside the map"
+            )),
         }
     }
     fn running(&self) -> bool {
@@ -93,7 +99,9 @@ impl Map for ShapedMap {
 fn check_reply(reply: &[u8], pdu: &[u8], answer: Answer) -> Verdict {
     let function = pdu.first().copied().unwrap_or(0);
     if reply.len() < 5 || crc16(reply) != 0 || reply[0] != ADDRESS {
-        return Err(format!("reply {reply:02X?} to {pdu:02X?} is not a valid frame"));
+        return Err(format!(
+            "reply {reply:02X?} to {pdu:02X?} is not a valid frame"
+        ));
     }
     let f = reply[1];
     let expected_len = match answer {
@@ -117,7 +125,10 @@ fn check_reply(reply: &[u8], pdu: &[u8], answer: Answer) -> Verdict {
         }
     };
     if reply.len() != expected_len {
-        return Err(format!("reply {reply:02X?} is {} bytes, its header says {expected_len}", reply.len()));
+        return Err(format!(
+            "reply {reply:02X?} is {} bytes, its header says {expected_len}",
+            reply.len()
+        ));
     }
     Ok(())
 }
@@ -135,7 +146,11 @@ pub fn modbus(data: &[u8]) -> Verdict {
             0 => rx.push(value, false),
             1 => rx.push(value, true),
             3 => {
-                let body: Vec<u8> = pairs.by_ref().take(usize::from(value % 40)).map(|p| p[1]).collect();
+                let body: Vec<u8> = pairs
+                    .by_ref()
+                    .take(usize::from(value % 40))
+                    .map(|p| p[1])
+                    .collect();
                 let mut frame = std::vec![ADDRESS];
                 frame.extend_from_slice(&body);
                 frame.extend_from_slice(&crc16(&frame).to_le_bytes());
@@ -159,7 +174,8 @@ pub fn modbus(data: &[u8]) -> Verdict {
                         return Err(format!("exception to {pdu:02X?} changed the map"));
                     }
                     let mut reply = Reply::new(ADDRESS, answer, &map);
-                    let bytes: Vec<u8> = std::iter::from_fn(|| reply.next_byte(&mut map, pdu)).collect();
+                    let bytes: Vec<u8> =
+                        std::iter::from_fn(|| reply.next_byte(&mut map, pdu)).collect();
                     if bytes.len() > 256 {
                         return Err(format!("reply of {} bytes", bytes.len()));
                     }

@@ -51,7 +51,13 @@ pub struct Receiver {
 impl Receiver {
     /// Waiting for a frame.
     pub const fn new() -> Self {
-        Self { buf: [0; FRAME_MAX], len: 0, gap: false, crc: Crc16::new(), kept: 0 }
+        Self {
+            buf: [0; FRAME_MAX],
+            len: 0,
+            gap: false,
+            crc: Crc16::new(),
+            kept: 0,
+        }
     }
 
     /// A received byte; `after_gap`: more than 1.5 character times of silence came first.

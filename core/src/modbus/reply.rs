@@ -31,7 +31,14 @@ impl Reply {
             Answer::ServerId => 5 + u16::from(map.id_len()),
             Answer::Exception { .. } => 3,
         };
-        Self { answer, address, at: 0, body, crc: Crc16::new(), low: 0 }
+        Self {
+            answer,
+            address,
+            at: 0,
+            body,
+            crc: Crc16::new(),
+            low: 0,
+        }
     }
 
     /// Bytes of the whole reply, CRC included (never 0).
@@ -71,7 +78,12 @@ impl Reply {
                 _ => code as u8,
             },
             Answer::Echo { .. } => pdu.get(usize::from(i - 1)).copied().unwrap_or(0),
-            Answer::Bits { function, table, start, qty } => match i {
+            Answer::Bits {
+                function,
+                table,
+                start,
+                qty,
+            } => match i {
                 1 => function,
                 2 => (self.body - 3) as u8,
                 _ => {
@@ -86,7 +98,12 @@ impl Reply {
                     byte
                 }
             },
-            Answer::Registers { function, table, start, .. } => match i {
+            Answer::Registers {
+                function,
+                table,
+                start,
+                ..
+            } => match i {
                 1 => function,
                 2 => (self.body - 3) as u8,
                 _ => {
@@ -117,4 +134,3 @@ impl Reply {
         }
     }
 }
-

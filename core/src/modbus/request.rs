@@ -82,14 +82,23 @@ fn check<M: Map + ?Sized>(function: u8, pdu: &[u8], map: &mut M) -> Result<Answe
     let b = word(pdu, 3);
     match function {
         READ_COILS | READ_DISCRETE_INPUTS => {
-            let table = if function == READ_COILS { Table::Coils } else { Table::DiscreteInputs };
+            let table = if function == READ_COILS {
+                Table::Coils
+            } else {
+                Table::DiscreteInputs
+            };
             if len != 5 || b == 0 || b > MAX_READ_BITS {
                 return Err(Exception::IllegalDataValue);
             }
             if !fits(a, b) || !covers(map, table, a, b) {
                 return Err(Exception::IllegalDataAddress);
             }
-            Ok(Answer::Bits { function, table, start: a, qty: b })
+            Ok(Answer::Bits {
+                function,
+                table,
+                start: a,
+                qty: b,
+            })
         }
         READ_HOLDING_REGISTERS | READ_INPUT_REGISTERS => {
             let table = if function == READ_HOLDING_REGISTERS {
@@ -103,7 +112,12 @@ fn check<M: Map + ?Sized>(function: u8, pdu: &[u8], map: &mut M) -> Result<Answe
             if !fits(a, b) || !covers(map, table, a, b) {
                 return Err(Exception::IllegalDataAddress);
             }
-            Ok(Answer::Registers { function, table, start: a, qty: b })
+            Ok(Answer::Registers {
+                function,
+                table,
+                start: a,
+                qty: b,
+            })
         }
         WRITE_SINGLE_COIL => {
             if len != 5 || (b != 0x0000 && b != 0xFF00) {
@@ -130,7 +144,11 @@ fn check<M: Map + ?Sized>(function: u8, pdu: &[u8], map: &mut M) -> Result<Answe
         }
         WRITE_MULTIPLE_COILS => {
             let count = pdu.get(5).copied().unwrap_or(0);
-            if b == 0 || b > MAX_WRITE_COILS || u16::from(count) != b.div_ceil(8) || len != 6 + usize::from(count) {
+            if b == 0
+                || b > MAX_WRITE_COILS
+                || u16::from(count) != b.div_ceil(8)
+                || len != 6 + usize::from(count)
+            {
                 return Err(Exception::IllegalDataValue);
             }
             if !fits(a, b) || !covers(map, Table::Coils, a, b) {
@@ -145,7 +163,11 @@ fn check<M: Map + ?Sized>(function: u8, pdu: &[u8], map: &mut M) -> Result<Answe
         }
         WRITE_MULTIPLE_REGISTERS => {
             let count = pdu.get(5).copied().unwrap_or(0);
-            if b == 0 || b > MAX_WRITE_REGISTERS || u16::from(count) != 2 * b || len != 6 + usize::from(count) {
+            if b == 0
+                || b > MAX_WRITE_REGISTERS
+                || u16::from(count) != 2 * b
+                || len != 6 + usize::from(count)
+            {
                 return Err(Exception::IllegalDataValue);
             }
             if !fits(a, b) || !covers(map, Table::HoldingRegisters, a, b) {
@@ -158,7 +180,11 @@ fn check<M: Map + ?Sized>(function: u8, pdu: &[u8], map: &mut M) -> Result<Answe
                 }
             }
             for i in 0..b {
-                map.write(Table::HoldingRegisters, a.wrapping_add(i), word(pdu, 6 + 2 * usize::from(i)));
+                map.write(
+                    Table::HoldingRegisters,
+                    a.wrapping_add(i),
+                    word(pdu, 6 + 2 * usize::from(i)),
+                );
             }
             Ok(Answer::Echo { len: 5 })
         }
