@@ -432,6 +432,11 @@ impl Board for Nano {
         eeprom_wait();
     }
 
+    #[inline]
+    fn rx_pending(&mut self) -> bool {
+        serial::rx_pending()
+    }
+
     fn rx_overruns(&mut self) -> u16 {
         serial::overruns()
     }

@@ -139,6 +139,12 @@ pub(crate) fn rx() -> Option<u8> {
     interrupt::free(|cs| RX.with(cs, |rx| rx.ring.pop()))
 }
 
+/// Received bytes wait in the ring.
+#[inline]
+pub(crate) fn rx_pending() -> bool {
+    interrupt::free(|cs| RX.with(cs, |rx| rx.ring.len() != 0))
+}
+
 /// Bytes lost on reception since reset.
 pub(crate) fn overruns() -> u16 {
     interrupt::free(|cs| RX.with(cs, |rx| rx.overruns))

@@ -128,6 +128,8 @@ texts! {
     STRIKE = "Strike any key -->";
     /// Unknown input.
     UNRECOGNIZED = "*** Unrecognized Input! ***";
+    /// Received bytes were lost (receive ring overrun) despite type-ahead.
+    INPUT_LOST = "*** Input lost (overrun) ***";
     /// More than 8 characters.
     TOO_LONG = "*** Line too long (8 max) ***";
     /// A number past 65535.
