@@ -38,6 +38,10 @@ pub trait Board {
     fn rx_pending(&mut self) -> bool {
         false
     }
+    /// Output is being dropped (the editor redraws later): drawing may stop early.
+    fn tx_dropped(&mut self) -> bool {
+        false
+    }
     /// Received bytes lost because the receive buffer was full, since reset (for STAT).
     fn rx_overruns(&mut self) -> u16 {
         0

@@ -191,6 +191,9 @@ impl Editor {
     /// One page entry `NNN NAME`; the cursor line in reverse video. `pad` overwrites what a
     /// longer name left behind.
     pub(super) fn entry<B: Board>(&self, eng: &Engine, b: &mut B, line: u8, pad: bool) {
+        if b.tx_dropped() {
+            return;
+        }
         let (row, col) = entry_pos(line);
         goto(b, row, col);
         let rev = line == self.cursor && !matches!(self.screen, Screen::Ldt { .. });

@@ -6,6 +6,9 @@ use super::super::board::Board;
 
 /// Send raw bytes.
 pub fn raw<B: Board>(b: &mut B, bytes: &[u8]) {
+    if b.tx_dropped() {
+        return;
+    }
     for &c in bytes {
         b.feed_watchdog();
         b.tx(c);
@@ -14,6 +17,9 @@ pub fn raw<B: Board>(b: &mut B, bytes: &[u8]) {
 
 /// Cursor to `row`, `col` (1-based), in the shortest form (`ESC[rH` for column 1).
 pub fn goto<B: Board>(b: &mut B, row: u8, col: u8) {
+    if b.tx_dropped() {
+        return;
+    }
     raw(b, b"\x1b[");
     num(b, u32::from(row));
     if col > 1 {
@@ -57,6 +63,9 @@ const POW10: [u32; 9] = [
 
 /// The decimal digits of `v`, most significant first, `width` digits at least (leading zeros).
 fn digits<B: Board>(b: &mut B, mut v: u32, width: u8) {
+    if b.tx_dropped() {
+        return;
+    }
     let mut started = false;
     for (i, &p) in POW10.iter().enumerate() {
         let mut d = b'0';
@@ -87,6 +96,9 @@ pub fn num_width<B: Board>(b: &mut B, v: u32, width: u8) {
 
 /// A byte as 8 bits `7 6 .. 0`: `0 1 0 1 0 1 0 1` (15 characters).
 pub fn bits<B: Board>(b: &mut B, v: u8) {
+    if b.tx_dropped() {
+        return;
+    }
     for i in (0..8).rev() {
         b.tx(if v & (1 << i) != 0 { b'1' } else { b'0' });
         if i != 0 {

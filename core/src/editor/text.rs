@@ -40,6 +40,9 @@ impl Txt {
 
     /// Send the text (waits while the transmit buffer is full).
     pub fn send<B: Board>(self, b: &mut B) {
+        if b.tx_dropped() {
+            return;
+        }
         for i in 0..self.len {
             b.feed_watchdog();
             b.tx(self.byte(i));

@@ -82,6 +82,9 @@ impl<B: Board> Board for Tracked<'_, B> {
     fn eeprom_update(&mut self, addr: u16, value: u8) {
         self.b.eeprom_update(addr, value)
     }
+    fn tx_dropped(&mut self) -> bool {
+        self.mute
+    }
     fn rx_pending(&mut self) -> bool {
         self.b.rx_pending()
     }
