@@ -138,6 +138,27 @@ fn a_pasted_256_line_listing_is_taken_whole_and_in_order() {
     nano.send(b"stat\r");
     let stat = String::from_utf8_lossy(&run_quiet(&mut nano, 50)).into_owned();
     assert!(stat.contains("rx overruns 0"), "{stat:?}");
+    // RAM (SPEC §11): static data plus the stack's high-water mark (painted at boot).
+    let (statics, stack) = ram_use(&nano);
+    eprintln!("RAM after the paste: static {statics} B + stack {stack} B = {}", statics + stack);
+    assert!(statics + stack <= 1536, "RAM budget: {}", statics + stack);
+}
+
+/// Byte the firmware paints over free RAM at boot.
+const STACK_PAINT: u8 = 0xC5;
+
+/// Static bytes (up to the paint) and the deepest stack use so far.
+fn ram_use(nano: &Nano) -> (usize, usize) {
+    let (start, end) = (0x100, nano.ramend());
+    let mut statics = start;
+    while !(0..16).all(|i| nano.peek(statics + i) == STACK_PAINT) {
+        statics += 1;
+    }
+    let mut low = statics;
+    while low <= end && nano.peek(low) == STACK_PAINT {
+        low += 1;
+    }
+    (statics - start, end + 1 - low)
 }
 
 #[test]
