@@ -135,6 +135,11 @@ fn type_ahead_with_a_full_transmitter_takes_every_line_and_catches_up() {
     }
     assert!(r.ed.drawing(), "the screen should be behind");
     assert!(r.sent() - sent < 200, "drew {} bytes while input waited", r.sent() - sent);
+    // What went out stays well-formed (no half escape sequence, nothing off the screen).
+    let mut term = utile_kit::fuzzing::Term::new();
+    term.feed(&r.b.tx_log[sent..], false);
+    assert_eq!(term.violation, None);
+    let fed = r.sent();
     // The transmitter drains before the last byte: it is taken and the screen catches up.
     r.b.tx_room_value = 255;
     let c = r.b.rx_queue.pop_front().unwrap();
@@ -147,6 +152,8 @@ fn type_ahead_with_a_full_transmitter_takes_every_line_and_catches_up() {
     assert_eq!(r.eng.prog.uf[42], NOP);
     r.wait_ms(5);
     assert!(!r.ed.drawing());
+    term.feed(&r.b.tx_log[fed..], false);
+    assert_eq!(term.violation, None);
     let caught_up = r.text();
     r.enter("/");
     assert_eq!(trimmed(&r.text()), trimmed(&caught_up));

@@ -5,6 +5,10 @@
 
 use super::*;
 
+/// Room for the longest escape sequence the editor sends (`ESC [ 2 4 ; 4 7 H` and a few
+/// digits after it), so starting one never waits.
+const SEQ_ROOM: u8 = 16;
+
 /// A board that notes whether anything was sent (so the cursor is put back at the prompt)
 /// and mutes its output rather than keep received bytes waiting.
 pub(super) struct Tracked<'a, B: Board> {
@@ -17,6 +21,8 @@ pub(super) struct Tracked<'a, B: Board> {
     pub(super) mute: bool,
     /// Something was dropped: the screen is behind.
     pub(super) dropped: bool,
+    /// The last byte sent (muting never cuts an `ESC [ n ; n X` sequence in half).
+    last: u8,
 }
 
 impl<'a, B: Board> Tracked<'a, B> {
@@ -27,6 +33,7 @@ impl<'a, B: Board> Tracked<'a, B> {
             may_mute,
             mute: false,
             dropped: false,
+            last: 0,
         }
     }
 }
@@ -63,7 +70,15 @@ impl<B: Board> Board for Tracked<'_, B> {
     #[inline(never)]
     fn tx(&mut self, byte: u8) {
         // Sending would wait while input is pending: input wins.
-        if self.may_mute && !self.mute && self.b.tx_room() == 0 && self.b.rx_pending() {
+        // Room this byte needs to go out without waiting. A sequence `ESC [ n ; n X` is
+        // started only with room for all of it and never cut: the terminal sees no half
+        // sequence (after a digit of plain text the cut just comes a byte later).
+        let need: u8 = match (byte, self.last) {
+            (0x1B, _) => SEQ_ROOM,
+            (_, 0x1B | b'[' | b'0'..=b'9' | b';') => 0,
+            _ => 1,
+        };
+        if self.may_mute && !self.mute && self.b.tx_room() < need && self.b.rx_pending() {
             self.mute = true;
         }
         if self.mute {
@@ -71,6 +86,7 @@ impl<B: Board> Board for Tracked<'_, B> {
             return;
         }
         self.sent = true;
+        self.last = byte;
         self.b.tx(byte)
     }
     fn tx_room(&mut self) -> u8 {
