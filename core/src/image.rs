@@ -127,8 +127,7 @@ pub fn decode_into(bytes: &[u8], prog: &mut Program) -> Result<(), ImageError> {
         return Err(ImageError::Crc);
     }
     prog.uf.copy_from_slice(&img[UF_OFFSET..PRESETS_OFFSET]);
-    prog.presets
-        .copy_from_slice(&img[PRESETS_OFFSET..CRC_OFFSET]);
+    prog.presets.copy_from_slice(&img[PRESETS_OFFSET..CRC_OFFSET]);
     Ok(())
 }
 

@@ -10,6 +10,7 @@ pub mod board;
 pub mod editor;
 pub mod engine;
 pub mod ihex;
+pub mod modbus;
 pub mod image;
 pub mod opcodes;
 pub mod stats;

@@ -136,102 +136,22 @@ pub struct Family {
 
 /// Every numbered family, in opcode order.
 pub const FAMILIES: [Family; 16] = [
-    Family {
-        base: PUSH_A,
-        count: 6,
-        prefix: "A",
-        suffix: ".",
-    },
-    Family {
-        base: PUSH_AL,
-        count: 6,
-        prefix: "AL",
-        suffix: ".",
-    },
-    Family {
-        base: PUSH_AT,
-        count: 6,
-        prefix: "AT",
-        suffix: ".",
-    },
-    Family {
-        base: PUSH_AD,
-        count: 6,
-        prefix: "AD",
-        suffix: ".",
-    },
-    Family {
-        base: PUSH_Y,
-        count: 8,
-        prefix: "Y",
-        suffix: ".",
-    },
-    Family {
-        base: PUSH_U,
-        count: 8,
-        prefix: "U",
-        suffix: ".",
-    },
-    Family {
-        base: PUSH_V,
-        count: 8,
-        prefix: "V",
-        suffix: ".",
-    },
-    Family {
-        base: PUSH_Q,
-        count: 16,
-        prefix: "Q",
-        suffix: ".",
-    },
-    Family {
-        base: PUSH_TQ,
-        count: 16,
-        prefix: "TQ",
-        suffix: ".",
-    },
-    Family {
-        base: POP_Y,
-        count: 8,
-        prefix: ".Y",
-        suffix: "",
-    },
-    Family {
-        base: POP_U,
-        count: 8,
-        prefix: ".U",
-        suffix: "",
-    },
-    Family {
-        base: POP_V,
-        count: 8,
-        prefix: ".V",
-        suffix: "",
-    },
-    Family {
-        base: POP_S,
-        count: 16,
-        prefix: ".S",
-        suffix: "",
-    },
-    Family {
-        base: POP_R,
-        count: 16,
-        prefix: ".R",
-        suffix: "",
-    },
-    Family {
-        base: POP_TK,
-        count: 16,
-        prefix: ".TK",
-        suffix: "",
-    },
-    Family {
-        base: POP_TR,
-        count: 16,
-        prefix: ".TR",
-        suffix: "",
-    },
+    Family { base: PUSH_A, count: 6, prefix: "A", suffix: "." },
+    Family { base: PUSH_AL, count: 6, prefix: "AL", suffix: "." },
+    Family { base: PUSH_AT, count: 6, prefix: "AT", suffix: "." },
+    Family { base: PUSH_AD, count: 6, prefix: "AD", suffix: "." },
+    Family { base: PUSH_Y, count: 8, prefix: "Y", suffix: "." },
+    Family { base: PUSH_U, count: 8, prefix: "U", suffix: "." },
+    Family { base: PUSH_V, count: 8, prefix: "V", suffix: "." },
+    Family { base: PUSH_Q, count: 16, prefix: "Q", suffix: "." },
+    Family { base: PUSH_TQ, count: 16, prefix: "TQ", suffix: "." },
+    Family { base: POP_Y, count: 8, prefix: ".Y", suffix: "" },
+    Family { base: POP_U, count: 8, prefix: ".U", suffix: "" },
+    Family { base: POP_V, count: 8, prefix: ".V", suffix: "" },
+    Family { base: POP_S, count: 16, prefix: ".S", suffix: "" },
+    Family { base: POP_R, count: 16, prefix: ".R", suffix: "" },
+    Family { base: POP_TK, count: 16, prefix: ".TK", suffix: "" },
+    Family { base: POP_TR, count: 16, prefix: ".TR", suffix: "" },
 ];
 
 /// Longest command name (`CLKA.`, `.TK0`): 5 characters.
@@ -378,10 +298,7 @@ pub fn family_of(op: u8) -> Option<(&'static Family, u8)> {
 
 /// The command name of an opcode, or `None` for a blank or unassigned byte (shown `.....`).
 pub fn name(op: u8) -> Option<Name> {
-    let mut n = Name {
-        buf: [0; MAX_NAME],
-        len: 0,
-    };
+    let mut n = Name { buf: [0; MAX_NAME], len: 0 };
     let i = usize::from(op);
     if i < SINGLES.len() {
         for k in 0..MAX_NAME {
@@ -472,34 +389,12 @@ mod tests {
     fn numbering_is_frozen() {
         // Part of the stored-image format: a change here breaks every saved program.
         let fixed: &[(&str, u8)] = &[
-            ("NOP", 0x00),
-            ("END", 0x01),
-            ("KEY", 0x02),
-            ("AND", 0x03),
-            ("!!", 0x07),
-            ("2DUP", 0x0D),
-            ("PBS", 0x1B),
-            ("CLKC.", 0x1E),
-            ("A0.", 0x20),
-            ("A5.", 0x25),
-            ("AL0.", 0x28),
-            ("AT3.", 0x33),
-            ("AD5.", 0x3D),
-            ("Y7.", 0x47),
-            ("U0.", 0x48),
-            ("V7.", 0x57),
-            ("QF.", 0x67),
-            ("TQ0.", 0x68),
-            ("TQF.", 0x77),
-            (".Y0", 0x80),
-            (".U7", 0x8F),
-            (".V0", 0x90),
-            (".S0", 0x98),
-            (".RF", 0xB7),
-            (".TK0", 0xB8),
-            (".TKF", 0xC7),
-            (".TR0", 0xC8),
-            (".TRF", 0xD7),
+            ("NOP", 0x00), ("END", 0x01), ("KEY", 0x02), ("AND", 0x03), ("!!", 0x07),
+            ("2DUP", 0x0D), ("PBS", 0x1B), ("CLKC.", 0x1E), ("A0.", 0x20), ("A5.", 0x25),
+            ("AL0.", 0x28), ("AT3.", 0x33), ("AD5.", 0x3D), ("Y7.", 0x47), ("U0.", 0x48),
+            ("V7.", 0x57), ("QF.", 0x67), ("TQ0.", 0x68), ("TQF.", 0x77), (".Y0", 0x80),
+            (".U7", 0x8F), (".V0", 0x90), (".S0", 0x98), (".RF", 0xB7), (".TK0", 0xB8),
+            (".TKF", 0xC7), (".TR0", 0xC8), (".TRF", 0xD7),
         ];
         for &(n, op) in fixed {
             assert_eq!(lookup(n.as_bytes()), Some(op), "{n}");
@@ -508,9 +403,7 @@ mod tests {
 
     #[test]
     fn near_misses_are_rejected() {
-        for w in [
-            "A6.", "A0", "AL6.", ".Y8", "Q0", "QG.", ".TK", "TQ10.", "", "NOPE", "A.", "Y0..", ".S",
-        ] {
+        for w in ["A6.", "A0", "AL6.", ".Y8", "Q0", "QG.", ".TK", "TQ10.", "", "NOPE", "A.", "Y0..", ".S"] {
             assert_eq!(lookup(w.as_bytes()), None, "{w}");
         }
         assert_eq!(name(BLANK), None);

@@ -116,17 +116,21 @@ pub fn on_rx(cs: CriticalSection) {
     // DOR0 (bit 3): the USART already lost a byte before this one.
     let hw_overrun = dp.USART0.ucsr0a().read().bits() & 0x08 != 0;
     let byte = dp.USART0.udr0().read().bits();
-    RX.with(cs, |rx| {
-        let lost = u16::from(hw_overrun) + u16::from(!rx.ring.push(byte));
-        rx.overruns = rx.overruns.saturating_add(lost);
-    });
+    // SAFETY: the closure does not re-enter RX.
+    unsafe {
+        RX.with(cs, |rx| {
+            let lost = u16::from(hw_overrun) + u16::from(!rx.ring.push(byte));
+            rx.overruns = rx.overruns.saturating_add(lost);
+        })
+    };
 }
 
 /// USART data-register-empty interrupt: send the next byte, or stop when the ring is empty.
 #[inline(always)]
 pub fn on_udre(cs: CriticalSection) {
     let dp = regs();
-    match TX.with(cs, |tx| tx.pop()) {
+    // SAFETY: the closure does not re-enter TX.
+    match unsafe { TX.with(cs, |tx| tx.pop()) } {
         Some(byte) => wr!(dp.USART0.udr0(), byte),
         // UCSR0B without UDRIE0: nothing more to send.
         None => wr!(dp.USART0.ucsr0b(), UCSR0B_ON),
@@ -136,25 +140,29 @@ pub fn on_udre(cs: CriticalSection) {
 /// Next received byte.
 #[inline]
 pub(crate) fn rx() -> Option<u8> {
-    interrupt::free(|cs| RX.with(cs, |rx| rx.ring.pop()))
+    // SAFETY: the closure does not re-enter RX.
+    interrupt::free(|cs| unsafe { RX.with(cs, |rx| rx.ring.pop()) })
 }
 
 /// Received bytes wait in the ring.
 #[inline]
 pub(crate) fn rx_pending() -> bool {
-    interrupt::free(|cs| RX.with(cs, |rx| rx.ring.len() != 0))
+    // SAFETY: the closure does not re-enter RX.
+    interrupt::free(|cs| unsafe { RX.with(cs, |rx| rx.ring.len() != 0) })
 }
 
 /// Bytes lost on reception since reset.
 pub(crate) fn overruns() -> u16 {
-    interrupt::free(|cs| RX.with(cs, |rx| rx.overruns))
+    // SAFETY: the closure does not re-enter RX.
+    interrupt::free(|cs| unsafe { RX.with(cs, |rx| rx.overruns) })
 }
 
 /// Queue `byte` for sending, waiting (and feeding the watchdog) while the ring is full.
 pub(crate) fn tx(byte: u8) {
     loop {
         let queued = interrupt::free(|cs| {
-            let queued = TX.with(cs, |tx| tx.push(byte));
+            // SAFETY: the closure does not re-enter TX.
+            let queued = unsafe { TX.with(cs, |tx| tx.push(byte)) };
             if queued {
                 // UCSR0B with UDRIE0: the interrupt drains the ring.
                 wr!(regs().USART0.ucsr0b(), UCSR0B_ON | UDRIE0);
@@ -171,5 +179,6 @@ pub(crate) fn tx(byte: u8) {
 /// Free space in the transmit ring.
 #[inline]
 pub(crate) fn tx_room() -> u8 {
-    interrupt::free(|cs| TX.with(cs, |tx| tx.room()))
+    // SAFETY: the closure does not re-enter TX.
+    interrupt::free(|cs| unsafe { TX.with(cs, |tx| tx.room()) })
 }

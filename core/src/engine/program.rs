@@ -1,0 +1,68 @@
+//! The user's program (UF0 and the timer presets) and the timers' units.
+
+use crate::opcodes::BLANK;
+
+/// Lines in the User File UF0.
+pub const LINES: usize = 256;
+/// Number of one-shot timers and of flip-flops.
+pub const UNITS: usize = 16;
+
+/// Timer unit in milliseconds for each timer: T0..T3 0.1 s, T4..TB 1 s, TC..TE 1 min,
+/// TF 400 s (6 2/3 min).
+pub const TIMER_UNIT_MS: [u32; UNITS] = [
+    100, 100, 100, 100, 1_000, 1_000, 1_000, 1_000, 1_000, 1_000, 1_000, 1_000, 60_000, 60_000,
+    60_000, 400_000,
+];
+
+/// Timer m's unit in milliseconds, by arithmetic rather than [`TIMER_UNIT_MS`], which as a
+/// table would sit in RAM on the chip.
+#[inline]
+pub fn unit_ms(m: u8) -> u32 {
+    match m {
+        0..=3 => 100,
+        4..=11 => 1_000,
+        12..=14 => 60_000,
+        _ => 400_000,
+    }
+}
+
+/// The user's program: UF0 and the 16 timer presets. This is what STORE/LOAD/READ/WRITE move.
+///
+/// `repr(C)` with UF0 last: in an [`Engine`] the byte after line 255 is then the END guard
+/// that the firmware's threaded scan runs into (see [`Engine`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+#[repr(C)]
+pub struct Program {
+    /// Timer presets T0..TF (0 disables a timer).
+    pub presets: [u8; UNITS],
+    /// One opcode per line.
+    pub uf: [u8; LINES],
+}
+
+impl Program {
+    /// A cold-start program: every line blank, presets 0.
+    pub const fn blank() -> Self {
+        Self {
+            uf: [BLANK; LINES],
+            presets: [0; UNITS],
+        }
+    }
+}
+
+impl Default for Program {
+    fn default() -> Self {
+        Self::blank()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unit_arithmetic_matches_the_table() {
+        for m in 0..UNITS as u8 {
+            assert_eq!(unit_ms(m), TIMER_UNIT_MS[usize::from(m)], "T{m:X}");
+        }
+    }
+}

@@ -1,0 +1,183 @@
+//! A request checked in the specification's order — function (exception 01), quantity and
+//! form (03), addresses (02), values (03) — and, only when all of it is good, its writes.
+
+use super::map::{covers, Map, Table};
+use super::*;
+
+/// Most coils or discrete inputs one read may ask for.
+pub const MAX_READ_BITS: u16 = 2000;
+/// Most registers one read may ask for.
+pub const MAX_READ_REGISTERS: u16 = 125;
+/// Most coils one write may carry.
+pub const MAX_WRITE_COILS: u16 = 1968;
+/// Most registers one write may carry.
+pub const MAX_WRITE_REGISTERS: u16 = 123;
+
+/// What the reply to a request is. `Copy` and small: the reply is produced from it, the map
+/// and the request's bytes, one byte at a time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Answer {
+    /// Functions 01/02: `qty` bits from `start`.
+    Bits {
+        /// Function code.
+        function: u8,
+        /// The table read.
+        table: Table,
+        /// First address.
+        start: u16,
+        /// Number of bits.
+        qty: u16,
+    },
+    /// Functions 03/04: `qty` registers from `start`.
+    Registers {
+        /// Function code.
+        function: u8,
+        /// The table read.
+        table: Table,
+        /// First address.
+        start: u16,
+        /// Number of registers.
+        qty: u16,
+    },
+    /// Functions 05, 06, 08, 15, 16: the first `len` bytes of the request's PDU again.
+    Echo {
+        /// Bytes of the PDU repeated (function code included).
+        len: u8,
+    },
+    /// Function 17: run indicator and the map's text.
+    ServerId,
+    /// An exception to `function`.
+    Exception {
+        /// The request's function code (the reply sets bit 7).
+        function: u8,
+        /// Why.
+        code: Exception,
+    },
+}
+
+fn word(pdu: &[u8], at: usize) -> u16 {
+    let hi = pdu.get(at).copied().unwrap_or(0);
+    let lo = pdu.get(at + 1).copied().unwrap_or(0);
+    u16::from_be_bytes([hi, lo])
+}
+
+/// `start .. start + qty` stays inside the 16-bit address space.
+fn fits(start: u16, qty: u16) -> bool {
+    u32::from(start) + u32::from(qty) <= 0x1_0000
+}
+
+/// Check the PDU (function code first, no address, no CRC) against `map`, do its writes if it
+/// is wholly valid, and say what to answer. An exception changes nothing.
+pub fn handle<M: Map + ?Sized>(pdu: &[u8], map: &mut M) -> Answer {
+    let function = pdu.first().copied().unwrap_or(0);
+    match check(function, pdu, map) {
+        Ok(answer) => answer,
+        Err(code) => Answer::Exception { function, code },
+    }
+}
+
+fn check<M: Map + ?Sized>(function: u8, pdu: &[u8], map: &mut M) -> Result<Answer, Exception> {
+    let len = pdu.len();
+    let a = word(pdu, 1);
+    let b = word(pdu, 3);
+    match function {
+        READ_COILS | READ_DISCRETE_INPUTS => {
+            let table = if function == READ_COILS { Table::Coils } else { Table::DiscreteInputs };
+            if len != 5 || b == 0 || b > MAX_READ_BITS {
+                return Err(Exception::IllegalDataValue);
+            }
+            if !fits(a, b) || !covers(map, table, a, b) {
+                return Err(Exception::IllegalDataAddress);
+            }
+            Ok(Answer::Bits { function, table, start: a, qty: b })
+        }
+        READ_HOLDING_REGISTERS | READ_INPUT_REGISTERS => {
+            let table = if function == READ_HOLDING_REGISTERS {
+                Table::HoldingRegisters
+            } else {
+                Table::InputRegisters
+            };
+            if len != 5 || b == 0 || b > MAX_READ_REGISTERS {
+                return Err(Exception::IllegalDataValue);
+            }
+            if !fits(a, b) || !covers(map, table, a, b) {
+                return Err(Exception::IllegalDataAddress);
+            }
+            Ok(Answer::Registers { function, table, start: a, qty: b })
+        }
+        WRITE_SINGLE_COIL => {
+            if len != 5 || (b != 0x0000 && b != 0xFF00) {
+                return Err(Exception::IllegalDataValue);
+            }
+            if !map.contains(Table::Coils, a) {
+                return Err(Exception::IllegalDataAddress);
+            }
+            map.write(Table::Coils, a, u16::from(b != 0));
+            Ok(Answer::Echo { len: 5 })
+        }
+        WRITE_SINGLE_REGISTER => {
+            if len != 5 {
+                return Err(Exception::IllegalDataValue);
+            }
+            if !map.contains(Table::HoldingRegisters, a) {
+                return Err(Exception::IllegalDataAddress);
+            }
+            if !map.accepts(a, b) {
+                return Err(Exception::IllegalDataValue);
+            }
+            map.write(Table::HoldingRegisters, a, b);
+            Ok(Answer::Echo { len: 5 })
+        }
+        WRITE_MULTIPLE_COILS => {
+            let count = pdu.get(5).copied().unwrap_or(0);
+            if b == 0 || b > MAX_WRITE_COILS || u16::from(count) != b.div_ceil(8) || len != 6 + usize::from(count) {
+                return Err(Exception::IllegalDataValue);
+            }
+            if !fits(a, b) || !covers(map, Table::Coils, a, b) {
+                return Err(Exception::IllegalDataAddress);
+            }
+            for i in 0..b {
+                let byte = pdu.get(6 + usize::from(i >> 3)).copied().unwrap_or(0);
+                let bit = (byte >> (i & 7)) & 1;
+                map.write(Table::Coils, a.wrapping_add(i), u16::from(bit));
+            }
+            Ok(Answer::Echo { len: 5 })
+        }
+        WRITE_MULTIPLE_REGISTERS => {
+            let count = pdu.get(5).copied().unwrap_or(0);
+            if b == 0 || b > MAX_WRITE_REGISTERS || u16::from(count) != 2 * b || len != 6 + usize::from(count) {
+                return Err(Exception::IllegalDataValue);
+            }
+            if !fits(a, b) || !covers(map, Table::HoldingRegisters, a, b) {
+                return Err(Exception::IllegalDataAddress);
+            }
+            // Every value is checked before the first write: an exception changes nothing.
+            for i in 0..b {
+                if !map.accepts(a.wrapping_add(i), word(pdu, 6 + 2 * usize::from(i))) {
+                    return Err(Exception::IllegalDataValue);
+                }
+            }
+            for i in 0..b {
+                map.write(Table::HoldingRegisters, a.wrapping_add(i), word(pdu, 6 + 2 * usize::from(i)));
+            }
+            Ok(Answer::Echo { len: 5 })
+        }
+        DIAGNOSTICS => {
+            if len < 3 {
+                return Err(Exception::IllegalDataValue);
+            }
+            if a != 0 {
+                return Err(Exception::IllegalFunction);
+            }
+            let len = u8::try_from(len).map_err(|_| Exception::IllegalDataValue)?;
+            Ok(Answer::Echo { len })
+        }
+        REPORT_SERVER_ID => {
+            if len != 1 {
+                return Err(Exception::IllegalDataValue);
+            }
+            Ok(Answer::ServerId)
+        }
+        _ => Err(Exception::IllegalFunction),
+    }
+}
