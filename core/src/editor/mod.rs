@@ -184,6 +184,11 @@ impl Editor {
         self.cursor
     }
 
+    /// True while READ takes a file (every byte of it may complete the program).
+    pub fn reading(&self) -> bool {
+        matches!(self.screen, Screen::Read(_))
+    }
+
     /// The Data display's value.
     pub fn data(&self) -> u16 {
         self.data

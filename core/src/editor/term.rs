@@ -6,9 +6,6 @@ use super::super::board::Board;
 
 /// Send raw bytes.
 pub fn raw<B: Board>(b: &mut B, bytes: &[u8]) {
-    if b.tx_dropped() {
-        return;
-    }
     for &c in bytes {
         b.feed_watchdog();
         b.tx(c);
@@ -96,9 +93,6 @@ pub fn num_width<B: Board>(b: &mut B, v: u32, width: u8) {
 
 /// A byte as 8 bits `7 6 .. 0`: `0 1 0 1 0 1 0 1` (15 characters).
 pub fn bits<B: Board>(b: &mut B, v: u8) {
-    if b.tx_dropped() {
-        return;
-    }
     for i in (0..8).rev() {
         b.tx(if v & (1 << i) != 0 { b'1' } else { b'0' });
         if i != 0 {
