@@ -171,3 +171,53 @@ fn lost_input_is_reported_on_the_status_line() {
     r.enter("dup");
     assert!(!r.status().contains("Input lost"));
 }
+
+#[test]
+fn random_bursts_with_a_choked_transmitter_always_catch_up_to_the_true_screen() {
+    let pieces: &[&[u8]] = &[
+        b"dup\r", b"a0.\r", b".y1\r", b"set\r", b"x\x7f", b"\x1b[A", b"\x1b[B", b"\x1b[C",
+        b"\x1b[D", b"\x1b[2~", b"\x1b[3~", b"\x1b[H", b"\x1b[Z", b"42\r", b"bogus\r",
+        b"toolongword\r", b"\x0c", b"\x18", b"?\r", b" ", b"ldt\r5\r\r", b"stat\r", b"pbs\r",
+        b"ppy\r", b"fill\r", b"ver\r",
+    ];
+    let mut x: u32 = 0x1234_5678;
+    let mut next = |n: u32| {
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        x % n
+    };
+    for round in 0..200 {
+        let mut r = filled();
+        let mut term = utile_kit::fuzzing::Term::new();
+        let mut fed = r.sent();
+        for _ in 0..1 + next(12) {
+            let mut burst = Vec::new();
+            for _ in 0..1 + next(8) {
+                burst.extend_from_slice(pieces[next(pieces.len() as u32) as usize]);
+            }
+            r.b.tx_room_value = if next(2) == 0 { 0 } else { 255 };
+            r.b.rx_queue.extend(burst.iter().copied());
+            while let Some(c) = r.b.rx_queue.pop_front() {
+                r.mode = r.ed.key(c, &mut r.eng, &mut r.b);
+                if next(4) == 0 {
+                    r.b.tx_room_value = if next(2) == 0 { 0 } else { 255 };
+                }
+            }
+            r.b.tx_room_value = 255;
+            r.wait_ms(1 + next(3));
+            term.feed(&r.b.tx_log[fed..], false);
+            fed = r.sent();
+            assert_eq!(term.violation, None, "round {round}");
+            assert!(!r.ed.drawing(), "round {round}: still behind after input stopped");
+        }
+        // Leave help (any key) so `/` below is a command; then the true screen.
+        r.type_bytes(b"\x18");
+        r.wait_ms(1);
+        let shown = trimmed(&r.text());
+        let cursor = r.cursor();
+        r.type_bytes(b"\x0c");
+        assert_eq!(trimmed(&r.text()), shown, "round {round}: Ctrl-L shows something else");
+        assert_eq!(r.cursor(), cursor, "round {round}");
+    }
+}

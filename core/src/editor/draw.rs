@@ -78,7 +78,6 @@ impl Editor {
             S_CLEAR => {
                 term::clear(b);
                 self.blank = true;
-                self.info = false;
             }
             S_TITLE => {
                 goto(b, 1, COL_TITLE);
@@ -146,6 +145,13 @@ impl Editor {
                         self.message(b, m);
                     } else if !self.blank {
                         goto(b, ROW_STATUS, self.status_col());
+                        ceol(b);
+                    }
+                    // STAT's report as it stands (a muted line may have erased it).
+                    if self.info {
+                        self.stat(b);
+                    } else if !self.blank {
+                        goto(b, ROW_INFO, 1);
                         ceol(b);
                     }
                 }

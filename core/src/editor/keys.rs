@@ -44,8 +44,10 @@ pub enum Event {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum State {
     Ground,
-    /// After ESC (and any intermediates).
+    /// After ESC.
     Esc,
+    /// After ESC and intermediates (0x20–0x2F): the next other byte ends it.
+    EscInter,
     /// After `ESC [`: the first parameter so far; `more` once a separator or intermediate
     /// has come (later parameters are not kept); `any` once any byte has come.
     Csi { param: u8, more: bool, any: bool },
@@ -123,7 +125,7 @@ impl KeyDecoder {
                 }
                 b'O' => self.state = State::Ss3,
                 // Intermediates: the final byte is still to come.
-                0x20..=0x2F => self.state = State::Esc,
+                0x20..=0x2F => self.state = State::EscInter,
                 // Home as C-Kermit sends it.
                 b'H' => return Event::Key(Key::Home),
                 _ => {}
@@ -162,8 +164,9 @@ impl KeyDecoder {
                 // Any other final byte 0x40–0x7E.
                 _ => return done(letter_key(byte)),
             },
-            // `ESC [ [ x`, and the Ground state (handled above).
-            State::Linux | State::Ground => {}
+            State::EscInter if byte < 0x30 => self.state = State::EscInter,
+            // `ESC [ [ x`, `ESC ( B`, and the Ground state (handled above).
+            State::EscInter | State::Linux | State::Ground => {}
         }
         Event::None
     }
@@ -245,6 +248,8 @@ mod tests {
         b"\x1bc",
         b"\x1b7",
         b"\x1b(B",
+        b"\x1b ![",
+        b"\x1b(O",
         b"\x1be",
     ];
 
