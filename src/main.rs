@@ -86,7 +86,13 @@ mod firmware {
                         loop {}
                     }
                     mode = editor.key(byte, eng, &mut board);
-                    hal::kept::reseal(&eng.prog);
+                    // Only a control byte (CR, LF: a submitted line), `~` (the Insert and
+                    // Delete keys) or a byte of READ's file changes the program; resealing
+                    // after every typed character took most of a byte time at 19200 baud
+                    // and starved a pasted listing.
+                    if byte < 0x20 || byte == b'~' || editor.reading() {
+                        hal::kept::reseal(&eng.prog);
+                    }
                 }
                 None => editor.idle(eng, &mut board),
             }

@@ -34,6 +34,14 @@ pub trait Board {
     fn eeprom_read(&mut self, addr: u16) -> u8;
     /// Write one EEPROM byte if it differs; returns once the byte is written.
     fn eeprom_update(&mut self, addr: u16, value: u8);
+    /// Received bytes wait to be read (the editor then defers its drawing: input first).
+    fn rx_pending(&mut self) -> bool {
+        false
+    }
+    /// Output is being dropped (the editor redraws later): drawing may stop early.
+    fn tx_dropped(&mut self) -> bool {
+        false
+    }
     /// Received bytes lost because the receive buffer was full, since reset (for STAT).
     fn rx_overruns(&mut self) -> u16 {
         0

@@ -16,7 +16,7 @@ use std::vec::Vec;
 
 use crate::rng::Rng;
 use crate::sim::{EepromFault, SimBoard, Tear};
-use utile_core::editor::keys::{Event, Key, KeyDecoder, TIMEOUT_MS};
+use utile_core::editor::keys::{Event, Key, KeyDecoder};
 use utile_core::editor::text;
 use utile_core::editor::{Editor, Mode, READ_TIMEOUT_MS};
 use utile_core::engine::{Engine, Flow, Program, LINES, UNITS};
@@ -27,6 +27,9 @@ use utile_core::store::{self, SLOT_ADDR, SLOT_LEN};
 
 /// What a harness says: `Ok` or the broken invariant.
 pub type Verdict = Result<(), String>;
+
+/// A pause longer than the version-1 escape time-out (50 ms): it must change nothing now.
+pub const ESC_PAUSE_MS: u32 = 60;
 
 /// Size of the firmware's receive ring (`hal::serial::RX_SIZE`): bytes past it are lost.
 pub const RX_RING: usize = 64;
@@ -290,6 +293,7 @@ impl MainLoop {
     pub fn receive(&mut self, byte: u8) -> Verdict {
         if self.board.rx_queue.len() >= RX_RING {
             self.overruns += 1;
+            self.board.rx_lost = self.board.rx_lost.saturating_add(1);
         } else {
             self.board.rx_queue.push_back(byte);
         }
@@ -467,13 +471,13 @@ impl MainLoop {
             }
         }
         let presets = self.eng.prog.presets;
-        // An unfinished escape sequence expires; ^X clears the line or leaves help/break;
-        // `/` leaves LIST/WRITE or aborts READ, whose result then waits for CR.
-        self.run_ms(TIMEOUT_MS + 10)?;
+        // ^X breaks off an unfinished escape sequence and clears the line or leaves
+        // help/break; `/` leaves LIST/WRITE or aborts READ, whose result then waits for CR.
+        self.run_ms(ESC_PAUSE_MS)?;
         self.type_bytes(b"\x18/")?;
         self.run_ms(300)?;
         self.type_bytes(b"\r")?;
-        self.run_ms(TIMEOUT_MS + 10)?;
+        self.run_ms(ESC_PAUSE_MS)?;
         // An LDT screen ends with an empty line; on the main screen it does nothing.
         self.type_bytes(b"\x18\r")?;
         self.type_bytes(b"\x18fill\r")?;
@@ -541,7 +545,7 @@ pub fn editor_loop(data: &[u8]) -> Result<MainLoop, String> {
     for &b in bytes {
         main_loop.receive(b)?;
         let gap = match rng.below(64) {
-            0 => TIMEOUT_MS + 1,
+            0 => ESC_PAUSE_MS,
             1 => 250,
             2 if first & 0x10 != 0 => READ_TIMEOUT_MS + 1,
             3..=33 => 1,
@@ -691,26 +695,33 @@ pub fn lines(data: &[u8]) -> Verdict {
     Ok(())
 }
 
-/// The escape-sequence decoder: bytes with time gaps taken from the input (a byte 0xFF
-/// followed by `n` waits `n` ms). Invariants: a character is handed on unchanged, keys come
-/// only on a final byte of their sequence, no more than 14 bytes after an ESC are swallowed,
-/// and a sequence never stays pending longer than [`TIMEOUT_MS`].
+/// The escape-sequence decoder (SPEC §8, version-2 rules). The input is bytes received; a
+/// byte 0xFF followed by `n` stands for a pause of `n` ms, which must change nothing (ESC
+/// always starts a sequence, however late the next byte comes). Invariants: a byte outside
+/// a sequence, and a control character, DEL or high byte anywhere, is handed on unchanged
+/// (ESC excepted); a printable byte inside a sequence never is; keys come only on a final
+/// byte of their sequence; and from the third byte after ESC on, any byte 0x40–0x7E ends
+/// the sequence.
 pub fn keys(data: &[u8]) -> Verdict {
     let mut d = KeyDecoder::new();
-    let mut now: u32 = 1000;
-    let mut swallowed: u32 = 0;
+    // Bytes taken since the ESC that started the current sequence.
+    let mut since_esc: u32 = 0;
     let mut it = data.iter().copied();
     while let Some(b) = it.next() {
         if b == 0xFF {
-            now = now.wrapping_add(u32::from(it.next().unwrap_or(0)));
-            d.expire(now);
+            // A pause: the decoder has no clock, nothing may happen.
+            let _ = it.next();
             continue;
         }
         let was_pending = d.pending();
-        let ev = d.feed(b, now);
+        let ev = d.feed(b);
+        let printable = (0x20..0x7F).contains(&b);
         match ev {
             Event::Char(c) if c != b => return Err(format!("byte {b:#04x} came out as {c:#04x}")),
-            Event::Char(_) => swallowed = 0,
+            Event::Char(_) if was_pending && printable => {
+                return Err(format!("printable byte {b:#04x} inside a sequence typed"));
+            }
+            Event::Char(_) => {}
             Event::Key(k) => {
                 if !was_pending {
                     return Err(format!("key {k:?} from a lone byte {b:#04x}"));
@@ -726,29 +737,26 @@ pub fn keys(data: &[u8]) -> Verdict {
                 if !final_ok {
                     return Err(format!("key {k:?} on byte {b:#04x}"));
                 }
-                swallowed = 0;
             }
             Event::None => {
-                if b == 0x1B {
-                    swallowed = 0;
-                } else {
-                    swallowed += 1;
-                    if swallowed > 14 {
-                        return Err("more than 14 bytes swallowed by one sequence".into());
-                    }
+                if !was_pending && b != 0x1B {
+                    return Err(format!("byte {b:#04x} outside a sequence was not handed on"));
+                }
+                if b != 0x1B && !printable {
+                    return Err(format!("control byte {b:#04x} swallowed by a sequence"));
                 }
             }
         }
-        if !was_pending && b != 0x1B && ev != Event::Char(b) {
-            return Err(format!(
-                "byte {b:#04x} outside a sequence was not handed on"
-            ));
+        if b == 0x1B {
+            since_esc = 0;
+            if !d.pending() {
+                return Err("ESC did not start a sequence".into());
+            }
+            continue;
         }
-        // Any sequence is gone once the time-out has passed.
-        let mut later = d;
-        later.expire(now.wrapping_add(TIMEOUT_MS + 1));
-        if later.pending() {
-            return Err("a sequence outlived its time-out".into());
+        since_esc = since_esc.saturating_add(1);
+        if was_pending && since_esc >= 3 && (0x40..0x7F).contains(&b) && d.pending() {
+            return Err(format!("final byte {b:#04x} did not end the sequence"));
         }
     }
     Ok(())

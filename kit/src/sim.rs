@@ -60,6 +60,8 @@ pub struct SimBoard {
     pub rx_queue: VecDeque<u8>,
     /// Everything sent to the terminal.
     pub tx_log: Vec<u8>,
+    /// Received bytes reported lost (`rx_overruns`, the firmware's overrun count).
+    pub rx_lost: u16,
     /// Free room reported by `tx_room` (the real buffer drains at 19200 baud).
     pub tx_room_value: u8,
     /// EEPROM contents (erased = 0xFF).
@@ -92,6 +94,7 @@ impl SimBoard {
             output_log: Vec::new(),
             rx_queue: VecDeque::new(),
             tx_log: Vec::new(),
+            rx_lost: 0,
             tx_room_value: 255,
             eeprom: std::vec![0xFF; EEPROM_SIZE],
             eeprom_writes: 0,
@@ -190,6 +193,12 @@ impl Board for SimBoard {
     }
     fn tx_room(&mut self) -> u8 {
         self.tx_room_value
+    }
+    fn rx_pending(&mut self) -> bool {
+        !self.rx_queue.is_empty()
+    }
+    fn rx_overruns(&mut self) -> u16 {
+        self.rx_lost
     }
     fn eeprom_read(&mut self, addr: u16) -> u8 {
         self.eeprom.get(usize::from(addr)).copied().unwrap_or(0xFF)

@@ -114,6 +114,11 @@ impl Board for Nano {
         eeprom::update(addr, value);
     }
 
+    #[inline]
+    fn rx_pending(&mut self) -> bool {
+        serial::rx_pending()
+    }
+
     fn rx_overruns(&mut self) -> u16 {
         serial::overruns()
     }

@@ -144,6 +144,13 @@ pub(crate) fn rx() -> Option<u8> {
     interrupt::free(|cs| unsafe { RX.with(cs, |rx| rx.ring.pop()) })
 }
 
+/// Received bytes wait in the ring.
+#[inline]
+pub(crate) fn rx_pending() -> bool {
+    // SAFETY: the closure does not re-enter RX.
+    interrupt::free(|cs| unsafe { RX.with(cs, |rx| rx.ring.len() != 0) })
+}
+
 /// Bytes lost on reception since reset.
 pub(crate) fn overruns() -> u16 {
     // SAFETY: the closure does not re-enter RX.

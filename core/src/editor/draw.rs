@@ -1,5 +1,11 @@
-//! Drawing: the full screen in steps (so RUN mode can draw it piece by piece without
-//! waiting), the page of entries, the Bit Stack / Data / Port Byte displays, the status line.
+//! Drawing: the full screen in steps (so RUN mode, and EDIT mode after type-ahead, can draw
+//! it piece by piece without keeping anything waiting), the page of entries, the Bit Stack /
+//! Data / Port Byte displays, the status line.
+//!
+//! A redraw from [`S_CLEAR`] draws everything on a cleared screen (boot, `/`, Ctrl-L, a new
+//! screen drawn late); one from [`S_BS`] or [`S_PROMPT`] (catching up after type-ahead)
+//! redraws only what can change, over what is there: values, entries padded, the typed
+//! line, the status message, then the screen's own overlay (help, LDT, LIST, WRITE, READ).
 
 use super::*;
 
@@ -20,9 +26,11 @@ pub(super) const S_ENTRY0: u8 = 14; // .. 45
 pub(super) const S_PROMPT: u8 = 46;
 pub(super) const S_DASH23: u8 = 47; // and 48
 pub(super) const S_STATUS_A: u8 = 49;
-pub(super) const S_STATUS_B: u8 = 50;
+/// The screen's own overlay (help text, LDT, LIST / WRITE / READ prompts, `Strike any key`).
+pub(super) const S_SCREEN: u8 = 50;
+pub(super) const S_STATUS_B: u8 = 51;
 /// Number of steps; a `render` value of this means the screen is complete.
-pub(super) const STEPS: u8 = 51;
+pub(super) const STEPS: u8 = 52;
 
 impl Editor {
     /// Put the terminal cursor where the next typed character goes.
@@ -32,22 +40,20 @@ impl Editor {
         }
     }
 
-    /// The whole screen, now.
-    pub(super) fn full_redraw<B: Board>(&mut self, eng: &Engine, b: &mut B) {
-        for i in 0..STEPS {
-            self.step(i, eng, b);
-        }
-        self.render = STEPS;
-        self.message = false;
+    /// The whole screen afresh, with an empty line and no message: drawn by the entry point
+    /// before it returns (or step by step while input is waiting).
+    pub(super) fn full_redraw(&mut self) {
+        self.render = 0;
+        self.msg = None;
         self.info = false;
         self.len = 0;
         self.overlong = false;
     }
 
     /// Back to the main screen from LIST, WRITE, READ.
-    pub(super) fn back_to_page<B: Board>(&mut self, eng: &Engine, b: &mut B) {
+    pub(super) fn back_to_page(&mut self) {
         self.screen = Screen::Page;
-        self.full_redraw(eng, b);
+        self.full_redraw();
     }
 
     /// Half of a dashed row.
@@ -60,8 +66,19 @@ impl Editor {
 
     /// One step of the full redraw.
     pub(super) fn step<B: Board>(&mut self, i: u8, eng: &Engine, b: &mut B) {
+        // Catching up, the frame is still there; LIST's screen is its prompt alone.
+        let is_list = matches!(self.screen, Screen::List { .. });
+        if (!self.blank && matches!(i, S_DASH7 | 13 | S_DASH23..=S_STATUS_A))
+            || (is_list && i != S_CLEAR && i != S_SCREEN)
+        {
+            return;
+        }
+        let typing = matches!(self.screen, Screen::Page | Screen::Ldt { .. });
         match i {
-            S_CLEAR => term::clear(b),
+            S_CLEAR => {
+                term::clear(b);
+                self.blank = true;
+            }
             S_TITLE => {
                 goto(b, 1, COL_TITLE);
                 text::TITLE.send(b);
@@ -104,31 +121,85 @@ impl Editor {
             S_PROMPT => {
                 goto(b, ROW_PROMPT, COL_PROMPT);
                 text::ENTER.send(b);
+                if typing {
+                    raw(b, &self.line[..usize::from(self.len.min(LINE_MAX))]);
+                }
+                if !self.blank {
+                    ceol(b);
+                }
             }
             S_DASH23 | 48 => Self::dashes(b, 23, i != S_DASH23),
             S_STATUS_A => {
                 goto(b, ROW_STATUS, COL_STATUS_A);
                 text::USER_FILE.send(b);
             }
+            S_SCREEN => self.overlay(eng, b),
             S_STATUS_B => {
                 if matches!(self.screen, Screen::Running | Screen::Break) {
                     goto(b, ROW_STATUS, COL_STATUS_B);
                     text::RUNNING.send(b);
+                } else if typing {
+                    if self.lost {
+                        self.message(b, text::INPUT_LOST);
+                    } else if let Some(m) = self.msg {
+                        self.message(b, m);
+                    } else if !self.blank {
+                        goto(b, ROW_STATUS, self.status_col());
+                        ceol(b);
+                    }
+                    // STAT's report as it stands (a muted line may have erased it).
+                    if self.info {
+                        self.stat(b);
+                    } else if !self.blank {
+                        goto(b, ROW_INFO, 1);
+                        ceol(b);
+                    }
                 }
             }
             _ => {
                 let k = i.wrapping_sub(S_ENTRY0);
-                if k < 32 {
+                let page = matches!(self.screen, Screen::Page | Screen::Running | Screen::Break);
+                if k < 32 && page {
                     let line = (page_of(self.cursor) << 5) | k;
-                    self.entry(eng, b, line, false);
+                    self.entry(eng, b, line, !self.blank);
                 }
             }
+        }
+    }
+
+    /// The screen's own part over the frame: what entering it drew.
+    fn overlay<B: Board>(&mut self, eng: &Engine, b: &mut B) {
+        match self.screen {
+            Screen::Help => self.help(b),
+            Screen::Ldt { sel } => self.ldt_draw(eng, b, sel),
+            Screen::List { .. } => {
+                text::LIST_PROMPT.send(b);
+                raw(b, b"\r\n");
+            }
+            Screen::Write { .. } | Screen::Read(_) => {
+                let write = matches!(self.screen, Screen::Write { .. });
+                let (col, prompt, row, at) = if write {
+                    (17, text::WRITE_PROMPT, 11, 1)
+                } else {
+                    (25, text::READ_PROMPT, ROW_STATUS, COL_STATUS_A)
+                };
+                self.transfer_screen(b, col, prompt);
+                goto(b, row, at);
+            }
+            Screen::Break => {
+                goto(b, ROW_STATUS, COL_STRIKE);
+                text::STRIKE.send(b);
+            }
+            Screen::Page | Screen::Running => {}
         }
     }
 
     /// One page entry `NNN NAME`; the cursor line in reverse video. `pad` overwrites what a
     /// longer name left behind.
     pub(super) fn entry<B: Board>(&self, eng: &Engine, b: &mut B, line: u8, pad: bool) {
+        if b.tx_dropped() {
+            return;
+        }
         let (row, col) = entry_pos(line);
         goto(b, row, col);
         let rev = line == self.cursor && !matches!(self.screen, Screen::Ldt { .. });
@@ -208,29 +279,32 @@ impl Editor {
         }
     }
 
-    /// A message on the status line (after `*** User File 0 ***`).
-    pub(super) fn message<B: Board>(&mut self, b: &mut B, t: Txt) {
-        let col = if matches!(self.screen, Screen::Ldt { .. }) {
+    /// Where messages go on the status line.
+    fn status_col(&self) -> u8 {
+        if matches!(self.screen, Screen::Ldt { .. }) {
             COL_LDT_MSG
         } else {
             COL_STATUS_B
-        };
-        goto(b, ROW_STATUS, col);
+        }
+    }
+
+    /// A message on the status line (after `*** User File 0 ***`).
+    pub(super) fn message<B: Board>(&mut self, b: &mut B, t: Txt) {
+        goto(b, ROW_STATUS, self.status_col());
         t.send(b);
         ceol(b);
-        self.message = true;
+        self.msg = Some(t);
     }
 
     pub(super) fn clear_message<B: Board>(&mut self, b: &mut B) {
-        if self.message {
-            let col = if matches!(self.screen, Screen::Ldt { .. }) {
-                COL_LDT_MSG
-            } else {
-                COL_STATUS_B
-            };
-            goto(b, ROW_STATUS, col);
+        if self.msg.is_some() {
+            goto(b, ROW_STATUS, self.status_col());
             ceol(b);
-            self.message = false;
+            self.msg = None;
+        }
+        // Lost input stays reported until a line is entered on an up-to-date screen.
+        if self.render >= STEPS {
+            self.lost = false;
         }
         if self.info {
             goto(b, ROW_INFO, 1);

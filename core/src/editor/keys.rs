@@ -1,17 +1,15 @@
 //! Decoder of the bytes a terminal sends: plain characters and the escape sequences of the
-//! cursor keys, Home, Insert and Delete.
+//! cursor keys, Home, Insert and Delete (SPEC §8, version-2 rules).
 //!
-//! Rules that keep typed words safe from broken sequences:
-//! - a sequence whose next byte does not fit (a control character, or a letter that is not
-//!   a known final without parameters) is dropped and that byte is handed on as a character;
-//! - a sequence not finished within [`TIMEOUT_MS`] is dropped (terminals send a sequence
-//!   back to back; a person typing ESC then a word is slower);
-//! - complete but unknown sequences (`ESC[15~`, `ESC[1;5P`) are swallowed whole.
-
-/// A sequence older than this is abandoned.
-pub const TIMEOUT_MS: u32 = 50;
-/// Parameter and intermediate bytes accepted in one CSI sequence.
-const MAX_CSI_LEN: u8 = 12;
+//! - ESC always starts a sequence, however late the next byte comes: ESC alone means
+//!   nothing in the editor, so a laggy link cannot turn `ESC [ A` into typed text.
+//! - A sequence ends at its final byte and is then either a key or swallowed whole:
+//!   a CSI (`ESC [`) at any byte 0x40–0x7E, with or without parameters; an SS3 (`ESC O`) at
+//!   its next byte; `ESC [ [ x` (Linux console F1–F5) at `x`; any other `ESC x` at its first
+//!   byte 0x30–0x7E (after intermediates 0x20–0x2F). A sequence the editor does not use
+//!   (End, PgUp, focus, function keys, `ESC[Z`) changes nothing.
+//! - A control character, DEL or a byte ≥ 0x80 inside a sequence breaks it off and is handed
+//!   on as itself (CR still submits, ^X still clears); a new ESC starts a new sequence.
 
 /// A decoded key.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -48,21 +46,21 @@ enum State {
     Ground,
     /// After ESC.
     Esc,
-    /// After `ESC [`: parameter so far, bytes so far.
-    Csi {
-        param: u8,
-        len: u8,
-    },
+    /// After ESC and intermediates (0x20–0x2F): the next other byte ends it.
+    EscInter,
+    /// After `ESC [`: the first parameter so far; `more` once a separator or intermediate
+    /// has come (later parameters are not kept); `any` once any byte has come.
+    Csi { param: u8, more: bool, any: bool },
     /// After `ESC O`.
     Ss3,
+    /// After `ESC [ [` (Linux console function keys).
+    Linux,
 }
 
 /// The escape-sequence state machine.
 #[derive(Clone, Copy, Debug)]
 pub struct KeyDecoder {
     state: State,
-    /// When the current sequence started.
-    since_ms: u32,
 }
 
 impl Default for KeyDecoder {
@@ -71,7 +69,7 @@ impl Default for KeyDecoder {
     }
 }
 
-/// The key a letter names after `ESC[` or `ESC O`.
+/// The key a final letter names after `ESC[` or `ESC O`.
 fn letter_key(c: u8) -> Option<Key> {
     match c {
         b'A' => Some(Key::Up),
@@ -83,12 +81,16 @@ fn letter_key(c: u8) -> Option<Key> {
     }
 }
 
+/// The event for a finished sequence: its key, or nothing.
+fn done(key: Option<Key>) -> Event {
+    key.map_or(Event::None, Event::Key)
+}
+
 impl KeyDecoder {
     /// A decoder outside any sequence.
     pub const fn new() -> Self {
         Self {
             state: State::Ground,
-            since_ms: 0,
         }
     }
 
@@ -97,104 +99,76 @@ impl KeyDecoder {
         self.state != State::Ground
     }
 
-    /// Drop a sequence that has waited longer than [`TIMEOUT_MS`].
-    pub fn expire(&mut self, now_ms: u32) {
-        if self.pending() && now_ms.wrapping_sub(self.since_ms) > TIMEOUT_MS {
+    /// Decode one received byte.
+    pub fn feed(&mut self, byte: u8) -> Event {
+        let state = self.state;
+        if state == State::Ground || !(0x20..0x7F).contains(&byte) {
+            // Outside a sequence, or a byte that breaks one off: ESC starts a (new) sequence,
+            // anything else is a character.
+            if byte == 0x1B {
+                self.state = State::Esc;
+                return Event::None;
+            }
             self.state = State::Ground;
+            return Event::Char(byte);
         }
-    }
-
-    /// Decode one received byte at time `now_ms`.
-    pub fn feed(&mut self, byte: u8, now_ms: u32) -> Event {
-        self.expire(now_ms);
-        match self.state {
-            State::Ground => self.ground(byte, now_ms),
+        // Printable bytes inside a sequence: the sequence ends unless it says otherwise.
+        self.state = State::Ground;
+        match state {
             State::Esc => match byte {
                 b'[' => {
-                    self.state = State::Csi { param: 0, len: 0 };
-                    Event::None
+                    self.state = State::Csi {
+                        param: 0,
+                        more: false,
+                        any: false,
+                    }
                 }
-                b'O' => {
-                    self.state = State::Ss3;
-                    Event::None
-                }
-                b'H' => {
-                    // Home as C-Kermit sends it.
-                    self.state = State::Ground;
-                    Event::Key(Key::Home)
-                }
-                _ => self.abandon(byte, now_ms),
+                b'O' => self.state = State::Ss3,
+                // Intermediates: the final byte is still to come.
+                0x20..=0x2F => self.state = State::EscInter,
+                // Home as C-Kermit sends it.
+                b'H' => return Event::Key(Key::Home),
+                _ => {}
             },
-            State::Ss3 => match byte {
-                b'A'..=b'D' | b'H' => {
-                    self.state = State::Ground;
-                    letter_key(byte).map_or(Event::None, Event::Key)
-                }
-                // End and the keypad / function keys that VT100s send as SS3: ignored.
-                b'F' | b'P'..=b'S' => {
-                    self.state = State::Ground;
-                    Event::None
-                }
-                _ => self.abandon(byte, now_ms),
-            },
-            State::Csi { param, len } => match byte {
+            State::Ss3 => return done(letter_key(byte)),
+            State::Csi { param, more, any } => match byte {
                 b'0'..=b'9' => {
-                    let p = param.saturating_mul(10).saturating_add(byte - b'0');
-                    self.csi_more(p, len, byte, now_ms)
-                }
-                // Parameter separators and intermediates: the first parameter is kept.
-                b';' | b':' | b'<'..=b'?' | 0x20..=0x2F => self.csi_more(param, len, byte, now_ms),
-                b'~' => {
-                    self.state = State::Ground;
-                    match param {
-                        1 | 7 => Event::Key(Key::Home),
-                        2 => Event::Key(Key::Insert),
-                        3 => Event::Key(Key::Delete),
-                        _ => Event::None,
-                    }
-                }
-                0x40..=0x7D => {
-                    if let Some(k) = letter_key(byte) {
-                        self.state = State::Ground;
-                        Event::Key(k)
-                    } else if len > 0 {
-                        // A complete sequence we do not use (`ESC[1;5P`): swallow it.
-                        self.state = State::Ground;
-                        Event::None
+                    let param = if more {
+                        param
                     } else {
-                        self.abandon(byte, now_ms)
+                        param.saturating_mul(10).saturating_add(byte - b'0')
+                    };
+                    self.state = State::Csi {
+                        param,
+                        more,
+                        any: true,
+                    };
+                }
+                // Other parameter bytes and intermediates: later parameters are not kept.
+                0x20..=0x3F => {
+                    self.state = State::Csi {
+                        param,
+                        more: true,
+                        any: true,
                     }
                 }
-                _ => self.abandon(byte, now_ms),
+                b'[' if !any => self.state = State::Linux,
+                b'~' => {
+                    return done(match param {
+                        1 | 7 => Some(Key::Home),
+                        2 => Some(Key::Insert),
+                        3 => Some(Key::Delete),
+                        _ => None,
+                    })
+                }
+                // Any other final byte 0x40–0x7E.
+                _ => return done(letter_key(byte)),
             },
+            State::EscInter if byte < 0x30 => self.state = State::EscInter,
+            // `ESC [ [ x`, `ESC ( B`, and the Ground state (handled above).
+            State::EscInter | State::Linux | State::Ground => {}
         }
-    }
-
-    fn csi_more(&mut self, param: u8, len: u8, byte: u8, now_ms: u32) -> Event {
-        if len >= MAX_CSI_LEN {
-            return self.abandon(byte, now_ms);
-        }
-        self.state = State::Csi {
-            param,
-            len: len + 1,
-        };
         Event::None
-    }
-
-    /// The sequence is broken: forget it and treat `byte` as if no ESC had come.
-    fn abandon(&mut self, byte: u8, now_ms: u32) -> Event {
-        self.state = State::Ground;
-        self.ground(byte, now_ms)
-    }
-
-    fn ground(&mut self, byte: u8, now_ms: u32) -> Event {
-        if byte == 0x1B {
-            self.state = State::Esc;
-            self.since_ms = now_ms;
-            Event::None
-        } else {
-            Event::Char(byte)
-        }
     }
 }
 
@@ -205,80 +179,165 @@ mod tests {
     fn feed_all(d: &mut KeyDecoder, bytes: &[u8]) -> std::vec::Vec<Event> {
         bytes
             .iter()
-            .map(|&c| d.feed(c, 0))
+            .map(|&c| d.feed(c))
             .filter(|e| *e != Event::None)
             .collect()
     }
 
+    /// Every key form terminals send (VT100, xterm, Linux console, C-Kermit).
+    const KEYS: &[(&[u8], Key)] = &[
+        (b"\x1b[A", Key::Up),
+        (b"\x1b[B", Key::Down),
+        (b"\x1b[C", Key::Right),
+        (b"\x1b[D", Key::Left),
+        (b"\x1bOA", Key::Up),
+        (b"\x1bOB", Key::Down),
+        (b"\x1bOC", Key::Right),
+        (b"\x1bOD", Key::Left),
+        (b"\x1b[1~", Key::Home),
+        (b"\x1b[7~", Key::Home),
+        (b"\x1b[H", Key::Home),
+        (b"\x1bOH", Key::Home),
+        (b"\x1bH", Key::Home),
+        (b"\x1b[2~", Key::Insert),
+        (b"\x1b[3~", Key::Delete),
+        (b"\x1b[1;5A", Key::Up),
+        (b"\x1b[1;5C", Key::Right),
+        (b"\x1b[1;2H", Key::Home),
+        (b"\x1b[3;5~", Key::Delete),
+        (b"\x1b[1111111111111111111111A", Key::Up),
+    ];
+
+    /// Complete sequences the editor does not use: swallowed whole.
+    const UNUSED: &[&[u8]] = &[
+        b"\x1b[Z",
+        b"\x1b[F",
+        b"\x1b[4~",
+        b"\x1b[8~",
+        b"\x1b[5~",
+        b"\x1b[6~",
+        b"\x1b[I",
+        b"\x1b[O",
+        b"\x1b[E",
+        b"\x1b[G",
+        b"\x1b[15~",
+        b"\x1b[24~",
+        b"\x1b[1;5P",
+        b"\x1b[1;2F",
+        b"\x1b[?25h",
+        b"\x1b[200~",
+        b"\x1b[201~",
+        b"\x1b[<0;12;5M",
+        b"\x1b[@",
+        b"\x1b[`",
+        b"\x1b[}",
+        b"\x1bOF",
+        b"\x1bOP",
+        b"\x1bOQ",
+        b"\x1bOR",
+        b"\x1bOS",
+        b"\x1bOM",
+        b"\x1bOp",
+        b"\x1bOj",
+        b"\x1b[[A",
+        b"\x1b[[B",
+        b"\x1b[[C",
+        b"\x1b[[D",
+        b"\x1b[[E",
+        b"\x1bZ",
+        b"\x1bc",
+        b"\x1b7",
+        b"\x1b(B",
+        b"\x1b ![",
+        b"\x1b(O",
+        b"\x1be",
+    ];
+
     #[test]
     fn every_key_form() {
-        let cases: &[(&[u8], Key)] = &[
-            (b"\x1b[A", Key::Up),
-            (b"\x1b[B", Key::Down),
-            (b"\x1b[C", Key::Right),
-            (b"\x1b[D", Key::Left),
-            (b"\x1bOA", Key::Up),
-            (b"\x1bOB", Key::Down),
-            (b"\x1bOC", Key::Right),
-            (b"\x1bOD", Key::Left),
-            (b"\x1b[1~", Key::Home),
-            (b"\x1b[7~", Key::Home),
-            (b"\x1b[H", Key::Home),
-            (b"\x1bOH", Key::Home),
-            (b"\x1bH", Key::Home),
-            (b"\x1b[2~", Key::Insert),
-            (b"\x1b[3~", Key::Delete),
-            (b"\x1b[1;5C", Key::Right),
-        ];
-        for (seq, key) in cases {
+        for (seq, key) in KEYS {
             let mut d = KeyDecoder::new();
             assert_eq!(feed_all(&mut d, seq), [Event::Key(*key)], "{seq:?}");
-            assert!(!d.pending());
+            assert!(!d.pending(), "{seq:?}");
         }
     }
 
     #[test]
-    fn broken_sequences_hand_on_the_next_byte() {
+    fn every_unused_sequence_is_swallowed_whole_and_the_next_byte_is_typed() {
+        for seq in UNUSED {
+            let mut d = KeyDecoder::new();
+            let mut bytes = seq.to_vec();
+            bytes.extend_from_slice(b"Z\r");
+            assert_eq!(
+                feed_all(&mut d, &bytes),
+                [Event::Char(b'Z'), Event::Char(b'\r')],
+                "{seq:?}"
+            );
+            assert!(!d.pending(), "{seq:?}");
+        }
+    }
+
+    #[test]
+    fn only_the_final_byte_ends_a_sequence() {
+        for (seq, _) in KEYS {
+            let mut d = KeyDecoder::new();
+            for (i, &c) in seq.iter().enumerate() {
+                let ev = d.feed(c);
+                if i + 1 < seq.len() {
+                    assert_eq!(ev, Event::None, "{seq:?} byte {i}");
+                    assert!(d.pending(), "{seq:?} byte {i}");
+                }
+            }
+        }
+        for seq in UNUSED {
+            let mut d = KeyDecoder::new();
+            for &c in seq.iter() {
+                assert_eq!(d.feed(c), Event::None, "{seq:?}");
+            }
+            assert!(!d.pending(), "{seq:?}");
+        }
+    }
+
+    #[test]
+    fn controls_break_a_sequence_off_and_are_handed_on() {
+        for cut in [&b"\x1b"[..], b"\x1b[", b"\x1b[1", b"\x1b[12;", b"\x1bO", b"\x1b[["] {
+            for ctl in [b'\r', b'\n', 0x18, 0x08, 0x7F, 0x0C, 0x00, 0x80, 0xFF] {
+                let mut d = KeyDecoder::new();
+                let mut bytes = cut.to_vec();
+                bytes.push(ctl);
+                assert_eq!(feed_all(&mut d, &bytes), [Event::Char(ctl)], "{bytes:?}");
+                assert!(!d.pending());
+            }
+            // A new ESC starts over.
+            let mut d = KeyDecoder::new();
+            let mut bytes = cut.to_vec();
+            bytes.extend_from_slice(b"\x1b[A");
+            assert_eq!(feed_all(&mut d, &bytes), [Event::Key(Key::Up)], "{bytes:?}");
+        }
+    }
+
+    #[test]
+    fn escape_then_printable_bytes_is_a_sequence_never_text() {
         let mut d = KeyDecoder::new();
-        // ESC then a word: the word survives.
+        // A laggy link: ESC, then `[A` much later: still the arrow (the decoder has no clock).
+        assert_eq!(d.feed(0x1B), Event::None);
+        assert_eq!(feed_all(&mut d, b"[A"), [Event::Key(Key::Up)]);
+        // ESC then a word: `ESC e` is one sequence, the rest is typed.
         assert_eq!(
             feed_all(&mut d, b"\x1bend"),
-            [Event::Char(b'e'), Event::Char(b'n'), Event::Char(b'd')]
+            [Event::Char(b'n'), Event::Char(b'd')]
         );
-        // ESC [ then CR: CR survives.
-        assert_eq!(feed_all(&mut d, b"\x1b[\r"), [Event::Char(b'\r')]);
-        // ESC [ then an unknown letter without parameters: the letter survives.
-        assert_eq!(
-            feed_all(&mut d, b"\x1b[END"),
-            [Event::Char(b'E'), Event::Char(b'N'), Event::Char(b'D')]
-        );
-        // Unknown complete sequences are swallowed.
-        assert_eq!(feed_all(&mut d, b"\x1b[15~\x1b[1;5Px"), [Event::Char(b'x')]);
-        // A new ESC restarts.
-        assert_eq!(feed_all(&mut d, b"\x1b\x1b[A"), [Event::Key(Key::Up)]);
-        // Overlong parameter lists end the sequence and hand on the byte.
-        let long = b"\x1b[1111111111111111A";
-        let evs = feed_all(&mut d, long);
-        assert!(evs.contains(&Event::Char(b'A')));
-        assert!(!d.pending());
+        // Shift-Tab leaves nothing behind.
+        assert_eq!(feed_all(&mut d, b"\x1b[ZZ"), [Event::Char(b'Z')]);
     }
 
     #[test]
-    fn a_slow_escape_times_out() {
-        let mut d = KeyDecoder::new();
-        assert_eq!(d.feed(0x1B, 1000), Event::None);
-        // 'O' 200 ms later is a typed letter, not SS3.
-        assert_eq!(d.feed(b'O', 1200), Event::Char(b'O'));
-        assert_eq!(d.feed(b'R', 1201), Event::Char(b'R'));
-    }
-
-    #[test]
-    fn any_byte_stream_ends_in_ground_or_pending_and_never_panics() {
+    fn any_byte_stream_never_panics() {
         let mut d = KeyDecoder::new();
         let mut x: u32 = 12345;
-        for t in 0..20000u32 {
+        for _ in 0..20000u32 {
             x = x.wrapping_mul(1103515245).wrapping_add(12345);
-            let _ = d.feed((x >> 16) as u8, t / 8);
+            let _ = d.feed((x >> 16) as u8);
         }
     }
 }

@@ -35,6 +35,12 @@ impl Editor {
 
     pub(super) fn ldt_enter<B: Board>(&mut self, eng: &Engine, b: &mut B) {
         self.screen = Screen::Ldt { sel: 0 };
+        self.ldt_draw(eng, b, 0);
+        self.msg = None;
+    }
+
+    /// The LDT screen over the work area and the status line, timer `sel` selected.
+    pub(super) fn ldt_draw<B: Board>(&mut self, eng: &Engine, b: &mut B, sel: u8) {
         self.clear_area(b);
         for (half, &row) in LDT_ROWS.iter().enumerate() {
             goto(b, row, LDT_COL);
@@ -47,11 +53,10 @@ impl Editor {
             goto(b, row + 1, LDT_COL);
             text::LDT_EQ.send(b);
         }
-        self.ldt_values(eng, b, 0);
+        self.ldt_values(eng, b, sel);
         goto(b, ROW_STATUS, COL_STATUS_A);
         text::LDT_STATUS.send(b);
         ceol(b);
-        self.message = false;
     }
 
     /// Both rows of preset values, `sel` in reverse video.
@@ -104,7 +109,7 @@ impl Editor {
                 goto(b, ROW_STATUS, COL_STATUS_A);
                 text::USER_FILE.send(b);
                 ceol(b);
-                self.message = false;
+                self.msg = None;
             }
             Parsed::Number(v) => {
                 eng.prog.presets[usize::from(sel) % UNITS] = v.min(255) as u8;

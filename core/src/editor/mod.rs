@@ -45,8 +45,9 @@ use super::image::{decode_into, image_byte, image_crc, ImageError, IMAGE_LEN};
 use super::opcodes::{self, END, KEY, NOP};
 use super::stats::{self, ScanStats};
 use super::store;
-use draw::STEPS;
+use draw::{S_BS, S_PROMPT, S_STATUS_B, STEPS};
 use keys::{Event, Key, KeyDecoder};
+use core::mem::discriminant;
 use layout::*;
 use line::Parsed;
 use read::{ReadPhase, ReadState};
@@ -124,8 +125,14 @@ pub struct Editor {
     shown_bs: u8,
     /// Port Byte value on the screen, once a PPx has shown one.
     shown_port: Option<u8>,
-    /// A message sits on the status line after column 22 (or 47 in LDT).
-    message: bool,
+    /// The message on the status line after column 22 (or 47 in LDT), kept for redraws.
+    msg: Option<Txt>,
+    /// Received bytes were lost: the status line says so until a line is entered.
+    lost: bool,
+    /// The receive overrun count last reported.
+    seen_lost: u16,
+    /// The redraw under way started from a cleared screen.
+    blank: bool,
     /// STAT's report sits on row 19.
     info: bool,
     /// Next step of a deferred full redraw ([`STEPS`] = done).
@@ -160,7 +167,10 @@ impl Editor {
             data: 0,
             shown_bs: 0,
             shown_port: None,
-            message: false,
+            msg: None,
+            lost: false,
+            seen_lost: 0,
+            blank: false,
             info: false,
             render: STEPS,
             bs_ms: 0,
@@ -174,12 +184,18 @@ impl Editor {
         self.cursor
     }
 
+    /// True while READ takes a file (every byte of it may complete the program).
+    pub fn reading(&self) -> bool {
+        matches!(self.screen, Screen::Read(_))
+    }
+
     /// The Data display's value.
     pub fn data(&self) -> u16 {
         self.data
     }
 
-    /// True while the screen is being drawn piece by piece in RUN mode.
+    /// True while the screen is being drawn piece by piece (RUN mode, or catching up after
+    /// type-ahead in EDIT mode).
     pub fn drawing(&self) -> bool {
         self.render < STEPS
     }
@@ -187,28 +203,52 @@ impl Editor {
     /// Power-up in EDIT mode: draw the whole main screen.
     pub fn boot<B: Board>(&mut self, eng: &Engine, b: &mut B) {
         // One instance of the drawing code: every entry point goes through `Tracked`.
-        let b = &mut Tracked { b, sent: false };
+        let b = &mut Tracked::new(b, false);
         self.screen = Screen::Page;
-        self.full_redraw(eng, b);
-        self.park(b);
+        self.full_redraw();
+        self.catch_up(eng, b);
     }
 
     /// Autostart: the program already runs; draw the running screen later, never waiting.
     pub fn boot_running<B: Board>(&mut self, eng: &Engine, b: &mut B) {
         // One instance of the drawing code: every entry point goes through `Tracked`.
-        let b = &mut Tracked { b, sent: false };
+        let b = &mut Tracked::new(b, false);
         let _ = eng;
         self.begin_run(b);
         self.render = 0;
     }
 
     /// One received byte in EDIT mode. Returns [`Mode::Run`] when RUN or EX0 start the program.
+    ///
+    /// Input first (SPEC §8 type-ahead): when the transmit ring is full while more bytes
+    /// are waiting, the rest of the drawing is dropped, and the screen catches up step by
+    /// step once input pauses ([`Editor::idle`]); LIST and WRITE always send whole.
     pub fn key<B: Board>(&mut self, byte: u8, eng: &mut Engine, b: &mut B) -> Mode {
-        let mut t = Tracked { b, sent: false };
+        let may_mute = !matches!(self.screen, Screen::List { .. } | Screen::Write { .. });
+        let mut t = Tracked::new(b, may_mute);
+        // A screen still behind is brought up to date first, unless input is waiting.
+        self.catch_up(eng, &mut t);
+        let before = discriminant(&self.screen);
         self.echo_only = false;
         let mode = self.key_inner(byte, eng, &mut t);
-        if t.sent && !self.echo_only && mode == Mode::Edit {
-            self.park(&mut t);
+        if t.dropped {
+            // Redraw what this key may have changed: the prompt line after an echo, the
+            // values, the page and the status line after a command, all after a new screen.
+            let from = if discriminant(&self.screen) != before {
+                0
+            } else if self.echo_only {
+                S_PROMPT
+            } else {
+                S_BS
+            };
+            self.render = self.render.min(from);
+        }
+        if mode == Mode::Edit {
+            if self.render < STEPS {
+                self.catch_up(eng, &mut t);
+            } else if t.sent && !self.echo_only {
+                self.park(&mut t);
+            }
         }
         mode
     }
@@ -218,7 +258,7 @@ impl Editor {
         if let Screen::Read(rs) = &mut self.screen {
             if Self::read_byte(rs, byte, now, eng).is_some() {
                 self.cursor = 0;
-                self.back_to_page(eng, b);
+                self.back_to_page();
             }
             return Mode::Edit;
         }
@@ -227,8 +267,13 @@ impl Editor {
         if byte == b'\n' && was_cr && !self.keys.pending() {
             return Mode::Edit;
         }
-        let event = self.keys.feed(byte, now);
+        let event = self.keys.feed(byte);
         if event == Event::None {
+            return Mode::Edit;
+        }
+        if event == Event::Char(0x0C) {
+            // Ctrl-L: the whole screen again, as it stands (a terminal that connected late).
+            self.render = 0;
             return Mode::Edit;
         }
         // One line per screen: each screen's keys live in its own room.
@@ -245,14 +290,43 @@ impl Editor {
         }
     }
 
-    /// Nothing received in EDIT mode (time-outs such as READ's use `b.now_ms()`).
+    /// Nothing received in EDIT mode: the screen catches up after type-ahead, lost input is
+    /// reported, and time-outs such as READ's run (on `b.now_ms()`).
     pub fn idle<B: Board>(&mut self, eng: &mut Engine, b: &mut B) {
         // One instance of the drawing code: every entry point goes through `Tracked`.
-        let b = &mut Tracked { b, sent: false };
+        let b = &mut Tracked::new(b, true);
         // No END runs in the editor: retire expired timers here instead.
         eng.retire_timers(b);
-        let now = b.now_ms();
-        self.keys.expire(now);
-        self.read_idle(now, b);
+        let lost = b.rx_overruns();
+        if lost != self.seen_lost {
+            // Bytes were lost all the same: never silently (the status line says so).
+            self.seen_lost = lost;
+            self.lost = true;
+            self.render = self.render.min(S_STATUS_B);
+        }
+        self.catch_up(eng, b);
+        if self.render >= STEPS {
+            let now = b.now_ms();
+            self.read_idle(now, b);
+        }
+    }
+
+    /// Draw the steps of a redraw still under way, until done or until input is waiting
+    /// (then the step is drawn again next time); done, the cursor goes back to the prompt.
+    fn catch_up<B: Board>(&mut self, eng: &Engine, t: &mut Tracked<'_, B>) {
+        if self.render >= STEPS || t.mute {
+            return;
+        }
+        // Output cut short may have left reverse video on.
+        normal(t);
+        while self.render < STEPS {
+            self.step(self.render, eng, t);
+            if t.mute {
+                return;
+            }
+            self.render += 1;
+        }
+        self.blank = false;
+        self.park(t);
     }
 }

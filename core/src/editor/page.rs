@@ -59,7 +59,7 @@ impl Editor {
                 let word = &self.line[..usize::from(n.min(LINE_MAX))];
                 match word {
                     b"?" => self.help(b),
-                    b"/" => self.full_redraw(eng, b),
+                    b"/" => self.full_redraw(),
                     b"INS" => self.insert_line(eng, b),
                     b"DEL" => self.delete_line(eng, b),
                     b"RUN" => {

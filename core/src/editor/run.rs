@@ -8,7 +8,7 @@ impl Editor {
     pub(super) fn break_event<B: Board>(&mut self, eng: &mut Engine, b: &mut B) -> Mode {
         self.screen = Screen::Page;
         if self.render < STEPS {
-            self.full_redraw(eng, b);
+            self.full_redraw();
         } else {
             goto(b, ROW_STATUS, COL_STATUS_B);
             ceol(b);
@@ -32,7 +32,7 @@ impl Editor {
         goto(b, ROW_STATUS, COL_STATUS_B);
         text::RUNNING.send(b);
         ceol(b);
-        self.message = false;
+        self.msg = None;
         Mode::Run
     }
 
@@ -47,7 +47,7 @@ impl Editor {
     /// and deferred screen drawing, only as much as `b.tx_room()` allows. Never waits.
     pub fn after_scan<B: Board>(&mut self, eng: &mut Engine, b: &mut B) {
         // One instance of the drawing code: every entry point goes through `Tracked`.
-        let b = &mut Tracked { b, sent: false };
+        let b = &mut Tracked::new(b, false);
         if self.render < STEPS {
             while self.render < STEPS && b.tx_room() >= STEP_MAX {
                 self.step(self.render, eng, b);
@@ -80,7 +80,7 @@ impl Editor {
     /// KEY saw `/`: show `Strike any key -->`; the next [`Editor::key`] returns to the editor.
     pub fn on_break<B: Board>(&mut self, _eng: &mut Engine, b: &mut B) {
         // One instance of the drawing code: every entry point goes through `Tracked`.
-        let b = &mut Tracked { b, sent: false };
+        let b = &mut Tracked::new(b, false);
         let now = b.now_ms();
         self.stats.run_ms = now.wrapping_sub(self.run_start_ms);
         self.screen = Screen::Break;

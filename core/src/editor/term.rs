@@ -16,6 +16,9 @@ pub fn raw<B: Board>(b: &mut B, bytes: &[u8]) {
 
 /// Cursor to `row`, `col` (1-based), in the shortest form (`ESC[rH` for column 1).
 pub fn goto<B: Board>(b: &mut B, row: u8, col: u8) {
+    if b.tx_dropped() {
+        return;
+    }
     raw(b, b"\x1b[");
     num(b, u32::from(row));
     if col > 1 {
@@ -59,6 +62,9 @@ const POW10: [u32; 9] = [
 
 /// The decimal digits of `v`, most significant first, `width` digits at least (leading zeros).
 fn digits<B: Board>(b: &mut B, mut v: u32, width: u8) {
+    if b.tx_dropped() {
+        return;
+    }
     let mut started = false;
     for (i, &p) in POW10.iter().enumerate() {
         let mut d = b'0';

@@ -40,6 +40,9 @@ impl Txt {
 
     /// Send the text (waits while the transmit buffer is full).
     pub fn send<B: Board>(self, b: &mut B) {
+        if b.tx_dropped() {
+            return;
+        }
         for i in 0..self.len {
             b.feed_watchdog();
             b.tx(self.byte(i));
@@ -128,6 +131,8 @@ texts! {
     STRIKE = "Strike any key -->";
     /// Unknown input.
     UNRECOGNIZED = "*** Unrecognized Input! ***";
+    /// Received bytes were lost (receive ring overrun) despite type-ahead.
+    INPUT_LOST = "*** Input lost (overrun) ***";
     /// More than 8 characters.
     TOO_LONG = "*** Line too long (8 max) ***";
     /// A number past 65535.

@@ -1,12 +1,41 @@
 //! [`Tracked`]: a board that notes whether anything was sent, so each entry point knows
-//! whether to put the terminal cursor back at the prompt.
+//! whether to put the terminal cursor back at the prompt, and that puts input first
+//! (SPEC §8 type-ahead): once the transmit ring is full while received bytes wait, it drops
+//! the rest of the call's output instead of waiting, and the editor redraws later.
 
 use super::*;
 
-/// A board that notes whether anything was sent (so the cursor is put back at the prompt).
+/// Room for the longest escape sequence the editor sends (`ESC [ 2 4 ; 4 7 H` and a few
+/// digits after it), so starting one never waits.
+const SEQ_ROOM: u8 = 16;
+
+/// A board that notes whether anything was sent (so the cursor is put back at the prompt)
+/// and mutes its output rather than keep received bytes waiting.
 pub(super) struct Tracked<'a, B: Board> {
     pub(super) b: &'a mut B,
+    /// Something went out.
     pub(super) sent: bool,
+    /// Muting is allowed (not while LIST or WRITE send their text).
+    pub(super) may_mute: bool,
+    /// Output is dropped from now on.
+    pub(super) mute: bool,
+    /// Something was dropped: the screen is behind.
+    pub(super) dropped: bool,
+    /// The last byte sent (muting never cuts an `ESC [ n ; n X` sequence in half).
+    last: u8,
+}
+
+impl<'a, B: Board> Tracked<'a, B> {
+    pub(super) fn new(b: &'a mut B, may_mute: bool) -> Self {
+        Self {
+            b,
+            sent: false,
+            may_mute,
+            mute: false,
+            dropped: false,
+            last: 0,
+        }
+    }
 }
 
 impl<B: Board> Board for Tracked<'_, B> {
@@ -37,8 +66,27 @@ impl<B: Board> Board for Tracked<'_, B> {
     fn rx(&mut self) -> Option<u8> {
         self.b.rx()
     }
+    // One copy: every byte the editor sends comes through here.
+    #[inline(never)]
     fn tx(&mut self, byte: u8) {
+        // Sending would wait while input is pending: input wins.
+        // Room this byte needs to go out without waiting. A sequence `ESC [ n ; n X` is
+        // started only with room for all of it and never cut: the terminal sees no half
+        // sequence (after a digit of plain text the cut just comes a byte later).
+        let need: u8 = match (byte, self.last) {
+            (0x1B, _) => SEQ_ROOM,
+            (_, 0x1B | b'[' | b'0'..=b'9' | b';') => 0,
+            _ => 1,
+        };
+        if self.may_mute && !self.mute && self.b.tx_room() < need && self.b.rx_pending() {
+            self.mute = true;
+        }
+        if self.mute {
+            self.dropped = true;
+            return;
+        }
         self.sent = true;
+        self.last = byte;
         self.b.tx(byte)
     }
     fn tx_room(&mut self) -> u8 {
@@ -49,6 +97,12 @@ impl<B: Board> Board for Tracked<'_, B> {
     }
     fn eeprom_update(&mut self, addr: u16, value: u8) {
         self.b.eeprom_update(addr, value)
+    }
+    fn tx_dropped(&mut self) -> bool {
+        self.mute
+    }
+    fn rx_pending(&mut self) -> bool {
+        self.b.rx_pending()
     }
     fn rx_overruns(&mut self) -> u16 {
         self.b.rx_overruns()

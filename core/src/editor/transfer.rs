@@ -13,8 +13,8 @@ impl Editor {
     ) -> Mode {
         let is_list = matches!(self.screen, Screen::List { .. });
         match event {
-            Event::Char(b'/') if !sent => self.back_to_page(eng, b),
-            Event::Char(b'\r' | b'\n') if sent => self.back_to_page(eng, b),
+            Event::Char(b'/') if !sent => self.back_to_page(),
+            Event::Char(b'\r' | b'\n') if sent => self.back_to_page(),
             Event::Char(b'\r' | b'\n') => {
                 if is_list {
                     Self::send_listing(eng, b);
@@ -42,7 +42,7 @@ impl Editor {
         goto(b, ROW_STATUS, COL_STATUS_A);
         text::TRANSFER.send(b);
         ceol(b);
-        self.message = false;
+        self.msg = None;
     }
 
     /// LIST's text: `NNN NAME` per programmed line, `Tm = preset` per timer, `#` comments.

@@ -122,7 +122,10 @@ fn run(o: &Options) -> Result<(), String> {
     nano.hold_low(RigPin::D9, o.d9_low);
 
     term::catch_quit_signals();
+    term::ignore_background_stops();
+    // A terminal that is not ours (`cargo nano --pty ... &`): no rig keys, no raw mode.
     let stdin_tty = term::is_tty(STDIN);
+    let own_keys = !stdin_tty || term::owns_terminal(STDIN);
     let stdout_tty = term::is_tty(STDOUT);
     let uart = if o.pty {
         let pty = Pty::open(o.link.as_deref()).map_err(|e| format!("cannot open a pty: {e}"))?;
@@ -132,7 +135,12 @@ fn run(o: &Options) -> Result<(), String> {
         }
         let mut out = std::io::stdout();
         let _ = writeln!(out, "{line}");
-        let _ = writeln!(out, "vnano: firmware {}; {}", elf.display(), rig::HELP_PTY);
+        let keys = if own_keys {
+            rig::HELP_PTY
+        } else {
+            "in the background: no rig keys (its terminal is the shell's); end it with kill"
+        };
+        let _ = writeln!(out, "vnano: firmware {}; {keys}", elf.display());
         if let Some(file) = &o.load {
             let _ = writeln!(out, "vnano: loading {} through READ", file.display());
         }
@@ -142,7 +150,7 @@ fn run(o: &Options) -> Result<(), String> {
         Uart::Terminal
     };
     // Raw mode for keys: uTile sees every key at once; ^C goes to uTile in terminal mode.
-    let _raw = if stdin_tty {
+    let _raw = if stdin_tty && own_keys {
         Some(RawMode::enable(STDIN).map_err(|e| format!("raw mode: {e}"))?)
     } else {
         None
@@ -151,7 +159,7 @@ fn run(o: &Options) -> Result<(), String> {
         uart,
         keys: KeyParser::default(),
         tracker: OutputTracker::default(),
-        stdin_open: true,
+        stdin_open: own_keys,
         stdout_tty,
         drawn: None,
         notice: None,

@@ -72,6 +72,12 @@ fn avr_build(features: Option<&str>, memory_x: Option<&Path>) -> Command {
     if let Some(f) = features {
         cmd.args(["--features", f]);
     }
+    // Debian's avr-gcc 5.4 does not know `-no-pie`: rustc retries the link without it and
+    // logs a warning on every build (`./x run` showed it before starting). The retry is the
+    // intended path, so that one log line is silenced; a user's RUSTC_LOG is kept.
+    if std::env::var_os("RUSTC_LOG").is_none() {
+        cmd.env("RUSTC_LOG", "warn,rustc_codegen_ssa::back::link=error");
+    }
     match memory_x {
         Some(path) => cmd.env("UTILE_MEMORY_X", path),
         None => cmd.env_remove("UTILE_MEMORY_X"),

@@ -17,6 +17,23 @@ pub fn is_tty(fd: i32) -> bool {
     unsafe { libc::isatty(fd) == 1 }
 }
 
+/// True if `fd` is a terminal whose foreground is this process's group: its keys are
+/// ours. Started with `&` from an interactive shell, the shell keeps the terminal; reading
+/// it or changing its settings would stop the process (SIGTTIN, SIGTTOU).
+pub fn owns_terminal(fd: i32) -> bool {
+    // SAFETY: tcgetpgrp and getpgrp only inspect the descriptor and the process.
+    unsafe { is_tty(fd) && libc::tcgetpgrp(fd) == libc::getpgrp() }
+}
+
+/// Never stop on terminal output or settings from the background (SIGTTOU with `stty
+/// tostop`, SIGTTIN): a stopped process would not end on SIGTERM until continued.
+pub fn ignore_background_stops() {
+    for sig in [libc::SIGTTOU, libc::SIGTTIN] {
+        // SAFETY: ignoring these job-control signals is always allowed.
+        unsafe { libc::signal(sig, libc::SIG_IGN) };
+    }
+}
+
 /// Raw mode on a terminal for as long as the guard lives.
 pub struct RawMode {
     _private: (),
