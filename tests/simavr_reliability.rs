@@ -5,7 +5,7 @@
 mod common;
 mod rng;
 
-use common::{contains, Nano, Rig, RAMSTART, STACK_PAINT};
+use common::{contains, Board, Rig, RAMSTART, STACK_PAINT};
 use rng::Rng;
 use utile_core::engine::Program;
 use utile_core::opcodes::{self, NOP};
@@ -45,8 +45,8 @@ fn stored_program(eeprom: &[u8]) -> Option<Program> {
 }
 
 /// Boot with `eeprom`, LOAD it, FILL, and type STORE; returns once the CR is received.
-fn start_store(eeprom: &'static [u8]) -> Nano {
-    let mut nano = Nano::boot_with(Rig {
+fn start_store(eeprom: &'static [u8]) -> Board {
+    let mut nano = Board::boot_with(Rig {
         eeprom: Some(eeprom),
         ..Rig::default()
     });
@@ -64,7 +64,7 @@ fn start_store(eeprom: &'static [u8]) -> Nano {
 }
 
 /// READ `file` through the UART and return to the editor.
-fn read_file(nano: &mut Nano, file: &[u8]) {
+fn read_file(nano: &mut Board, file: &[u8]) {
     nano.enter("READ", 300);
     nano.type_bytes(file);
     nano.drain_typed();
@@ -76,7 +76,7 @@ fn read_file(nano: &mut Nano, file: &[u8]) {
 }
 
 /// WRITE: everything the firmware sends from the CR to the end-of-file record's CR LF.
-fn write_file(nano: &mut Nano) -> Vec<u8> {
+fn write_file(nano: &mut Board) -> Vec<u8> {
     nano.enter("WRITE", 300);
     nano.take_output();
     nano.type_bytes(b"\r");
@@ -162,7 +162,7 @@ fn flipped_bytes_in_the_newest_slot_fall_back_to_the_other() {
 }
 
 /// Static data (up to the stack paint) plus the deepest stack since boot.
-fn ram_in_use(nano: &Nano) -> (u16, u16) {
+fn ram_in_use(nano: &Board) -> (u16, u16) {
     let mut end = RAMSTART;
     while !(0..16).all(|i| nano.ram(end + i) == STACK_PAINT) {
         end += 1;
@@ -183,7 +183,7 @@ fn the_deepest_editor_paths_stay_within_the_ram_budget() {
     prog.presets = [3; 16];
     let file = hex_of(&prog);
 
-    let mut nano = Nano::boot();
+    let mut nano = Board::boot();
     assert!(nano.wait_for("*** User File 0 ***", 2000));
     nano.enter("?", 800);
     nano.type_bytes(b" ");
@@ -239,7 +239,7 @@ fn ten_minutes_of_input_and_uart_noise_change_nothing_and_hang_nothing() {
     prog.presets = [7; 16];
     let file = hex_of(&prog);
 
-    let mut nano = Nano::boot();
+    let mut nano = Board::boot();
     assert!(nano.wait_for("*** User File 0 ***", 2000));
     read_file(&mut nano, &file);
     nano.enter("EX0", 500);
@@ -306,7 +306,7 @@ fn ten_minutes_of_input_and_uart_noise_change_nothing_and_hang_nothing() {
 fn write_read_store_power_cycle_load_write_is_bit_exact() {
     let prog = old_program();
     let file = hex_of(&prog);
-    let mut nano = Nano::boot();
+    let mut nano = Board::boot();
     assert!(nano.wait_for("*** User File 0 ***", 2000));
     read_file(&mut nano, &file);
     nano.enter("STORE", 1500);

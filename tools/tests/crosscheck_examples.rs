@@ -30,8 +30,8 @@ mod vnano_util;
 
 use std::path::{Path, PathBuf};
 use utile_kit::listing;
+use utile_kit::simavr::{self as simavr, CpuState, RigPin};
 use utile_kit::simulate::{self, Event};
-use utile_kit::simavr::{CpuState, Nano, RigPin};
 
 /// CPU cycles per millisecond.
 const MS: u64 = 16_000;
@@ -63,7 +63,7 @@ fn examples_dir() -> PathBuf {
 
 /// The simulated chip with the tick grid it keeps.
 struct Chip {
-    nano: Nano,
+    nano: simavr::Chip,
     /// Cycle at which Timer0 was started (tick 0).
     epoch: u64,
     /// Firmware output not yet looked at.
@@ -73,7 +73,7 @@ struct Chip {
 impl Chip {
     /// Power up, find tick 0, wait for the editor's page.
     fn boot() -> Chip {
-        let mut nano = Nano::load(&vnano_util::firmware_elf()).expect("load the firmware");
+        let mut nano = simavr::Chip::load(&vnano_util::firmware_elf()).expect("load the firmware");
         while nano.peek(TCCR0B) == 0 {
             assert_eq!(nano.run_for(1), CpuState::Running);
             assert!(nano.cycle() < 50 * MS, "Timer0 never started");
