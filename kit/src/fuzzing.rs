@@ -14,7 +14,6 @@ use std::format;
 use std::string::{String, ToString};
 use std::vec::Vec;
 
-use crate::sim::{EepromFault, SimBoard, Tear};
 use utile_core::editor::keys::{Event, Key, KeyDecoder, TIMEOUT_MS};
 use utile_core::editor::text;
 use utile_core::editor::{Editor, Mode, READ_TIMEOUT_MS};
@@ -23,6 +22,7 @@ use utile_core::ihex::{self, HexEvent, HexReader};
 use utile_core::image::{self, IMAGE_LEN};
 use utile_core::opcodes::{self, END, NOP};
 use utile_core::store::{self, SLOT_ADDR, SLOT_LEN};
+use crate::sim::{EepromFault, SimBoard, Tear};
 
 /// What a harness says: `Ok` or the broken invariant.
 pub type Verdict = Result<(), String>;

@@ -17,11 +17,11 @@ use std::fmt::Write as _;
 use std::string::String;
 use std::vec::Vec;
 
-use crate::sim::SimBoard;
 use utile_core::board::Board;
 use utile_core::engine::{Engine, Program, UNITS};
 use utile_core::opcodes::{END, POP_Y, PUSH_TQ, STORE_PY};
 use utile_core::ticker::INPUTS;
+use crate::sim::SimBoard;
 
 use crate::listing::{strip_comment, FileErrors, Problem};
 
