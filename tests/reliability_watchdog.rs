@@ -26,7 +26,7 @@ fn hang_elf() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("out/m328-nano-utile-hang-test.elf")
 }
 
-/// Every test here runs the hang-test image (common::Nano reads `UTILE_ELF`).
+/// Every test here runs the hang-test image (common::Board reads `UTILE_ELF`).
 fn use_hang_image() {
     static SET: Once = Once::new();
     SET.call_once(|| {

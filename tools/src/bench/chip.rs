@@ -1,4 +1,4 @@
-//! The chip as the benchmark runs it: the project's simavr wrapper [`Nano`] with input on a
+//! The chip as the benchmark runs it: the project's simavr harness [`Chip`] with input on a
 //! steady line and the 3.4 ms EEPROM write time modelled, plus run loops that keep the
 //! rig's pins asserted and stop when a condition holds.
 
@@ -25,7 +25,7 @@ pub fn load(elf: &Path) -> Result<Chip, String> {
     Ok(nano)
 }
 
-/// The benchmark's run loops on a [`Nano`].
+/// The benchmark's run loops on a [`Chip`].
 pub trait BenchRun {
     /// Runs `cycles` more cycles, re-asserting the rig pins every millisecond. False if the
     /// CPU stopped for good.
