@@ -5,13 +5,17 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::Mutex;
 
 use utile_kit::simavr::{
     frame_cycles, BootSection, Bus, Chip, Reset, RxPacing, CYCLES_PER_MS, F_CPU,
 };
 
-/// Builds a fixture with avr-gcc (once per name) and returns its ELF.
+/// Builds a fixture with avr-gcc (once per name, one build at a time: the tests run in
+/// parallel) and returns its ELF.
 fn fixture(src: &str, name: &str, flags: &[&str]) -> PathBuf {
+    static BUILD: Mutex<()> = Mutex::new(());
+    let _one_at_a_time = BUILD.lock().unwrap_or_else(|e| e.into_inner());
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("simavr-harness");
     std::fs::create_dir_all(&dir).expect("fixture dir");
     let elf = dir.join(format!("{name}-{}.elf", std::process::id()));
