@@ -9,6 +9,27 @@
 //!
 //! One file per job: [`chip`] (load, step, cycles, reset, memory), [`uart`] (the serial
 //! port), [`pins`] (driven inputs, output levels), [`adc`], [`eeprom`], [`bus`].
+//!
+//! ```no_run
+//! use std::path::Path;
+//! use utile_kit::simavr::{BootSection, Bus, Chip, Reset, RxPacing, CYCLES_PER_MS};
+//!
+//! let mut chip = Chip::load(Path::new("out/m328-nano-utile.elf")).unwrap();
+//! chip.load_boot(Path::new("boot.elf"), BootSection::B512).unwrap(); // starts at 0x7E00
+//! chip.set_rx_pacing(RxPacing::Line { baud: 19_200 });
+//! chip.set_analog_mv(6, 2500);
+//! chip.send(b"\x01\x03");
+//! chip.run_for(10 * CYCLES_PER_MS);
+//! for (byte, stop_bit_cycle) in chip.take_output_timed() { /* gaps, bytes */ }
+//! chip.reset(Reset::External); // MCUSR |= EXTRF; chip.cycle() goes on
+//!
+//! let chips = vec![chip, Chip::load(Path::new("other.elf")).unwrap()];
+//! let mut bus = Bus::new(chips, 19_200).with_driver_enable(); // D10 = DE
+//! bus.send(b"request");
+//! bus.run_for(20 * CYCLES_PER_MS);
+//! let replies = bus.take_master();
+//! assert!(bus.collisions().is_empty());
+//! ```
 
 pub mod adc;
 pub mod bus;
