@@ -11,7 +11,7 @@ mod common;
 use std::path::PathBuf;
 use std::sync::Once;
 
-use common::{Nano, Rig, CYCLES_PER_MS};
+use common::{Board, Rig, CYCLES_PER_MS};
 use utile_core::engine::Program;
 use utile_core::opcodes::{lookup, END};
 use utile_kit::sim::SimBoard;
@@ -26,7 +26,7 @@ fn hang_elf() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("out/m328-nano-utile-hang-test.elf")
 }
 
-/// Every test here runs the hang-test image (common::Nano reads `UTILE_ELF`).
+/// Every test here runs the hang-test image (common::Board reads `UTILE_ELF`).
 fn use_hang_image() {
     static SET: Once = Once::new();
     SET.call_once(|| {
@@ -58,7 +58,7 @@ fn eeprom_with_program() -> &'static [u8] {
 }
 
 /// Run until the program drives Y0 and Y7 (at most `max_ms`); the ms it took.
-fn until_running(nano: &mut Nano, max_ms: u64) -> Option<u64> {
+fn until_running(nano: &mut Board, max_ms: u64) -> Option<u64> {
     (1..=max_ms).find(|_| {
         nano.run_ms(1);
         nano.outputs() == 0x81
@@ -67,7 +67,7 @@ fn until_running(nano: &mut Nano, max_ms: u64) -> Option<u64> {
 
 /// Hang the chip from the editor; step until it resets. Returns the ms from the hang byte
 /// to the reset and the pin levels (Y0..Y7) at the instant the pins are outputs again.
-fn hang_and_reset(nano: &mut Nano) -> (f64, u8) {
+fn hang_and_reset(nano: &mut Board) -> (f64, u8) {
     // Stop the program ('/'), leave `Strike any key` with a key, and the outputs stay on.
     nano.type_bytes(b"/");
     assert!(
@@ -125,7 +125,7 @@ fn hang_and_reset(nano: &mut Nano) -> (f64, u8) {
 
 fn check(invert: bool) {
     use_hang_image();
-    let mut nano = Nano::load(Rig {
+    let mut nano = Board::load(Rig {
         d8: true,
         d9: invert,
         eeprom: Some(eeprom_with_program()),
@@ -166,7 +166,7 @@ fn with_d9_grounded_the_outputs_are_high_from_the_first_instant_after_the_reset(
 #[test]
 fn without_d8_the_chip_comes_back_in_the_editor_with_outputs_off() {
     use_hang_image();
-    let mut nano = Nano::load(Rig::default());
+    let mut nano = Board::load(Rig::default());
     // The first screen takes about 0.7 s at 19200 baud.
     nano.run_ms(1000);
     nano.enter("set", 50);

@@ -22,7 +22,7 @@
 mod common;
 mod common_scenario;
 
-use common::{Nano, Rig, CYCLES_PER_MS};
+use common::{Board, Rig, CYCLES_PER_MS};
 use common_scenario::{changes, clock, listing, parse_timeline, Act, DEBOUNCE_MS};
 use utile_core::engine::Program;
 use utile_core::ihex::{HexEvent, HexReader};
@@ -37,7 +37,7 @@ const STEP: u64 = CYCLES_PER_MS / 16;
 
 /// The real image running one program.
 struct Chip {
-    nano: Nano,
+    nano: Board,
     /// Cycle at which the 1 ms tick started (tick 0).
     epoch: u64,
     /// Tick interval in which EX0 started the program.
@@ -51,7 +51,7 @@ struct Chip {
 impl Chip {
     /// Power up and wait for the editor's page.
     fn boot() -> Chip {
-        let mut nano = Nano::load(Rig::default());
+        let mut nano = Board::load(Rig::default());
         while nano.data(TCCR0B) == 0 {
             nano.step();
             assert!(nano.cycles() < 50 * CYCLES_PER_MS, "Timer0 never started");

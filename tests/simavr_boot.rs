@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{Nano, Rig, CYCLES_PER_MS, RAMSTART, STACK_PAINT};
+use common::{Board, Rig, CYCLES_PER_MS, RAMSTART, STACK_PAINT};
 use utile_core::engine::Program;
 use utile_core::opcodes::{END, LOAD_PA, NOT_ALL, STORE_PY};
 use utile_kit::sim::SimBoard;
@@ -19,7 +19,7 @@ fn eeprom_with(uf: &[u8]) -> &'static [u8] {
 
 /// Step until the pins become outputs and return (PORTD, PORTB) at that instant.
 fn ports_when_outputs_appear(rig: Rig) -> (u8, u8) {
-    let mut nano = Nano::load(rig);
+    let mut nano = Board::load(rig);
     for _ in 0..100_000 {
         let (portd, ddrd) = nano.port('D');
         let (portb, ddrb) = nano.port('B');
@@ -66,7 +66,7 @@ fn with_d9_grounded_outputs_are_high_before_they_become_outputs() {
 
 #[test]
 fn reset_state_of_every_pin() {
-    let mut nano = Nano::boot();
+    let mut nano = Board::boot();
     assert_eq!(nano.y_pins(), 0, "all outputs off");
     let (portc, ddrc) = nano.port('C');
     assert_eq!(ddrc & 0x3F, 0, "A0..A5 are inputs");
@@ -82,7 +82,7 @@ fn reset_state_of_every_pin() {
 
 #[test]
 fn grounding_d9_while_running_inverts_the_pins_within_2ms() {
-    let mut nano = Nano::boot();
+    let mut nano = Board::boot();
     assert_eq!(nano.y_pins(), 0);
     nano.jumper_d9(true);
     nano.run_ms(2);
@@ -97,7 +97,7 @@ fn grounding_d9_while_running_inverts_the_pins_within_2ms() {
 fn autostart_runs_the_stored_program_within_100ms_and_maps_every_pin() {
     // PA. !! .PY END: Y0..Y5 = NOT A0..A5 (on while the switch is closed), Y6/Y7 = 1.
     let eeprom = eeprom_with(&[LOAD_PA, NOT_ALL, STORE_PY, END]);
-    let mut nano = Nano::load(Rig {
+    let mut nano = Board::load(Rig {
         d8: true,
         eeprom: Some(eeprom),
         ..Rig::default()
@@ -135,7 +135,7 @@ fn autostart_runs_the_stored_program_within_100ms_and_maps_every_pin() {
 fn autostart_with_out_sense_inverts_only_at_the_pins() {
     // PA. .PY END: Y0..Y5 follow the (open = 1) inputs, Y6/Y7 = 0.
     let eeprom = eeprom_with(&[LOAD_PA, STORE_PY, END]);
-    let mut nano = Nano::boot_with(Rig {
+    let mut nano = Board::boot_with(Rig {
         d8: true,
         d9: true,
         eeprom: Some(eeprom),
@@ -151,7 +151,7 @@ fn autostart_with_out_sense_inverts_only_at_the_pins() {
 #[test]
 fn without_d8_the_stored_program_does_not_start() {
     let eeprom = eeprom_with(&[LOAD_PA, NOT_ALL, STORE_PY, END]);
-    let mut nano = Nano::boot_with(Rig {
+    let mut nano = Board::boot_with(Rig {
         eeprom: Some(eeprom),
         ..Rig::default()
     });
@@ -161,7 +161,7 @@ fn without_d8_the_stored_program_does_not_start() {
 
 #[test]
 fn autostart_without_a_valid_image_stays_in_the_editor() {
-    let mut nano = Nano::boot_with(Rig {
+    let mut nano = Board::boot_with(Rig {
         d8: true,
         ..Rig::default()
     });
@@ -172,7 +172,7 @@ fn autostart_without_a_valid_image_stays_in_the_editor() {
 #[test]
 fn reset_button_restarts_the_stored_program() {
     let eeprom = eeprom_with(&[LOAD_PA, NOT_ALL, STORE_PY, END]);
-    let mut nano = Nano::boot_with(Rig {
+    let mut nano = Board::boot_with(Rig {
         d8: true,
         eeprom: Some(eeprom),
         ..Rig::default()
@@ -186,7 +186,7 @@ fn reset_button_restarts_the_stored_program() {
 #[test]
 fn static_data_plus_stack_stay_within_1536_bytes() {
     let eeprom = eeprom_with(&[LOAD_PA, NOT_ALL, STORE_PY, END]);
-    let mut nano = Nano::boot_with(Rig {
+    let mut nano = Board::boot_with(Rig {
         d8: true,
         eeprom: Some(eeprom),
         ..Rig::default()
@@ -215,7 +215,7 @@ fn static_data_plus_stack_stay_within_1536_bytes() {
 #[test]
 fn the_timer_interrupt_runs_at_1khz() {
     // Indirect but exact: Timer0 counts in CTC mode from 0 to 249 at clk/64.
-    let mut nano = Nano::boot();
+    let mut nano = Board::boot();
     let start = nano.cycles();
     nano.run_cycles(10 * CYCLES_PER_MS);
     assert!(nano.cycles() - start >= 10 * CYCLES_PER_MS);
@@ -231,7 +231,7 @@ fn the_timer_interrupt_runs_at_1khz() {
 
 #[test]
 fn boots_to_the_main_screen() {
-    let mut nano = Nano::boot();
+    let mut nano = Board::boot();
     assert!(
         nano.wait_for("*** User File 0 ***", 1500),
         "status line missing"
@@ -247,7 +247,7 @@ fn boots_to_the_main_screen() {
 
 #[test]
 fn typed_characters_echo_at_the_prompt() {
-    let mut nano = Nano::boot();
+    let mut nano = Board::boot();
     assert!(nano.wait_for("*** User File 0 ***", 1500));
     nano.take_output();
     nano.type_bytes(b"A0.");
@@ -266,7 +266,7 @@ fn typed_characters_echo_at_the_prompt() {
 
 #[test]
 fn set_then_pop_into_y7_lights_led_l_at_once() {
-    let mut nano = Nano::boot();
+    let mut nano = Board::boot();
     assert!(nano.wait_for("*** User File 0 ***", 1500));
     nano.enter("SET", 50);
     nano.enter(".Y7", 50);

@@ -3,11 +3,11 @@
 //! noise. Needs `out/m328-nano-utile.elf` (`cargo fw`).
 
 mod common;
-use common::{contains, Nano, Rig, RAMSTART, STACK_PAINT};
+use common::{contains, Board, Rig, RAMSTART, STACK_PAINT};
+use utile_kit::rng::Rng;
 use utile_core::engine::Program;
 use utile_core::opcodes::{self, NOP};
 use utile_core::{ihex, image, store};
-use utile_kit::rng::Rng;
 use utile_kit::sim::SimBoard;
 
 /// The program every fault test starts from: stored in EEPROM, different from FILL's.
@@ -43,8 +43,8 @@ fn stored_program(eeprom: &[u8]) -> Option<Program> {
 }
 
 /// Boot with `eeprom`, LOAD it, FILL, and type STORE; returns once the CR is received.
-fn start_store(eeprom: &'static [u8]) -> Nano {
-    let mut nano = Nano::boot_with(Rig {
+fn start_store(eeprom: &'static [u8]) -> Board {
+    let mut nano = Board::boot_with(Rig {
         eeprom: Some(eeprom),
         ..Rig::default()
     });
@@ -62,7 +62,7 @@ fn start_store(eeprom: &'static [u8]) -> Nano {
 }
 
 /// READ `file` through the UART and return to the editor.
-fn read_file(nano: &mut Nano, file: &[u8]) {
+fn read_file(nano: &mut Board, file: &[u8]) {
     nano.enter("READ", 300);
     nano.type_bytes(file);
     nano.drain_typed();
@@ -74,7 +74,7 @@ fn read_file(nano: &mut Nano, file: &[u8]) {
 }
 
 /// WRITE: everything the firmware sends from the CR to the end-of-file record's CR LF.
-fn write_file(nano: &mut Nano) -> Vec<u8> {
+fn write_file(nano: &mut Board) -> Vec<u8> {
     nano.enter("WRITE", 300);
     nano.take_output();
     nano.type_bytes(b"\r");
@@ -160,7 +160,7 @@ fn flipped_bytes_in_the_newest_slot_fall_back_to_the_other() {
 }
 
 /// Static data (up to the stack paint) plus the deepest stack since boot.
-fn ram_in_use(nano: &Nano) -> (u16, u16) {
+fn ram_in_use(nano: &Board) -> (u16, u16) {
     let mut end = RAMSTART;
     while !(0..16).all(|i| nano.ram(end + i) == STACK_PAINT) {
         end += 1;
@@ -181,7 +181,7 @@ fn the_deepest_editor_paths_stay_within_the_ram_budget() {
     prog.presets = [3; 16];
     let file = hex_of(&prog);
 
-    let mut nano = Nano::boot();
+    let mut nano = Board::boot();
     assert!(nano.wait_for("*** User File 0 ***", 2000));
     nano.enter("?", 800);
     nano.type_bytes(b" ");
@@ -237,7 +237,7 @@ fn ten_minutes_of_input_and_uart_noise_change_nothing_and_hang_nothing() {
     prog.presets = [7; 16];
     let file = hex_of(&prog);
 
-    let mut nano = Nano::boot();
+    let mut nano = Board::boot();
     assert!(nano.wait_for("*** User File 0 ***", 2000));
     read_file(&mut nano, &file);
     nano.enter("EX0", 500);
@@ -304,7 +304,7 @@ fn ten_minutes_of_input_and_uart_noise_change_nothing_and_hang_nothing() {
 fn write_read_store_power_cycle_load_write_is_bit_exact() {
     let prog = old_program();
     let file = hex_of(&prog);
-    let mut nano = Nano::boot();
+    let mut nano = Board::boot();
     assert!(nano.wait_for("*** User File 0 ***", 2000));
     read_file(&mut nano, &file);
     nano.enter("STORE", 1500);

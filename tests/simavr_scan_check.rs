@@ -14,7 +14,7 @@ mod common;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use common::{Nano, Rig, CYCLES_PER_MS};
+use common::{Board, Rig, CYCLES_PER_MS};
 
 /// `TRIALS` and `SCANS` in src/hal/scan_check/mod.rs.
 const TRIALS: u64 = 400;
@@ -54,7 +54,7 @@ fn the_assembly_scan_matches_the_core_scan_on_random_programs() {
     std::env::set_var("UTILE_ELF", &elf);
 
     let started = Instant::now();
-    let mut nano = Nano::load(Rig::default());
+    let mut nano = Board::load(Rig::default());
     let mut ms = 0;
     while ms < LIMIT_MS && !common::contains(&nano.transcript, b"scan-check END") {
         nano.run_ms(100);

@@ -30,7 +30,7 @@ mod utile_support;
 mod vnano_util;
 
 use utile_kit::listing;
-use utile_kit::simavr::{CpuState, Nano, RigPin};
+use utile_kit::simavr::{self as simavr, CpuState, RigPin};
 use utile_kit::simulate::{self, Event};
 use utile_support::{example_stems, examples_dir};
 
@@ -60,7 +60,7 @@ const EXAMPLES: &[&str] = &[
 
 /// The simulated chip with the tick grid it keeps.
 struct Chip {
-    nano: Nano,
+    nano: simavr::Chip,
     /// Cycle at which Timer0 was started (tick 0).
     epoch: u64,
     /// Firmware output not yet looked at.
@@ -70,7 +70,7 @@ struct Chip {
 impl Chip {
     /// Power up, find tick 0, wait for the editor's page.
     fn boot() -> Chip {
-        let mut nano = Nano::load(&vnano_util::firmware_elf()).expect("load the firmware");
+        let mut nano = simavr::Chip::load(&vnano_util::firmware_elf()).expect("load the firmware");
         while nano.peek(TCCR0B) == 0 {
             assert_eq!(nano.run_for(1), CpuState::Running);
             assert!(nano.cycle() < 50 * MS, "Timer0 never started");

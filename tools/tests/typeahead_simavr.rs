@@ -10,14 +10,14 @@
 mod vnano_util;
 
 use utile_core::opcodes;
-use utile_kit::simavr::{CpuState, Nano, RX_FIXED_CYCLES_PER_BYTE};
+use utile_kit::simavr::{CpuState, Chip, RX_FIXED_CYCLES_PER_BYTE};
 
 /// CPU cycles per millisecond.
 const MS: u64 = 16_000;
 
 /// Power up and wait for the main screen.
-fn boot() -> Nano {
-    let mut nano = Nano::load(&vnano_util::firmware_elf()).expect("load the firmware");
+fn boot() -> Chip {
+    let mut nano = Chip::load(&vnano_util::firmware_elf()).expect("load the firmware");
     let mut seen = Vec::new();
     for _ in 0..2000 {
         assert_eq!(nano.run_for(MS), CpuState::Running);
@@ -36,7 +36,7 @@ fn contains(hay: &[u8], needle: &[u8]) -> bool {
 
 /// Run until all queued input is in and the firmware has sent nothing for `quiet_ms`;
 /// returns the output. Panics after 60 s of simulated time.
-fn run_quiet(nano: &mut Nano, quiet_ms: u64) -> Vec<u8> {
+fn run_quiet(nano: &mut Chip, quiet_ms: u64) -> Vec<u8> {
     let mut out = Vec::new();
     let mut quiet = 0;
     for _ in 0..60_000 {
@@ -73,7 +73,7 @@ fn commands(n: usize) -> Vec<String> {
 }
 
 /// LIST's lines `NNN NAME`: the UF as the firmware holds it (blank lines are not listed).
-fn listed(nano: &mut Nano) -> Vec<(usize, String)> {
+fn listed(nano: &mut Chip) -> Vec<(usize, String)> {
     nano.send(b"list\r");
     run_quiet(nano, 50);
     nano.send(b"\r");
@@ -148,7 +148,7 @@ fn a_pasted_256_line_listing_is_taken_whole_and_in_order() {
 const STACK_PAINT: u8 = 0xC5;
 
 /// Static bytes (up to the paint) and the deepest stack use so far.
-fn ram_use(nano: &Nano) -> (usize, usize) {
+fn ram_use(nano: &Chip) -> (usize, usize) {
     let (start, end) = (0x100, nano.ramend());
     let mut statics = start;
     while !(0..16).all(|i| nano.peek(statics + i) == STACK_PAINT) {
@@ -197,7 +197,7 @@ fn bytes_sent_for_a_pasted_listing_against_single_entries() {
     }
 }
 
-fn run_quiet_after(nano: &mut Nano, bytes: &[u8]) -> usize {
+fn run_quiet_after(nano: &mut Chip, bytes: &[u8]) -> usize {
     nano.send(bytes);
     run_quiet(nano, 300).len()
 }

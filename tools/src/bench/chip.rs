@@ -1,9 +1,9 @@
-//! The chip as the benchmark runs it: the project's simavr wrapper [`Nano`] with input on a
+//! The chip as the benchmark runs it: the project's simavr harness [`Chip`] with input on a
 //! steady line and the 3.4 ms EEPROM write time modelled, plus run loops that keep the
 //! rig's pins asserted and stop when a condition holds.
 
-use utile_kit::simavr::{CpuState, Nano, RxPacing, RX_FIXED_CYCLES_PER_BYTE};
 use std::path::Path;
+use utile_kit::simavr::{Chip, CpuState, RxPacing, RX_FIXED_CYCLES_PER_BYTE};
 
 pub use utile_kit::simavr::F_CPU;
 
@@ -18,14 +18,14 @@ pub const RETI: u16 = 0x9518;
 
 /// Loads the ELF into a fresh ATmega328P (power-on: RAM cleared, EEPROM erased), set up
 /// for measurements: input paced at a fixed rate, EEPROM writes taking their real time.
-pub fn load(elf: &Path) -> Result<Nano, String> {
-    let mut nano = Nano::load(elf).map_err(|e| e.to_string())?;
+pub fn load(elf: &Path) -> Result<Chip, String> {
+    let mut nano = Chip::load(elf).map_err(|e| e.to_string())?;
     nano.set_rx_pacing(RxPacing::Fixed);
     nano.set_eeprom_write_time(true);
     Ok(nano)
 }
 
-/// The benchmark's run loops on a [`Nano`].
+/// The benchmark's run loops on a [`Chip`].
 pub trait BenchRun {
     /// Runs `cycles` more cycles, re-asserting the rig pins every millisecond. False if the
     /// CPU stopped for good.
@@ -33,7 +33,7 @@ pub trait BenchRun {
     /// Runs until `done` says so (checked after every instruction) or `limit` cycles pass,
     /// re-asserting the rig pins every millisecond. Returns the cycle at which `done`
     /// first held.
-    fn run_until(&mut self, limit: u64, done: impl FnMut(&Nano) -> bool) -> Option<u64>;
+    fn run_until(&mut self, limit: u64, done: impl FnMut(&Chip) -> bool) -> Option<u64>;
     /// Runs until the UART input queue is empty and the firmware has sent nothing for
     /// `quiet_ms` (or `limit_ms` pass). Returns the cycle of the last byte sent.
     fn run_until_quiet(&mut self, quiet_ms: u64, limit_ms: u64) -> u64;
@@ -45,9 +45,9 @@ pub trait BenchRun {
 /// CPU stops (`Err`), re-asserting the rig pins every millisecond.
 #[inline]
 fn run_rig_until(
-    nano: &mut Nano,
+    nano: &mut Chip,
     limit: u64,
-    mut done: impl FnMut(&Nano) -> bool,
+    mut done: impl FnMut(&Chip) -> bool,
 ) -> Result<Option<u64>, CpuState> {
     let end = nano.cycle() + limit;
     let mut next_assert = nano.cycle();
@@ -67,12 +67,12 @@ fn run_rig_until(
     Ok(None)
 }
 
-impl BenchRun for Nano {
+impl BenchRun for Chip {
     fn run_rig(&mut self, cycles: u64) -> bool {
         run_rig_until(self, cycles, |_| false).is_ok()
     }
 
-    fn run_until(&mut self, limit: u64, done: impl FnMut(&Nano) -> bool) -> Option<u64> {
+    fn run_until(&mut self, limit: u64, done: impl FnMut(&Chip) -> bool) -> Option<u64> {
         run_rig_until(self, limit, done).ok().flatten()
     }
 

@@ -14,7 +14,7 @@ use utile_core::opcodes::{self, END, NOP};
 use utile_kit::listing;
 use utile_kit::rng::Rng;
 use utile_kit::sim::SimBoard;
-use utile_kit::simavr::{CpuState, Nano, RigPin};
+use utile_kit::simavr::{Chip, CpuState, RigPin};
 
 /// The vector number of TIMER0_COMPA (the 1 ms tick) on the ATmega328P.
 pub const TICK_VECTOR: u32 = 14;
@@ -106,9 +106,9 @@ pub fn eeprom_with(prog: &Program, stores: usize) -> Vec<u8> {
 }
 
 /// A chip with `prog` stored in EEPROM and D8 grounded: it autostarts at power-up.
-pub fn autostarting(elf: &Path, prog: &Program) -> Result<Nano, String> {
+pub fn autostarting(elf: &Path, prog: &Program) -> Result<Chip, String> {
     let mut chip = chip::load(elf)?;
-    chip.set_eeprom(&eeprom_with(prog, 1));
+    chip.set_eeprom(0, &eeprom_with(prog, 1));
     chip.hold_low(RigPin::D8, true);
     Ok(chip)
 }
@@ -130,7 +130,7 @@ pub struct ScanResult {
 
 /// Byte addresses of every `lds Rd, 0x0084` (a read of TCNT1L): the main loop reads
 /// Timer1 once per scan for STAT, which marks the scan boundary.
-fn tcnt1_reads(chip: &Nano) -> Vec<u32> {
+fn tcnt1_reads(chip: &Chip) -> Vec<u32> {
     let mut v = Vec::new();
     let mut pc = 0u32;
     while (pc as usize) + 3 < chip.flash_len() {
@@ -402,14 +402,14 @@ pub struct UartBytes {
 
 /// Sends `input`, waits until the firmware has been quiet for `quiet_ms`, returns the
 /// number of bytes it sent meanwhile.
-fn exchange_q(chip: &mut Nano, input: &[u8], quiet_ms: u64) -> usize {
+fn exchange_q(chip: &mut Chip, input: &[u8], quiet_ms: u64) -> usize {
     chip.take_output();
     chip.send(input);
     chip.run_until_quiet(quiet_ms, 10_000);
     chip.take_output().len()
 }
 
-fn exchange(chip: &mut Nano, input: &[u8]) -> usize {
+fn exchange(chip: &mut Chip, input: &[u8]) -> usize {
     exchange_q(chip, input, 40)
 }
 
@@ -493,7 +493,7 @@ pub struct StoreTiming {
     pub ms: f64,
 }
 
-fn timed_store(chip: &mut Nano) -> StoreTiming {
+fn timed_store(chip: &mut Chip) -> StoreTiming {
     let w0 = chip.ee_writes();
     chip.send(b"STORE\r");
     chip.run_until(1000 * CYCLES_PER_MS, |c| c.pending_input() == 0);
@@ -511,7 +511,7 @@ fn timed_store(chip: &mut Nano) -> StoreTiming {
 pub fn measure_store(elf: &Path) -> Result<(StoreTiming, StoreTiming), String> {
     let prog = example("11.2b-intrusion-alarm.utl")?;
     let mut chip = chip::load(elf)?;
-    chip.set_eeprom(&eeprom_with(&prog, 2));
+    chip.set_eeprom(0, &eeprom_with(&prog, 2));
     chip.run_until_quiet(40, 5000);
     exchange(&mut chip, b"LOAD\r");
     exchange(&mut chip, b"A1.\r");

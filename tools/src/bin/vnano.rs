@@ -5,9 +5,9 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
+use utile_kit::simavr::{self as nano, Chip, CpuState, Reset, RigPin};
 use utile_tools::vnano::args::{self, Options, USAGE};
 use utile_tools::vnano::load::{Loader, Step};
-use utile_kit::simavr::{self as nano, CpuState, Nano, RigPin};
 use utile_tools::vnano::pty::Pty;
 use utile_tools::vnano::rig::{self, Key, KeyParser, OutputTracker, RigAction, RigView};
 use utile_tools::vnano::term::{self, RawMode};
@@ -104,13 +104,13 @@ fn run(o: &Options) -> Result<(), String> {
         Some(file) => Some(Loader::from_file(file)?),
         None => None,
     };
-    let mut nano = Nano::load(&elf).map_err(|e| e.to_string())?;
+    let mut nano = Chip::load(&elf).map_err(|e| e.to_string())?;
     if let Some(file) = &o.eeprom {
         let bytes = std::fs::read(file).map_err(|e| format!("--eeprom {}: {e}", file.display()))?;
-        nano.set_eeprom(&bytes);
+        nano.set_eeprom(0, &bytes);
     } else if let Some(file) = &o.eeprom_if_exists {
         if let Ok(bytes) = std::fs::read(file) {
-            nano.set_eeprom(&bytes);
+            nano.set_eeprom(0, &bytes);
         }
     }
     for n in 0..6u8 {
@@ -189,7 +189,7 @@ fn run(o: &Options) -> Result<(), String> {
             read_input(&mut s, &mut nano);
         }
         if std::mem::take(&mut s.reset) {
-            nano.reset();
+            nano.reset(Reset::External);
         }
         let step = limit_cycles.map_or(CHUNK_CYCLES, |l| {
             CHUNK_CYCLES.min(l.saturating_sub(nano.cycle())).max(1)
@@ -314,7 +314,7 @@ fn readable(fd: i32) -> bool {
 }
 
 /// Reads keys (stdin) and client bytes (pty) and routes them.
-fn read_input(s: &mut Session, nano: &mut Nano) {
+fn read_input(s: &mut Session, nano: &mut Chip) {
     if s.stdin_open && readable(STDIN) {
         let mut buf = [0u8; 1024];
         // SAFETY: reading into a stack buffer of the given length.
@@ -337,7 +337,7 @@ fn read_input(s: &mut Session, nano: &mut Nano) {
 }
 
 /// One byte from the keyboard.
-fn key(s: &mut Session, nano: &mut Nano, b: u8) {
+fn key(s: &mut Session, nano: &mut Chip, b: u8) {
     let action = match s.uart {
         Uart::Terminal => match s.keys.feed(b) {
             Key::Uart(byte) => {
@@ -403,7 +403,7 @@ fn emit(s: &mut Session, out: &[u8]) {
 }
 
 /// Redraws the status line when it changed (at most 10 times a second).
-fn update_status(s: &mut Session, nano: &Nano) {
+fn update_status(s: &mut Session, nano: &Chip) {
     let now = Instant::now();
     if s.notice.as_ref().is_some_and(|(_, until)| now >= *until) {
         s.notice = None;
@@ -462,7 +462,7 @@ fn update_status(s: &mut Session, nano: &Nano) {
 }
 
 /// Leaves the terminal tidy: plain attributes, cursor visible, below the status line.
-fn finish(s: &mut Session, nano: &Nano) {
+fn finish(s: &mut Session, nano: &Chip) {
     let secs = nano.seconds();
     match &s.uart {
         Uart::Terminal if s.stdout_tty => {

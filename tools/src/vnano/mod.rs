@@ -8,4 +8,4 @@ pub mod pty;
 pub mod rig;
 pub mod term;
 
-pub use utile_kit::simavr::{CpuState, Nano, RigPin};
+pub use utile_kit::simavr::{Chip, CpuState, RigPin};

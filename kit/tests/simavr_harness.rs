@@ -1,0 +1,339 @@
+//! The simavr harness's own capabilities, each on a tiny fixture built here with avr-gcc
+//! (`kit/tests/fixtures/*.c`): a boot loader beside the application, reset flags and the
+//! cycle count over resets, the watchdog after a reset, the ADC in millivolts, UART bytes
+//! timed at any baud, several chips on one RS-485 line.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::Mutex;
+
+use utile_kit::simavr::{
+    frame_cycles, BootSection, Bus, Chip, Reset, RxPacing, CYCLES_PER_MS, F_CPU,
+};
+
+/// Builds a fixture with avr-gcc (once per name, one build at a time: the tests run in
+/// parallel) and returns its ELF.
+fn fixture(src: &str, name: &str, flags: &[&str]) -> PathBuf {
+    static BUILD: Mutex<()> = Mutex::new(());
+    let _one_at_a_time = BUILD.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("simavr-harness");
+    std::fs::create_dir_all(&dir).expect("fixture dir");
+    let elf = dir.join(format!("{name}-{}.elf", std::process::id()));
+    if elf.is_file() {
+        return elf;
+    }
+    let src = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures")
+        .join(src);
+    let out = Command::new("avr-gcc")
+        .args(["-mmcu=atmega328p", "-Os", "-DF_CPU=16000000UL"])
+        .args(flags)
+        .arg("-o")
+        .arg(&elf)
+        .arg(&src)
+        .output()
+        .expect("avr-gcc (package gcc-avr) must be installed");
+    assert!(
+        out.status.success(),
+        "avr-gcc failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    elf
+}
+
+fn app() -> PathBuf {
+    fixture("app.c", "app", &[])
+}
+
+fn boot_loader(section: BootSection) -> PathBuf {
+    let start = format!("-Wl,--section-start=.text={:#x}", section.start());
+    fixture("boot.c", &format!("boot-{:x}", section.start()), &[&start])
+}
+
+/// Runs until the output holds `n` lines; returns them (with the cycle each line's last
+/// byte ends).
+fn lines(chip: &mut Chip, n: usize, max_ms: u64) -> Vec<(String, u64)> {
+    let mut text = Vec::new();
+    let mut out = Vec::new();
+    for _ in 0..max_ms {
+        for (b, at) in chip.take_output_timed() {
+            if b == b'\n' {
+                let line = String::from_utf8_lossy(&text).trim_end().to_string();
+                out.push((line, at));
+                text.clear();
+            } else {
+                text.push(b);
+            }
+        }
+        if out.len() >= n {
+            return out;
+        }
+        chip.run_for(CYCLES_PER_MS);
+    }
+    panic!("only {out:?} (and {text:?}) within {max_ms} ms");
+}
+
+fn texts(lines: &[(String, u64)]) -> Vec<&str> {
+    lines.iter().map(|(l, _)| l.as_str()).collect()
+}
+
+#[test]
+fn a_boot_loader_in_the_boot_section_runs_first_and_sees_the_reset_flags() {
+    for section in [BootSection::B512, BootSection::K2] {
+        let mut chip = Chip::load(&app()).expect("load");
+        chip.load_boot(&boot_loader(section), section)
+            .expect("load the boot loader");
+        assert_eq!(
+            chip.pc(),
+            section.start(),
+            "BOOTRST: execution starts there"
+        );
+        assert_eq!(
+            section.start(),
+            if section == BootSection::B512 {
+                0x7E00
+            } else {
+                0x7800
+            }
+        );
+        assert_eq!(chip.mcusr(), 0x01, "power-on");
+        let got = lines(&mut chip, 2, 100);
+        assert_eq!(texts(&got), ["BOOT mcusr=01", "APP mcusr=01"]);
+
+        // The reset button: the boot loader again, with EXTRF (the app cleared PORF).
+        chip.reset(Reset::External);
+        assert_eq!(chip.pc(), section.start());
+        let got = lines(&mut chip, 2, 100);
+        assert_eq!(texts(&got), ["BOOT mcusr=02", "APP mcusr=02"]);
+
+        // A watchdog reset done by simavr itself also starts in the boot section.
+        chip.send(b"w");
+        let got = lines(&mut chip, 2, 100);
+        assert_eq!(texts(&got), ["BOOT mcusr=08", "APP mcusr=08"]);
+
+        // Power off and on: PORF alone.
+        chip.reset(Reset::PowerOn);
+        let got = lines(&mut chip, 2, 100);
+        assert_eq!(texts(&got), ["BOOT mcusr=01", "APP mcusr=01"]);
+    }
+}
+
+#[test]
+fn without_a_boot_loader_the_chip_starts_at_0_with_power_on_flags() {
+    let mut chip = Chip::load(&app()).expect("load");
+    assert_eq!(chip.pc(), 0);
+    assert_eq!(texts(&lines(&mut chip, 1, 50)), ["APP mcusr=01"]);
+    chip.reset(Reset::Watchdog);
+    assert_eq!(texts(&lines(&mut chip, 1, 50)), ["APP mcusr=08"]);
+}
+
+#[test]
+fn the_cycle_count_goes_on_over_resets() {
+    let mut chip = Chip::load(&app()).expect("load");
+    lines(&mut chip, 1, 50);
+    chip.run_for(10 * CYCLES_PER_MS);
+    let before = chip.cycle();
+    assert!(before >= 10 * CYCLES_PER_MS);
+    chip.reset(Reset::External);
+    assert!(
+        chip.cycles_since_reset() < 10,
+        "simavr restarts its own count"
+    );
+    assert!(chip.cycle() >= before, "ours goes on");
+    chip.run_for(CYCLES_PER_MS);
+    assert!(chip.cycle() >= before + CYCLES_PER_MS);
+    assert_eq!(texts(&lines(&mut chip, 1, 50)), ["APP mcusr=02"]);
+
+    // Over a watchdog reset simavr does by itself, inside a step.
+    chip.send(b"w");
+    let sent = chip.cycle();
+    let got = lines(&mut chip, 1, 100);
+    assert_eq!(texts(&got), ["APP mcusr=08"]);
+    let after = got[0].1;
+    let ms = (after - sent) as f64 / CYCLES_PER_MS as f64;
+    // The byte (0.6 ms), the 16 ms timeout, the boot line (14 bytes, 7.3 ms).
+    assert!(
+        (20.0..30.0).contains(&ms),
+        "watchdog reset and boot line in {ms} ms"
+    );
+}
+
+#[test]
+fn after_a_reset_the_watchdog_fires_on_time() {
+    // EEPROM byte 1 set: the app leaves the watchdog enabled after a watchdog reset (WDRF
+    // forces WDE at the shortest timeout), so the chip resets every 16 ms and some.
+    let mut chip = Chip::load(&app()).expect("load");
+    chip.set_eeprom(1, &[1]);
+    lines(&mut chip, 1, 50);
+    chip.reset(Reset::Watchdog);
+    let got = lines(&mut chip, 4, 200);
+    // The app keeps MCUSR too: PORF from power-up, WDRF from each timeout.
+    assert!(texts(&got).iter().all(|l| *l == "APP mcusr=09"), "{got:?}");
+    for w in got.windows(2) {
+        let ms = (w[1].1 - w[0].1) as f64 / CYCLES_PER_MS as f64;
+        // 16.4 ms of timeout (2048 cycles of the 128 kHz oscillator; simavr says 16 ms).
+        assert!((15.5..17.5).contains(&ms), "resets {ms} ms apart: {got:?}");
+    }
+}
+
+#[test]
+fn the_adc_reads_millivolts_against_avcc() {
+    let mut chip = Chip::load(&app()).expect("load");
+    lines(&mut chip, 1, 50);
+    for (mv, reading) in [(2500, "0511"), (0, "0000"), (5000, "1023"), (1000, "0204")] {
+        chip.set_analog_mv(6, mv);
+        chip.send(b"a");
+        let got = lines(&mut chip, 1, 20);
+        assert_eq!(got[0].0, format!("A6={reading}"), "{mv} mV");
+    }
+    // Another channel does not leak into ADC6.
+    chip.set_analog_mv(7, 4000);
+    chip.set_analog_mv(6, 1250);
+    chip.send(b"a");
+    assert_eq!(lines(&mut chip, 1, 20)[0].0, "A6=0255");
+}
+
+/// Echo test at `baud` with the app built for `ubrr`: back-to-back bytes every frame, a
+/// gap where the sender made one, each echo timed at its stop bit.
+fn echo_timing(baud: u32, ubrr: u32) {
+    let flag = format!("-DUBRRV={ubrr}");
+    let mut chip = Chip::load(&fixture("app.c", &format!("app-{ubrr}"), &[&flag])).unwrap();
+    chip.set_rx_pacing(RxPacing::Line { baud });
+    chip.run_for(20 * CYCLES_PER_MS);
+    chip.take_output();
+    assert_eq!(chip.baud(), (F_CPU / (16 * (u64::from(ubrr) + 1))) as u32);
+    let frame = frame_cycles(baud);
+    let gap = 35 * frame / 10; // Modbus's 3.5 characters of silence
+    chip.send(b"ABCD");
+    chip.send_after(gap, b"EF");
+    let start = chip.cycle();
+    chip.run_for(12 * frame);
+    assert_eq!(chip.pending_input(), 0);
+    chip.run_for(2 * frame);
+    let echo = chip.take_output_timed();
+    let bytes: Vec<u8> = echo.iter().map(|&(b, _)| b).collect();
+    assert_eq!(bytes, b"ABCDEF");
+    // The first byte is in after one frame; the echo leaves at the firmware's own rate.
+    let tx_frame = 10 * 16 * (u64::from(ubrr) + 1);
+    let first = echo[0].1 - start;
+    assert!(
+        (frame + tx_frame..frame + tx_frame + 200).contains(&first),
+        "first echo ends {first} cycles after sending (frame {frame}, tx {tx_frame})"
+    );
+    let gaps: Vec<u64> = echo.windows(2).map(|w| w[1].1 - w[0].1).collect();
+    for (i, g) in gaps.iter().enumerate() {
+        let want = if i == 3 { frame + gap } else { frame };
+        assert!(
+            want.abs_diff(*g) <= 60,
+            "gap {i}: {g} cycles, want {want} (all {gaps:?})"
+        );
+    }
+}
+
+#[test]
+fn uart_bytes_are_received_and_timed_at_19200_baud() {
+    echo_timing(19_200, 51);
+    // One 8N1 frame at 19200 baud is 521 µs.
+    assert_eq!(frame_cycles(19_200) * 1_000_000 / F_CPU, 520);
+}
+
+#[test]
+fn uart_bytes_are_received_and_timed_at_9600_and_38400_baud() {
+    echo_timing(9_600, 103);
+    echo_timing(38_400, 25);
+}
+
+#[test]
+fn three_chips_share_one_rs485_line() {
+    let chips: Vec<Chip> = (0..3u8)
+        .map(|addr| {
+            let mut c = Chip::load(&app()).expect("load");
+            c.set_eeprom(0, &[addr]);
+            c
+        })
+        .collect();
+    let mut bus = Bus::new(chips, 19_200).with_driver_enable();
+    assert_eq!(bus.len(), 3);
+    bus.run_for(20 * CYCLES_PER_MS);
+    assert!(bus.take_master().is_empty(), "silent until addressed");
+
+    let reply = |bus: &mut Bus| -> (String, Vec<usize>) {
+        let got = bus.take_master();
+        let text =
+            String::from_utf8_lossy(&got.iter().map(|b| b.byte).collect::<Vec<_>>()).into_owned();
+        assert!(got.windows(2).all(|w| w[0].cycle <= w[1].cycle));
+        (text, got.iter().map(|b| b.from).collect())
+    };
+
+    // Chip 0 heard one byte.
+    bus.send(b"x");
+    bus.run_for(10 * CYCLES_PER_MS);
+    let (text, from) = reply(&mut bus);
+    assert_eq!(text, "R0=01\r\n");
+    assert!(from.iter().all(|&f| f == 0));
+
+    // Chip 1 heard "x", chip 0's reply (7 bytes: the line is shared) and "y".
+    bus.send(b"y");
+    bus.run_for(10 * CYCLES_PER_MS);
+    assert_eq!(reply(&mut bus).0, "R1=09\r\n");
+    // Chip 2 heard both replies too.
+    bus.send(b"z");
+    bus.run_for(10 * CYCLES_PER_MS);
+    assert_eq!(reply(&mut bus).0, "R2=11\r\n");
+    assert!(bus.collisions().is_empty(), "one driver at a time");
+
+    // Everyone at once: the drivers overlap.
+    bus.send(b"*");
+    bus.run_for(10 * CYCLES_PER_MS);
+    let (text, from) = reply(&mut bus);
+    assert_eq!(text.len(), 21, "{text:?}");
+    for chip in 0..3 {
+        assert_eq!(from.iter().filter(|&&f| f == chip).count(), 7);
+    }
+    let collisions = bus.collisions();
+    assert_eq!(collisions.len(), 1, "{collisions:?}");
+    let c = &collisions[0];
+    assert!(c.chips.len() >= 2);
+    let end = c.end.expect("the overlap ended");
+    let ms = (end - c.start) as f64 / CYCLES_PER_MS as f64;
+    // 7 bytes (3.6 ms) plus the 1.5 ms wait, each chip about as long.
+    assert!((4.0..6.0).contains(&ms), "overlap {ms} ms");
+}
+
+#[test]
+fn dropping_chips_frees_simavr() {
+    // Each chip's simulator (its avr_t, 32 KB of flash, RAM, I/O modules) is freed on
+    // drop. simavr keeps about 10 KB per chip of its own (IRQ tables and names it never
+    // frees); a leaked chip would add its whole MCU.
+    const LOADS: u64 = 1000;
+    let rss = || {
+        let s = std::fs::read_to_string("/proc/self/statm").unwrap_or_default();
+        s.split_whitespace()
+            .nth(1)
+            .and_then(|p| p.parse::<u64>().ok())
+            .unwrap_or(0)
+            * 4096
+    };
+    let elf = app();
+    drop(Chip::load(&elf).unwrap());
+    let before = rss();
+    for _ in 0..LOADS {
+        let mut c = Chip::load(&elf).unwrap();
+        c.run_for(1000);
+    }
+    let per_chip = rss().saturating_sub(before) / LOADS;
+    // Leaking the MCU alone (its avr_t, 16.8 KB, and its I/O modules) would exceed this.
+    let avr_t = std::mem::size_of::<simavr_ffi::avr_t>() as u64;
+    assert!(per_chip < avr_t, "each chip left {per_chip} bytes behind");
+}
+
+#[test]
+fn eeprom_reads_and_writes_through_one_path() {
+    let mut chip = Chip::load(&app()).expect("load");
+    assert!(chip.eeprom().iter().all(|&b| b == 0xFF));
+    chip.set_eeprom(1020, &[1, 2, 3, 4, 5, 6]);
+    let ee = chip.eeprom();
+    assert_eq!(&ee[1018..], &[0xFF, 0xFF, 1, 2, 3, 4]);
+    chip.set_eeprom(0, &[7]);
+    assert_eq!(chip.eeprom()[0], 7);
+}
