@@ -176,7 +176,9 @@ impl Term {
 // ---------------------------------------------------------------------------------------
 
 fn txt_bytes(t: text::Txt) -> Vec<u8> {
-    (0..t.len()).map(|i| t.byte(i)).collect()
+    let mut v = Vec::new();
+    t.each(|c| v.push(c));
+    v
 }
 
 fn contains(hay: &[u8], needle: &[u8]) -> bool {

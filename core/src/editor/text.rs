@@ -15,26 +15,31 @@ pub struct Txt {
 }
 
 impl Txt {
-    /// Number of bytes in the text.
-    pub const fn len(self) -> u16 {
-        self.len
-    }
-
-    /// True for an empty text.
-    pub const fn is_empty(self) -> bool {
-        self.len == 0
-    }
-
-    /// The text's byte at `i` (0 past the end).
-    pub fn byte(self, i: u16) -> u8 {
-        if i >= self.len {
-            return 0;
-        }
+    /// A packed byte of the text (0 past the blob).
+    fn raw(self, i: u16) -> u8 {
         let at = usize::from(self.off) + usize::from(i);
-        if at < BLOB_LEN {
+        if i < self.len && at < BLOB_LEN {
             TEXT.load_at(at)
         } else {
             0
+        }
+    }
+
+    /// Hand every byte of the text, unpacked, to `f`.
+    pub fn each(self, mut f: impl FnMut(u8)) {
+        let mut i = 0;
+        while i < self.len {
+            let b = self.raw(i);
+            i += 1;
+            if b & RUN != 0 {
+                let c = self.raw(i);
+                i += 1;
+                for _ in 0..b & !RUN {
+                    f(c);
+                }
+            } else {
+                f(b);
+            }
         }
     }
 
@@ -43,25 +48,56 @@ impl Txt {
         if b.tx_dropped() {
             return;
         }
-        for i in 0..self.len {
+        self.each(|c| {
             b.feed_watchdog();
-            b.tx(self.byte(i));
-        }
+            b.tx(c);
+        });
     }
 }
 
-/// Sum of the lengths of `parts[..n]`.
+/// A packed byte with this bit set repeats the next byte (its low 7 bits) times: the texts
+/// are ASCII, and their runs of spaces, dashes and `=` would otherwise fill the flash.
+const RUN: u8 = 0x80;
+/// Runs shorter than this stay as they are (a run costs two bytes).
+const RUN_MIN: usize = 3;
+
+/// Length of the run of `s[i]` starting at `i` (at most 127).
+const fn run_at(s: &[u8], i: usize) -> usize {
+    let mut n = 1;
+    while i + n < s.len() && s[i + n] == s[i] && n < 127 {
+        n += 1;
+    }
+    n
+}
+
+/// Packed length of `s`.
+const fn packed_len(s: &[u8]) -> usize {
+    let (mut i, mut len) = (0, 0);
+    while i < s.len() {
+        let n = run_at(s, i);
+        if n >= RUN_MIN {
+            len += 2;
+            i += n;
+        } else {
+            len += 1;
+            i += 1;
+        }
+    }
+    len
+}
+
+/// Sum of the packed lengths of `parts[..n]`.
 const fn offset_of(parts: &[&str], n: usize) -> usize {
     let mut i = 0;
     let mut sum = 0;
     while i < n {
-        sum += parts[i].len();
+        sum += packed_len(parts[i].as_bytes());
         i += 1;
     }
     sum
 }
 
-/// All parts, concatenated.
+/// All parts, packed and concatenated.
 const fn join<const N: usize>(parts: &[&str]) -> [u8; N] {
     let mut out = [0u8; N];
     let mut at = 0;
@@ -70,9 +106,17 @@ const fn join<const N: usize>(parts: &[&str]) -> [u8; N] {
         let s = parts[i].as_bytes();
         let mut j = 0;
         while j < s.len() {
-            out[at] = s[j];
-            at += 1;
-            j += 1;
+            let n = run_at(s, j);
+            if n >= RUN_MIN {
+                out[at] = RUN | n as u8;
+                out[at + 1] = s[j];
+                at += 2;
+                j += n;
+            } else {
+                out[at] = s[j];
+                at += 1;
+                j += 1;
+            }
         }
         i += 1;
     }
@@ -96,9 +140,12 @@ macro_rules! texts {
             $(#[$m])*
             pub const $name: Txt = Txt {
                 off: offset_of(PARTS, Index::$name as usize) as u16,
-                len: PARTS[Index::$name as usize].len() as u16,
+                len: packed_len(PARTS[Index::$name as usize].as_bytes()) as u16,
             };
         )*
+        /// Every text with its source, for the unpacking test.
+        #[cfg(test)]
+        const ALL: &[(Txt, &str)] = &[$(($name, $s)),*];
     };
 }
 
@@ -238,4 +285,24 @@ const BLOB_LEN: usize = offset_of(PARTS, PARTS.len());
 progmem! {
     /// Every text of the editor, back to back.
     static progmem TEXT: [u8; BLOB_LEN] = join::<BLOB_LEN>(PARTS);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_text_unpacks_to_its_source() {
+        for &(t, s) in ALL {
+            let mut out = std::vec::Vec::new();
+            t.each(|c| out.push(c));
+            assert_eq!(out, s.as_bytes(), "{s:?}");
+            assert!(s.is_ascii(), "{s:?}");
+        }
+        assert!(BLOB_LEN < offset_of_plain(), "packing saves nothing");
+    }
+
+    fn offset_of_plain() -> usize {
+        PARTS.iter().map(|p| p.len()).sum()
+    }
 }
