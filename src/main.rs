@@ -19,6 +19,8 @@ use panic_halt as _;
 
 #[cfg(target_arch = "avr")]
 mod firmware {
+    use core::mem::MaybeUninit;
+
     use avr_device::interrupt::CriticalSection;
     use utile_core::board::Board;
     use utile_core::editor::{Editor, Mode};
@@ -34,7 +36,9 @@ mod firmware {
 
     /// The editor lives in static RAM, so the linker counts it against the RAM budget
     /// (memory.x) instead of it hiding in `main`'s stack frame.
-    static mut EDITOR: Editor = Editor::new();
+    /// Uninitialised (`.bss`) and written at boot: a `const` initial value would put the
+    /// whole editor, READ's staging buffer included, in `.data`, whose image takes flash.
+    static mut EDITOR: MaybeUninit<Editor> = MaybeUninit::uninit();
 
     /// Autostart: D8 grounded and a valid stored image → load it and run at once (drawing
     /// comes later).
@@ -64,7 +68,7 @@ mod firmware {
         #[cfg(feature = "scan-check")]
         hal::scan_check::run(eng, &mut board);
         // SAFETY: the only reference to EDITOR, taken once; no interrupt handler uses it.
-        let editor = unsafe { &mut *core::ptr::addr_of_mut!(EDITOR) };
+        let editor = unsafe { (*core::ptr::addr_of_mut!(EDITOR)).write(Editor::new()) };
 
         let mut mode = autostart(eng, editor, &mut board);
         if mode == Mode::Edit {
