@@ -26,7 +26,6 @@ mod firmware {
     use utile_core::editor::{Editor, Mode};
     use utile_core::engine::Engine;
     use utile_core::stats::ScanStats;
-    use utile_core::store;
     use crate::hal;
     use crate::hal::scan::{self, Exit, RunState};
 
@@ -47,15 +46,9 @@ mod firmware {
         if !board.autostart_jumper() {
             return Mode::Edit;
         }
-        match store::load_into(board, &mut eng.prog) {
-            Ok(()) => {
-                hal::kept::reseal(&eng.prog);
-                eng.clear_runtime(board);
-                editor.boot_running(eng, board);
-                Mode::Run
-            }
-            Err(_) => Mode::Edit,
-        }
+        let mode = editor.autostart(eng, board);
+        hal::kept::reseal(&eng.prog);
+        mode
     }
 
     // A `scan-check` build never reaches the editor below (the check never returns).

@@ -209,6 +209,20 @@ impl Editor {
         self.catch_up(eng, b);
     }
 
+    /// Autostart (D8 grounded at reset): load the newest stored program and run it at once,
+    /// drawing later. [`Mode::Edit`] (nothing changed) when no valid image is stored.
+    pub fn autostart<B: Board>(&mut self, eng: &mut Engine, b: &mut B) -> Mode {
+        // Through `Tracked`, so LOAD's instance of the storage code serves here too.
+        let b = &mut Tracked::new(b, false);
+        if store::load_into(b, &mut eng.prog).is_err() {
+            return Mode::Edit;
+        }
+        eng.clear_runtime(b);
+        self.begin_run(b);
+        self.render = 0;
+        Mode::Run
+    }
+
     /// Autostart: the program already runs; draw the running screen later, never waiting.
     pub fn boot_running<B: Board>(&mut self, eng: &Engine, b: &mut B) {
         // One instance of the drawing code: every entry point goes through `Tracked`.

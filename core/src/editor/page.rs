@@ -1,7 +1,52 @@
 //! The main screen: cursor keys and a submitted line (command, interpreter word or
 //! number), INS/DEL, and redrawing what an edit changed.
 
+use avr_progmem::progmem;
+
 use super::*;
+
+progmem! {
+    /// The interpreter's words (manual ch. 9), each after its length, in the order of the
+    /// arms of `submit_page`: one compare loop instead of inline code for every word.
+    static progmem WORDS: [u8; 65] = *b"\x01?\x01/\x03INS\x03DEL\x03RUN\x03EX0\x04FILL\x03VER\x03LDT\x04LIST\x04STAT\x05STORE\x04LOAD\x05WRITE\x04READ";
+}
+
+// Indices into [`WORDS`].
+const W_HELP: u8 = 0;
+const W_REDRAW: u8 = 1;
+const W_INS: u8 = 2;
+const W_DEL: u8 = 3;
+const W_RUN: u8 = 4;
+const W_EX0: u8 = 5;
+const W_FILL: u8 = 6;
+const W_VER: u8 = 7;
+const W_LDT: u8 = 8;
+const W_LIST: u8 = 9;
+const W_STAT: u8 = 10;
+const W_STORE: u8 = 11;
+const W_LOAD: u8 = 12;
+const W_WRITE: u8 = 13;
+const W_READ: u8 = 14;
+
+/// The index of `word` in [`WORDS`].
+fn interpreter_word(word: &[u8]) -> Option<u8> {
+    let (mut at, mut index) = (0, 0);
+    while at < WORDS.len() {
+        let len = usize::from(WORDS.load_at(at));
+        let start = at + 1;
+        at = start + len;
+        if len == word.len()
+            && word
+                .iter()
+                .enumerate()
+                .all(|(i, &c)| WORDS.load_at(start + i) == c)
+        {
+            return Some(index);
+        }
+        index += 1;
+    }
+    None
+}
 
 impl Editor {
     /// A key event on the main screen.
@@ -57,36 +102,36 @@ impl Editor {
             }
             Parsed::Word => {
                 let word = &self.line[..usize::from(n.min(LINE_MAX))];
-                match word {
-                    b"?" => self.help(b),
-                    b"/" => self.full_redraw(),
-                    b"INS" => self.insert_line(eng, b),
-                    b"DEL" => self.delete_line(eng, b),
-                    b"RUN" => {
+                match interpreter_word(word) {
+                    Some(W_HELP) => self.help(b),
+                    Some(W_REDRAW) => self.full_redraw(),
+                    Some(W_INS) => self.insert_line(eng, b),
+                    Some(W_DEL) => self.delete_line(eng, b),
+                    Some(W_RUN) => {
                         eng.prog.uf[usize::from(self.cursor)] = END;
                         self.entry(eng, b, self.cursor, true);
                         eng.clear_runtime(b);
                         return self.start_run(b);
                     }
-                    b"EX0" => {
+                    Some(W_EX0) => {
                         eng.clear_runtime(b);
                         return self.start_run(b);
                     }
-                    b"FILL" => {
+                    Some(W_FILL) => {
                         eng.prog.uf = [NOP; LINES];
                         self.cursor = 0;
                         self.draw_page(eng, b, true);
                     }
-                    b"VER" => self.message(b, text::VERSION),
-                    b"LDT" => self.ldt_enter(eng, b),
-                    b"LIST" => {
+                    Some(W_VER) => self.message(b, text::VERSION),
+                    Some(W_LDT) => self.ldt_enter(eng, b),
+                    Some(W_LIST) => {
                         self.screen = Screen::List { sent: false };
                         term::clear(b);
                         text::LIST_PROMPT.send(b);
                         raw(b, b"\r\n");
                     }
-                    b"STAT" => self.stat(b),
-                    b"STORE" => {
+                    Some(W_STAT) => self.stat(b),
+                    Some(W_STORE) => {
                         self.message(b, text::STORING);
                         let msg = match store::store(&eng.prog, b) {
                             Ok(()) => text::STORED,
@@ -94,19 +139,19 @@ impl Editor {
                         };
                         self.message(b, msg);
                     }
-                    b"LOAD" => match store::load_into(b, &mut eng.prog) {
+                    Some(W_LOAD) => match store::load_into(b, &mut eng.prog) {
                         Ok(()) => {
                             self.draw_page(eng, b, true);
                             self.message(b, text::LOADED);
                         }
                         Err(_) => self.message(b, text::NO_STORED),
                     },
-                    b"WRITE" => {
+                    Some(W_WRITE) => {
                         self.screen = Screen::Write { sent: false };
                         self.transfer_screen(b, 17, text::WRITE_PROMPT);
                         goto(b, 11, 1);
                     }
-                    b"READ" => {
+                    Some(W_READ) => {
                         let now = b.now_ms();
                         self.screen = Screen::Read(ReadState {
                             reader: HexReader::new(),
