@@ -2,6 +2,7 @@
 
 /// Length of one statistics tick in nanoseconds (Timer1 at 16 MHz / 8 = 0.5 µs).
 pub const TICK_NS: u32 = 500;
+const _: () = assert!(1000 % TICK_NS == 0, "a whole number of ticks per µs");
 
 /// `n / d` (0 when `d` is 0) by shift and subtract. STAT's few divisions use this instead
 /// of the compiler's 32-bit division routine, which costs over 1 KB of AVR flash; speed
@@ -88,7 +89,8 @@ impl ScanStats {
 
     /// Convert ticks to whole microseconds.
     pub fn ticks_to_us(ticks: u32) -> u32 {
-        div(ticks * TICK_NS, 1000)
+        // 1000 / TICK_NS ticks per µs: a halving, not a 32-bit multiply and division.
+        ticks / (1000 / TICK_NS)
     }
 }
 

@@ -2,6 +2,8 @@
 //!
 //! Numbers are printed by subtracting powers of ten (no division on the AVR).
 
+use avr_progmem::progmem;
+
 use super::super::board::Board;
 /// An upper-case hex digit (the one helper, [`crate::hex::digit`]).
 pub use crate::hex::digit as hex_digit;
@@ -48,17 +50,20 @@ pub fn clear<B: Board>(b: &mut B) {
     raw(b, b"\x1b[H\x1b[J");
 }
 
-const POW10: [u32; 9] = [
-    1_000_000_000,
-    100_000_000,
-    10_000_000,
-    1_000_000,
-    100_000,
-    10_000,
-    1_000,
-    100,
-    10,
-];
+progmem! {
+    /// Powers of ten for [`digits`], in flash (a `const` table would be copied to RAM).
+    static progmem POW10: [u32; 9] = [
+        1_000_000_000,
+        100_000_000,
+        10_000_000,
+        1_000_000,
+        100_000,
+        10_000,
+        1_000,
+        100,
+        10,
+    ];
+}
 
 /// The decimal digits of `v`, most significant first, `width` digits at least (leading zeros).
 fn digits<B: Board>(b: &mut B, mut v: u32, width: u8) {
@@ -66,7 +71,8 @@ fn digits<B: Board>(b: &mut B, mut v: u32, width: u8) {
         return;
     }
     let mut started = false;
-    for (i, &p) in POW10.iter().enumerate() {
+    for i in 0..POW10.len() {
+        let p = POW10.load_at(i);
         let mut d = b'0';
         while v >= p {
             v -= p;
