@@ -188,21 +188,32 @@ impl Editor {
     pub(super) fn insert_line<B: Board>(&mut self, eng: &mut Engine, b: &mut B) {
         let c = usize::from(self.cursor);
         let uf = &mut eng.prog.uf;
-        uf.copy_within(c..LINES - 1, c + 1);
+        // A loop rather than `copy_within`, whose bounds checks LLVM kept (a panic path).
+        let mut i = LINES - 1;
+        while i > c {
+            uf[i] = uf[i - 1];
+            i -= 1;
+        }
         uf[c] = NOP;
         // Line i changed if it differs from what it held: now at i + 1.
-        self.redraw_changed(eng, b, |uf, i| i == 255 || uf[i] != uf[i + 1]);
+        self.redraw_changed(eng, b, |uf, i| {
+            i == 255 || uf[usize::from(i)] != uf[usize::from(i) + 1]
+        });
     }
 
     /// DEL: lines below the cursor move up one, NOP at line 255.
     pub(super) fn delete_line<B: Board>(&mut self, eng: &mut Engine, b: &mut B) {
         let c = usize::from(self.cursor);
         let uf = &mut eng.prog.uf;
-        uf.copy_within(c + 1..LINES, c);
+        for i in c..LINES - 1 {
+            uf[i] = uf[i + 1];
+        }
         uf[LINES - 1] = NOP;
-        let cur = c;
+        let cur = self.cursor;
         // Line i (> cursor) held what line i - 1 holds now.
-        self.redraw_changed(eng, b, |uf, i| i == cur || uf[i] != uf[i - 1]);
+        self.redraw_changed(eng, b, |uf, i| {
+            i == cur || uf[usize::from(i)] != uf[usize::from(i.wrapping_sub(1))]
+        });
     }
 
     /// Redraw the entries of the shown page, from the cursor on, for which `changed` holds.
@@ -210,12 +221,12 @@ impl Editor {
         &mut self,
         eng: &Engine,
         b: &mut B,
-        changed: impl Fn(&[u8; LINES], usize) -> bool,
+        changed: impl Fn(&[u8; LINES], u8) -> bool,
     ) {
-        let last = usize::from(self.cursor | 31);
-        for i in usize::from(self.cursor)..=last {
+        // u8 lines: indexing a 256-entry program with them has no panic path.
+        for i in self.cursor..=self.cursor | 31 {
             if changed(&eng.prog.uf, i) {
-                self.entry(eng, b, i as u8, true);
+                self.entry(eng, b, i, true);
             }
         }
     }
