@@ -35,13 +35,19 @@ fn interpreter_word(word: &[u8]) -> Option<u8> {
         let len = usize::from(WORDS.load_at(at));
         let start = at + 1;
         at = start + len;
-        if len == word.len()
-            && word
-                .iter()
-                .enumerate()
-                .all(|(i, &c)| WORDS.load_at(start + i) == c)
-        {
-            return Some(index);
+        // Every read below is inside the table, so no bounds check (and no panic path).
+        if at > WORDS.len() {
+            break;
+        }
+        if len == word.len() {
+            let mut same = true;
+            for (k, &c) in word.iter().enumerate() {
+                let i = start + k;
+                same &= i < WORDS.len() && WORDS.load_at(i) == c;
+            }
+            if same {
+                return Some(index);
+            }
         }
         index += 1;
     }
