@@ -1,8 +1,8 @@
-//! Fuzz target `modbus`: `utile_kit::fuzz_modbus::modbus` (invariants documented there).
+//! Fuzz target `modbus`: `utile_kit::fuzzing::modbus` (invariants documented there).
 #![no_main]
 
 libfuzzer_sys::fuzz_target!(|data: &[u8]| {
-    if let Err(why) = utile_kit::fuzz_modbus::modbus(data) {
+    if let Err(why) = utile_kit::fuzzing::modbus(data) {
         panic!("invariant broken: {why}");
     }
 });

@@ -5,13 +5,12 @@
 //! - [`listing`]: `.utl` listings and hex images;
 //! - [`simulate`] and [`diagram`]: timelines, simulation on the core, VCD and SVG;
 //! - [`rng`]: the one random generator of the host code;
-//! - [`fuzzing`]: the invariants of SPEC §12, shared by the fuzz targets and the tests,
-//!   and [`fuzz_modbus`] those of the Modbus codec (SPEC §13);
+//! - [`fuzzing`]: the invariants of SPEC §12 and of the Modbus codec (SPEC §13), shared by
+//!   the fuzz targets and the tests;
 //! - [`simavr`]: the real firmware image on a simulated ATmega328P.
 #![deny(missing_docs)]
 
 pub mod diagram;
-pub mod fuzz_modbus;
 pub mod fuzzing;
 pub mod listing;
 pub mod rng;

@@ -16,7 +16,7 @@ use utile_core::modbus::map::{Map, Table};
 use utile_core::modbus::reply::Reply;
 use utile_core::modbus::request::{handle, Answer};
 
-use crate::fuzzing::Verdict;
+use super::Verdict;
 
 /// The slave address the harness answers as.
 const ADDRESS: u8 = 1;

@@ -1,0 +1,209 @@
+//! Harnesses of storage: Intel HEX against an independent reader, hex round trips, image decoding, EEPROM slots.
+
+use super::*;
+
+
+/// An independent, whole-text Intel HEX parser with the rules of `docs/FORMAT.md`: the
+/// image if the text (up to its end-of-file record) is a valid file, else `None`.
+pub(super) fn reference_hex(text: &[u8]) -> Option<(Vec<u8>, usize)> {
+    let start = text.iter().position(|&c| c == b':')?;
+    let mut image = Vec::new();
+    let mut i = start;
+    loop {
+        // At a ':'.
+        i += 1;
+        let mut rec = Vec::new();
+        let mut need = 5usize;
+        while rec.len() < need {
+            let hi = (*text.get(i)? as char).to_digit(16)? as u8;
+            let lo = (*text.get(i + 1)? as char).to_digit(16)? as u8;
+            rec.push(hi << 4 | lo);
+            i += 2;
+            if rec.len() == 1 {
+                need = 5 + usize::from(rec[0]);
+            }
+        }
+        if rec.iter().fold(0u8, |s, &b| s.wrapping_add(b)) != 0 {
+            return None;
+        }
+        let addr = usize::from(rec[1]) << 8 | usize::from(rec[2]);
+        match rec[3] {
+            0 if addr == image.len() && addr + usize::from(rec[0]) <= IMAGE_LEN => {
+                image.extend_from_slice(&rec[4..rec.len() - 1]);
+            }
+            1 if rec[0] == 0 && image.len() == IMAGE_LEN => return Some((image, i)),
+            _ => return None,
+        }
+        // Between records: control characters and blanks, then ':'.
+        loop {
+            let c = *text.get(i)?;
+            if c == b':' {
+                break;
+            }
+            if c > b' ' && c != 0x7F {
+                return None;
+            }
+            i += 1;
+        }
+    }
+}
+
+/// The Intel HEX reader: it says `Done` exactly when the text is a valid file (checked
+/// against an independent parser), then holds exactly that file's bytes; `Done` and
+/// `Error` are final. A decoded image re-encodes to the same bytes.
+pub fn ihex(data: &[u8]) -> Verdict {
+    let mut r = HexReader::new();
+    let mut done_at: Option<(usize, u16)> = None;
+    let mut error = None;
+    for (i, &b) in data.iter().enumerate() {
+        let ev = r.feed(b);
+        match (done_at, error, ev) {
+            (Some((_, l)), _, HexEvent::Done { len }) if l == len => {}
+            (Some(_), _, e) => return Err(format!("after Done the reader said {e:?}")),
+            (None, Some(e0), HexEvent::Error(e)) if e == e0 => {}
+            (None, Some(e0), e) => {
+                return Err(format!("after Error({e0:?}) the reader said {e:?}"))
+            }
+            (None, None, HexEvent::Done { len }) => done_at = Some((i + 1, len)),
+            (None, None, HexEvent::Error(e)) => error = Some(e),
+            (None, None, HexEvent::More) => {}
+        }
+    }
+    let reference = reference_hex(data);
+    match (done_at, &reference) {
+        (Some((end, len)), Some((img, ref_end))) => {
+            if *ref_end != end || r.data().get(..usize::from(len)) != Some(img.as_slice()) {
+                return Err("the reader's file differs from the reference parser's".into());
+            }
+            if let Ok(p) = image::decode(img) {
+                if image::encode(&p).as_slice() != img.as_slice() {
+                    return Err("decode then encode changed the image".into());
+                }
+            }
+            Ok(())
+        }
+        (Some(_), None) => Err("the reader accepted a file the reference parser refuses".into()),
+        (None, Some(_)) => Err(format!("the reader refused a valid file ({error:?})")),
+        _ => Ok(()),
+    }
+}
+
+/// The WRITE/READ round trip of the image `data` (as a program) through the Intel HEX text.
+pub fn hex_roundtrip(data: &[u8]) -> Verdict {
+    let mut prog = Program::blank();
+    for (dst, &src) in prog
+        .uf
+        .iter_mut()
+        .chain(prog.presets.iter_mut())
+        .zip(data.iter())
+    {
+        *dst = src;
+    }
+    let img = image::encode(&prog);
+    let mut text = Vec::new();
+    ihex::write_hex(&img, &mut |c| text.push(c));
+    let mut r = HexReader::new();
+    let mut last = HexEvent::More;
+    for &c in &text {
+        last = r.feed(c);
+    }
+    match last {
+        HexEvent::Done { len } if usize::from(len) == IMAGE_LEN => {}
+        e => return Err(format!("WRITE's own text read back as {e:?}")),
+    }
+    if image::decode(r.data()) != Ok(prog) {
+        return Err("WRITE then READ changed the program".into());
+    }
+    Ok(())
+}
+
+/// The stored-image decoder: accepts exactly a 278-byte image with the magic, version 1
+/// and a good CRC, and then re-encodes to the same bytes.
+pub fn image_decode(data: &[u8]) -> Verdict {
+    let res = image::decode(data);
+    let valid = data.len() == IMAGE_LEN
+        && data[..2] == image::MAGIC
+        && data[image::VERSION_OFFSET] == image::VERSION
+        && image::crc16(&data[..image::CRC_OFFSET]).to_be_bytes() == data[image::CRC_OFFSET..];
+    match res {
+        Ok(p) if valid => {
+            if image::encode(&p).as_slice() == data {
+                Ok(())
+            } else {
+                Err("a decoded image re-encodes differently".into())
+            }
+        }
+        Ok(_) => Err("decode accepted an invalid image".into()),
+        Err(e) if valid => Err(format!("decode refused a valid image: {e:?}")),
+        Err(_) => Ok(()),
+    }
+}
+
+/// EEPROM `load` on random contents: input bytes 0..280 are slot 0, 280..560 slot 1 (the
+/// rest erased). LOAD returns only a program whose slot holds a valid image (the newest
+/// valid one); STORE then works from any contents; and a STORE cut by a power failure after
+/// any number of writes leaves LOAD with the old or the new program, never anything else.
+pub fn eeprom(data: &[u8]) -> Verdict {
+    let mut board = SimBoard::new();
+    let slot = usize::from(SLOT_LEN);
+    for (k, chunk) in data.chunks(slot).take(2).enumerate() {
+        let at = usize::from(SLOT_ADDR[k]);
+        board.eeprom[at..at + chunk.len()].copy_from_slice(chunk);
+    }
+    let old = store::load(&mut board);
+    let slot_image = |b: &SimBoard, k: usize| {
+        let at = usize::from(SLOT_ADDR[k]) + 2;
+        image::decode(&b.eeprom[at..at + IMAGE_LEN]).ok()
+    };
+    let valid: Vec<Option<Program>> = (0..2).map(|k| slot_image(&board, k)).collect();
+    match &old {
+        Ok(p) => {
+            if !valid.iter().any(|v| v.as_ref() == Some(p)) {
+                return Err("LOAD returned a program no slot holds as a valid image".into());
+            }
+            let (addr, _) =
+                store::newest_slot(&mut board).ok_or("LOAD worked but no newest slot")?;
+            let k = usize::from(addr == SLOT_ADDR[1]);
+            if valid[k].as_ref() != Some(p) {
+                return Err("LOAD did not take the newest valid slot".into());
+            }
+        }
+        Err(_) => {
+            if valid.iter().any(Option::is_some) {
+                return Err("LOAD found nothing although a slot holds a valid image".into());
+            }
+        }
+    }
+    // A new program from the input itself, stored with a power failure after `cut` writes.
+    let mut new = Program::blank();
+    for (dst, &src) in new.uf.iter_mut().zip(data.iter().rev()) {
+        *dst = src;
+    }
+    new.presets[0] = data.len() as u8;
+    let cut = data.first().map_or(0, |&c| u32::from(c) * 3);
+    let mut failing = board.clone();
+    failing.eeprom_fault = EepromFault::PowerFail {
+        writes: cut,
+        tear: Tear::Old,
+    };
+    let _ = store::store(&new, &mut failing);
+    let after_cut = store::load(&mut failing);
+    let ok = after_cut.as_ref() == Ok(&new) || after_cut == old;
+    if !ok {
+        return Err(format!(
+            "a STORE cut after {cut} writes lost the stored program"
+        ));
+    }
+    // A whole STORE works from any contents, and a second one too (the other slot).
+    store::store(&new, &mut board).map_err(|e| format!("STORE failed: {e:?}"))?;
+    if store::load(&mut board).as_ref() != Ok(&new) {
+        return Err("LOAD after STORE does not give the stored program".into());
+    }
+    let mut newer = new.clone();
+    newer.presets[1] = newer.presets[1].wrapping_add(1);
+    store::store(&newer, &mut board).map_err(|e| format!("second STORE failed: {e:?}"))?;
+    if store::load(&mut board).as_ref() != Ok(&newer) {
+        return Err("LOAD after a second STORE does not give the newer program".into());
+    }
+    Ok(())
+}
