@@ -2,8 +2,8 @@
 //! steady line and the 3.4 ms EEPROM write time modelled, plus run loops that keep the
 //! rig's pins asserted and stop when a condition holds.
 
-use utile_kit::simavr::{CpuState, Nano, RxPacing, RX_FIXED_CYCLES_PER_BYTE};
 use std::path::Path;
+use utile_kit::simavr::{CpuState, Nano, RxPacing, RX_FIXED_CYCLES_PER_BYTE};
 
 pub use utile_kit::simavr::F_CPU;
 

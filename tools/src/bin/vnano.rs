@@ -5,9 +5,9 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
+use utile_kit::simavr::{self as nano, CpuState, Nano, RigPin};
 use utile_tools::vnano::args::{self, Options, USAGE};
 use utile_tools::vnano::load::{Loader, Step};
-use utile_kit::simavr::{self as nano, CpuState, Nano, RigPin};
 use utile_tools::vnano::pty::Pty;
 use utile_tools::vnano::rig::{self, Key, KeyParser, OutputTracker, RigAction, RigView};
 use utile_tools::vnano::term::{self, RawMode};
