@@ -87,14 +87,14 @@ fn callers(elf: &Path, panics: &[(String, String)], root: &Path) -> Vec<String> 
                 .any(|(_, name)| line.contains(&format!("<{name}>")));
         if calls_panic {
             if let Some(addr) = line.split(':').next() {
-                sites.push(addr.trim().to_string());
+                sites.push((addr.trim().to_string(), current.clone()));
             }
         }
     }
     let prefix = format!("{}/", root.display());
     sites
         .iter()
-        .map(|a| {
+        .map(|(a, func)| {
             let lines = Command::new("avr-addr2line")
                 .args(["-i", "-e"])
                 .arg(elf)
@@ -109,7 +109,12 @@ fn callers(elf: &Path, panics: &[(String, String)], root: &Path) -> Vec<String> 
                         .join(" <- ")
                 })
                 .unwrap_or_default();
-            format!("0x{a}: {lines}")
+            if lines.is_empty() {
+                // Only library code: name the function (e.g. `copy_within`) the call is in.
+                format!("0x{a}: in {func}")
+            } else {
+                format!("0x{a}: {lines}")
+            }
         })
         .collect()
 }
