@@ -82,7 +82,7 @@ impl Board for Nano {
         tick::CLOCKS.load(Ordering::Relaxed)
     }
 
-    #[inline]
+    #[inline(never)]
     fn now_ms(&mut self) -> u32 {
         tick::with_ticker(|t| t.now_ms())
     }
