@@ -87,7 +87,7 @@ impl Board for Nano {
         tick::with_ticker(|t| t.now_ms())
     }
 
-    #[inline]
+    #[inline(never)]
     fn write_outputs(&mut self, py: u8) {
         pins::write_outputs(py);
     }
