@@ -367,21 +367,24 @@ pub fn family_of(op: u8) -> Option<(&'static Family, u8)> {
 
 /// The command name of an opcode, or `None` for a blank or unassigned byte (shown `.....`).
 pub fn name(op: u8) -> Option<Name> {
+    let i = usize::from(op);
+    // The spelling as five bytes whose NULs are left out: a single's padded slot, or a
+    // family's padded prefix, the digit and the suffix (NUL when there is none).
+    let spelled: [u8; MAX_NAME] = if i < SINGLE_NAMES.len() {
+        SINGLE_NAMES.at(i).load()
+    } else {
+        let (f, num) = find_family(op)?;
+        [f.0[2], f.0[3], f.0[4], hex::digit(num), f.0[5]]
+    };
     let mut n = Name {
         buf: [0; MAX_NAME],
         len: 0,
     };
-    let i = usize::from(op);
-    if i < SINGLE_NAMES.len() {
-        unpad(&SINGLE_NAMES.at(i).load())
-            .iter()
-            .for_each(|&c| n.push(c));
-        return Some(n);
+    for c in spelled {
+        if c != 0 {
+            n.push(c);
+        }
     }
-    let (fam, num) = find_family(op)?;
-    fam.prefix().iter().for_each(|&c| n.push(c));
-    n.push(hex::digit(num));
-    fam.suffix().iter().for_each(|&c| n.push(c));
     Some(n)
 }
 
