@@ -393,9 +393,14 @@ pub fn is_valid(op: u8) -> bool {
     usize::from(op) < SINGLES.len() || find_family(op).is_some()
 }
 
-/// Case-insensitive equality of ASCII bytes.
-fn eq_fold(a: &[u8], b: &[u8]) -> bool {
-    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.eq_ignore_ascii_case(y))
+/// Case-insensitive equality of a typed word and a name spelled in upper case (the names'
+/// digits and dots have no case, so upper-casing the word alone is enough).
+fn eq_fold(word: &[u8], name: &[u8]) -> bool {
+    word.len() == name.len()
+        && word
+            .iter()
+            .zip(name)
+            .all(|(w, n)| w.to_ascii_uppercase() == *n)
 }
 
 /// The opcode of an executable command name (any case), or `None`.
@@ -405,7 +410,7 @@ pub fn lookup(word: &[u8]) -> Option<u8> {
     }
     if let Some(op) = SINGLE_NAMES
         .wrapper_iter()
-        .position(|w| eq_fold(unpad(&w.load()), word))
+        .position(|w| eq_fold(word, unpad(&w.load())))
     {
         return Some(op as u8);
     }
