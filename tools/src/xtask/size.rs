@@ -65,7 +65,7 @@ pub fn rust_path(sym: &str) -> Vec<String> {
         "8utile_fw",
         "4core",
         "10avr_device",
-        "12avr_progmem",
+        "11avr_progmem",
         "10panic_halt",
         "17compiler_builtins",
     ];
@@ -118,7 +118,11 @@ pub fn room(name: &str) -> String {
     if name == "__vectors" || name.starts_with("__vector_default") {
         return "vectors and startup".into();
     }
-    if name.starts_with("__do_") || name == "main" || name.starts_with("__init") {
+    if name.starts_with("__do_")
+        || name.starts_with(".do_")
+        || ["main", "_exit", "_etext"].contains(&name)
+        || name.starts_with("__init")
+    {
         return "vectors and startup".into();
     }
     if name.starts_with("__vector_") {
@@ -129,6 +133,9 @@ pub fn room(name: &str) -> String {
     }
     if let Some(owner) = name.strip_prefix("switch.table.") {
         return room(owner);
+    }
+    if name.starts_with("anon.") {
+        return "constants (.data, unnamed)".into();
     }
     let path = rust_path(name);
     let p: Vec<&str> = path.iter().map(String::as_str).collect();
