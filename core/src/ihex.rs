@@ -218,12 +218,15 @@ impl HexReader {
         }
         match self.kind {
             0x00 => {
-                let end = u32::from(self.addr) + u32::from(self.count);
-                if self.addr != self.next || end > IMAGE_LEN as u32 {
+                // u16 arithmetic: an end past 0xFFFF is past the image too.
+                let end = self.addr.checked_add(u16::from(self.count));
+                let Some(end) = end.filter(|&e| usize::from(e) <= IMAGE_LEN) else {
+                    return self.fail(HexError::Address);
+                };
+                if self.addr != self.next {
                     return self.fail(HexError::Address);
                 }
-                // end ≤ IMAGE_LEN, so it fits a u16.
-                self.next = end as u16;
+                self.next = end;
                 self.state = State::AfterRecord;
                 HexEvent::More
             }

@@ -48,10 +48,12 @@ pub enum ImageError {
 }
 
 /// One byte of CRC-16/CCITT-FALSE: feed bytes one at a time starting from 0xFFFF
-/// (lets STORE/LOAD check an EEPROM slot without copying it to RAM).
+/// (lets STORE/LOAD check an EEPROM slot without copying it to RAM). Out of line: inlined
+/// in the slot check and the image's CRC it cost 134 bytes more.
+#[inline(never)]
 pub const fn crc16_update(crc: u16, byte: u8) -> u16 {
     let mut crc = crc ^ ((byte as u16) << 8);
-    let mut bit = 0;
+    let mut bit = 0u8;
     while bit < 8 {
         crc = if crc & 0x8000 != 0 {
             (crc << 1) ^ 0x1021

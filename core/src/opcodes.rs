@@ -243,14 +243,14 @@ pub const MAX_NAME: usize = 5;
 const FAM_REC: usize = 6;
 
 /// The single names as NUL-padded 5-byte slots, built at compile time.
-const fn single_slots() -> [u8; SINGLES.len() * MAX_NAME] {
-    let mut out = [0u8; SINGLES.len() * MAX_NAME];
+const fn single_slots() -> [[u8; MAX_NAME]; SINGLES.len()] {
+    let mut out = [[0u8; MAX_NAME]; SINGLES.len()];
     let mut i = 0;
     while i < SINGLES.len() {
         let name = SINGLES[i].as_bytes();
         let mut j = 0;
         while j < name.len() {
-            out[i * MAX_NAME + j] = name[j];
+            out[i][j] = name[j];
             j += 1;
         }
         i += 1;
@@ -258,34 +258,41 @@ const fn single_slots() -> [u8; SINGLES.len() * MAX_NAME] {
     out
 }
 
-/// The family table as flat records, built at compile time.
-const fn family_records() -> [u8; FAMILIES.len() * FAM_REC] {
-    let mut out = [0u8; FAMILIES.len() * FAM_REC];
+/// The family table as records, built at compile time.
+const fn family_records() -> [[u8; FAM_REC]; FAMILIES.len()] {
+    let mut out = [[0u8; FAM_REC]; FAMILIES.len()];
     let mut i = 0;
     while i < FAMILIES.len() {
         let f = &FAMILIES[i];
-        out[i * FAM_REC] = f.base;
-        out[i * FAM_REC + 1] = f.count;
+        out[i][0] = f.base;
+        out[i][1] = f.count;
         let p = f.prefix.as_bytes();
         let mut j = 0;
         while j < p.len() {
-            out[i * FAM_REC + 2 + j] = p[j];
+            out[i][2 + j] = p[j];
             j += 1;
         }
         let s = f.suffix.as_bytes();
         if !s.is_empty() {
-            out[i * FAM_REC + 5] = s[0];
+            out[i][5] = s[0];
         }
         i += 1;
     }
     out
 }
 
-// The name tables are read a byte at a time from flash: as RAM statics they would cost
-// about 400 of the chip's 2048 bytes.
+// The name tables are read a record at a time from flash: as RAM statics they would cost
+// about 400 of the chip's 2048 bytes. Records (not flat bytes) so that every read is one
+// bounds check the compiler can prove (no panic path in the image).
 avr_progmem::progmem! {
-    static progmem SINGLE_NAMES: [u8; SINGLES.len() * MAX_NAME] = single_slots();
-    static progmem FAMILY_RECORDS: [u8; FAMILIES.len() * FAM_REC] = family_records();
+    static progmem SINGLE_NAMES: [[u8; MAX_NAME]; SINGLES.len()] = single_slots();
+    static progmem FAMILY_RECORDS: [[u8; FAM_REC]; FAMILIES.len()] = family_records();
+}
+
+/// A NUL-padded name slot without its padding.
+fn unpad(slot: &[u8]) -> &[u8] {
+    let len = slot.iter().position(|&c| c == 0).unwrap_or(slot.len());
+    slot.get(..len).unwrap_or(&[])
 }
 
 /// One family as read from flash.
@@ -293,15 +300,9 @@ avr_progmem::progmem! {
 struct FamRec([u8; FAM_REC]);
 
 impl FamRec {
-    fn load(i: usize) -> Option<Self> {
-        if i >= FAMILIES.len() {
-            return None;
-        }
-        let mut r = [0u8; FAM_REC];
-        for (k, slot) in r.iter_mut().enumerate() {
-            *slot = FAMILY_RECORDS.load_at(i * FAM_REC + k);
-        }
-        Some(Self(r))
+    /// Every family record, read from flash one at a time.
+    fn all() -> impl Iterator<Item = Self> {
+        FAMILY_RECORDS.wrapper_iter().map(|w| Self(w.load()))
     }
     fn base(&self) -> u8 {
         self.0[0]
@@ -310,9 +311,7 @@ impl FamRec {
         self.0[1]
     }
     fn prefix(&self) -> &[u8] {
-        let p = &self.0[2..5];
-        let len = p.iter().position(|&c| c == 0).unwrap_or(p.len());
-        p.get(..len).unwrap_or(&[])
+        unpad(&self.0[2..5])
     }
     fn suffix(&self) -> &[u8] {
         let s = &self.0[5..6];
@@ -329,10 +328,7 @@ impl FamRec {
 
 /// Index of the family holding `op`, with the number.
 fn find_family(op: u8) -> Option<(FamRec, u8)> {
-    (0..FAMILIES.len()).find_map(|i| {
-        let f = FamRec::load(i)?;
-        f.holds(op).then(|| (f, op - f.base()))
-    })
+    FamRec::all().find_map(|f| f.holds(op).then(|| (f, op - f.base())))
 }
 
 /// A command name, spelled into a small fixed buffer (no heap, no RAM tables).
@@ -371,25 +367,24 @@ pub fn family_of(op: u8) -> Option<(&'static Family, u8)> {
 
 /// The command name of an opcode, or `None` for a blank or unassigned byte (shown `.....`).
 pub fn name(op: u8) -> Option<Name> {
+    let i = usize::from(op);
+    // The spelling as five bytes whose NULs are left out: a single's padded slot, or a
+    // family's padded prefix, the digit and the suffix (NUL when there is none).
+    let spelled: [u8; MAX_NAME] = if i < SINGLE_NAMES.len() {
+        SINGLE_NAMES.at(i).load()
+    } else {
+        let (f, num) = find_family(op)?;
+        [f.0[2], f.0[3], f.0[4], hex::digit(num), f.0[5]]
+    };
     let mut n = Name {
         buf: [0; MAX_NAME],
         len: 0,
     };
-    let i = usize::from(op);
-    if i < SINGLES.len() {
-        for k in 0..MAX_NAME {
-            let c = SINGLE_NAMES.load_at(i * MAX_NAME + k);
-            if c == 0 {
-                break;
-            }
+    for c in spelled {
+        if c != 0 {
             n.push(c);
         }
-        return Some(n);
     }
-    let (fam, num) = find_family(op)?;
-    fam.prefix().iter().for_each(|&c| n.push(c));
-    n.push(hex::digit(num));
-    fam.suffix().iter().for_each(|&c| n.push(c));
     Some(n)
 }
 
@@ -398,9 +393,14 @@ pub fn is_valid(op: u8) -> bool {
     usize::from(op) < SINGLES.len() || find_family(op).is_some()
 }
 
-/// Case-insensitive equality of ASCII bytes.
-fn eq_fold(a: &[u8], b: &[u8]) -> bool {
-    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.eq_ignore_ascii_case(y))
+/// Case-insensitive equality of a typed word and a name spelled in upper case (the names'
+/// digits and dots have no case, so upper-casing the word alone is enough).
+fn eq_fold(word: &[u8], name: &[u8]) -> bool {
+    word.len() == name.len()
+        && word
+            .iter()
+            .zip(name)
+            .all(|(w, n)| w.to_ascii_uppercase() == *n)
 }
 
 /// The opcode of an executable command name (any case), or `None`.
@@ -408,13 +408,13 @@ pub fn lookup(word: &[u8]) -> Option<u8> {
     if word.len() > MAX_NAME {
         return None;
     }
-    for op in 0..SINGLES.len() as u8 {
-        if name(op).is_some_and(|n| eq_fold(n.as_bytes(), word)) {
-            return Some(op);
-        }
+    if let Some(op) = SINGLE_NAMES
+        .wrapper_iter()
+        .position(|w| eq_fold(word, unpad(&w.load())))
+    {
+        return Some(op as u8);
     }
-    (0..FAMILIES.len()).find_map(|i| {
-        let f = FamRec::load(i)?;
+    FamRec::all().find_map(|f| {
         let (p, s) = (f.prefix(), f.suffix());
         if word.len() != p.len() + 1 + s.len() {
             return None;

@@ -12,9 +12,11 @@ pub fn div(n: u32, d: u32) -> u32 {
     if d == 0 {
         return 0;
     }
-    let (mut q, mut r) = (0u32, 0u32);
-    for i in (0..32).rev() {
-        r = (r << 1) | ((n >> i) & 1);
+    // `q` starts as `n`: each step shifts its top bit into `r` and a quotient bit in at the
+    // bottom (no variable shift, which the AVR does one bit at a time).
+    let (mut q, mut r) = (n, 0u32);
+    for _ in 0..32u8 {
+        r = (r << 1) | (q >> 31);
         q <<= 1;
         if r >= d {
             r -= d;

@@ -82,12 +82,12 @@ impl Board for Nano {
         tick::CLOCKS.load(Ordering::Relaxed)
     }
 
-    #[inline]
+    #[inline(never)]
     fn now_ms(&mut self) -> u32 {
         tick::with_ticker(|t| t.now_ms())
     }
 
-    #[inline]
+    #[inline(never)]
     fn write_outputs(&mut self, py: u8) {
         pins::write_outputs(py);
     }

@@ -73,6 +73,8 @@ pub(super) fn engine_ptr() -> *const Engine {
 /// took about 1.1 ms, longer than one byte at 19200 baud (0.52 ms), so resealing after
 /// every byte of a READ overflowed the receive buffer; this takes about 0.14 ms and still
 /// catches any single damaged byte and reordered bytes.
+// Out of line: inlined four times (boot check, reseal) it cost 150 bytes more.
+#[inline(never)]
 fn seal(bytes: &[u8]) -> u32 {
     let (mut a, mut b) = (0x5555u16, 0u16);
     for &x in bytes {
@@ -83,6 +85,8 @@ fn seal(bytes: &[u8]) -> u32 {
 }
 
 /// Record the present program as the one to keep over a warm reset.
+// Out of line: inlined at its call sites in the main loop it cost 132 bytes more.
+#[inline(never)]
 pub fn reseal(prog: &Program) {
     let (sum_uf, sum_presets) = (seal(&prog.uf), seal(&prog.presets));
     let kept = addr_of_mut!(KEPT).cast::<Kept>();

@@ -2,7 +2,7 @@
 //! the benchmarks (`./x bench`). What the tools share with the tests is in `utile_kit`.
 #![deny(missing_docs)]
 
-/// The virtual Nano (`cargo nano`): firmware in simavr, UART on a terminal or pty.
-pub mod vnano;
 /// Benchmarks of the real firmware image in simavr (`bench` binary).
 pub mod bench;
+/// The virtual Nano (`cargo nano`): firmware in simavr, UART on a terminal or pty.
+pub mod vnano;

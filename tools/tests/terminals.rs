@@ -32,12 +32,33 @@ impl Term {
         let dir = scratch(&format!("terminals-{name}"));
         let link = dir.join("nano");
         let elf = firmware_elf();
-        let nano = PtyNano::start(&["--elf", elf.to_str().unwrap(), "--link", link.to_str().unwrap()]);
+        let nano = PtyNano::start(&[
+            "--elf",
+            elf.to_str().unwrap(),
+            "--link",
+            link.to_str().unwrap(),
+        ]);
         let socket = format!("utile-{name}-{}", std::process::id());
         let cmd = program(&link);
         let st = Command::new("tmux")
-            .args(["-L", &socket, "-f", "/dev/null", "new-session", "-d", "-x", "80", "-y", "24"])
-            .args(["-e", &format!("HOME={}", dir.display()), "-c", dir.to_str().unwrap()])
+            .args([
+                "-L",
+                &socket,
+                "-f",
+                "/dev/null",
+                "new-session",
+                "-d",
+                "-x",
+                "80",
+                "-y",
+                "24",
+            ])
+            .args([
+                "-e",
+                &format!("HOME={}", dir.display()),
+                "-c",
+                dir.to_str().unwrap(),
+            ])
             .arg(&cmd)
             .stdin(Stdio::null())
             .status()
@@ -101,7 +122,12 @@ impl Term {
         let col = 8 + 19 * usize::from(k >> 3);
         let p = self.pane();
         let r = p.lines().nth(row - 1).unwrap_or("");
-        r.chars().skip(col - 1).take(9).collect::<String>().trim_end().to_string()
+        r.chars()
+            .skip(col - 1)
+            .take(9)
+            .collect::<String>()
+            .trim_end()
+            .to_string()
     }
 
     fn wait_entry(&self, line: u8, want: &str) {
@@ -189,7 +215,10 @@ fn check(name: &str, program: impl Fn(&Path) -> String) {
     t.keys(&["Enter"]);
     t.wait_for("T0     T1");
     let p = t.wait_for("007");
-    assert!(!p.contains("Unrecognized"), "{name}: a key left text behind:\n{p}");
+    assert!(
+        !p.contains("Unrecognized"),
+        "{name}: a key left text behind:\n{p}"
+    );
     t.keys(&["Enter"]);
     t.wait_entry(1, "001 NOP");
     // A pasted listing (tmux paste-buffer: one write, LF turned into CR).
@@ -208,11 +237,17 @@ fn check(name: &str, program: impl Fn(&Path) -> String) {
     t.wait_entry(last + 1, &format!("{:03} NOP", last + 1));
     t.wait_entry(last, &format!("{last:03} END"));
     for (i, w) in words.iter().enumerate() {
-        t.wait_entry(i as u8 + 1, &format!("{:03} {}", i + 1, w.to_ascii_uppercase()));
+        t.wait_entry(
+            i as u8 + 1,
+            &format!("{:03} {}", i + 1, w.to_ascii_uppercase()),
+        );
     }
     let p = t.pane();
     assert!(!p.contains("Input lost"), "{name}: input lost:\n{p}");
-    assert!(!p.contains("Unrecognized"), "{name}: a pasted line was mangled:\n{p}");
+    assert!(
+        !p.contains("Unrecognized"),
+        "{name}: a pasted line was mangled:\n{p}"
+    );
 }
 
 fn path(p: &Path) -> String {
@@ -226,7 +261,9 @@ fn picocom() {
 
 #[test]
 fn minicom() {
-    check("minicom", |p| format!("minicom -o -w -D {} -b 19200", path(p)));
+    check("minicom", |p| {
+        format!("minicom -o -w -D {} -b 19200", path(p))
+    });
 }
 
 #[test]

@@ -120,10 +120,20 @@ fn a_pasted_256_line_listing_is_taken_whole_and_in_order() {
         line_ms <= ideal_ms + ideal_ms / 50,
         "the input was held back: {line_ms} ms for {ideal_ms} ms of line time"
     );
-    assert!(!contains(&out, b"Input lost"), "the firmware reported lost input");
-    assert!(!contains(&out, b"Unrecognized"), "a pasted command was mangled");
+    assert!(
+        !contains(&out, b"Input lost"),
+        "the firmware reported lost input"
+    );
+    assert!(
+        !contains(&out, b"Unrecognized"),
+        "a pasted command was mangled"
+    );
     // The screen caught up: the cursor wrapped to line 0, the prompt is where typing goes.
-    assert!(out.ends_with(b"\x1b[22;13H"), "{:?}", String::from_utf8_lossy(&out[out.len().saturating_sub(80)..]));
+    assert!(
+        out.ends_with(b"\x1b[22;13H"),
+        "{:?}",
+        String::from_utf8_lossy(&out[out.len().saturating_sub(80)..])
+    );
     let got = listed(&mut nano);
     assert_eq!(got.len(), 256, "lines listed: {got:?}");
     for (i, w) in words.iter().enumerate() {
@@ -140,7 +150,10 @@ fn a_pasted_256_line_listing_is_taken_whole_and_in_order() {
     assert!(stat.contains("rx overruns 0"), "{stat:?}");
     // RAM (SPEC §11): static data plus the stack's high-water mark (painted at boot).
     let (statics, stack) = ram_use(&nano);
-    eprintln!("RAM after the paste: static {statics} B + stack {stack} B = {}", statics + stack);
+    eprintln!(
+        "RAM after the paste: static {statics} B + stack {stack} B = {}",
+        statics + stack
+    );
     assert!(statics + stack <= 1536, "RAM budget: {}", statics + stack);
 }
 
@@ -192,8 +205,16 @@ fn bytes_sent_for_a_pasted_listing_against_single_entries() {
     let pasted_uf = listed(&mut nano);
     assert_eq!(singles.len(), 256);
     for (i, w) in words.iter().enumerate() {
-        assert!(singles[i].1.eq_ignore_ascii_case(w), "typed line {i}: {:?}", singles[i]);
-        assert!(pasted_uf[i].1.eq_ignore_ascii_case(w), "pasted line {i}: {:?}", pasted_uf[i]);
+        assert!(
+            singles[i].1.eq_ignore_ascii_case(w),
+            "typed line {i}: {:?}",
+            singles[i]
+        );
+        assert!(
+            pasted_uf[i].1.eq_ignore_ascii_case(w),
+            "pasted line {i}: {:?}",
+            pasted_uf[i]
+        );
     }
 }
 

@@ -4,8 +4,8 @@ mod utile_support;
 
 use utile_core::engine::Program;
 use utile_core::opcodes::{self, BLANK, NOP};
-use utile_support::*;
 use utile_kit::listing;
+use utile_support::*;
 
 /// `asm` of a listing must fail with exactly these `file:line: problem` lines.
 fn expect_errors(text: &str, expected: &[(usize, &str)]) {

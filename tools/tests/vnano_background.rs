@@ -38,7 +38,18 @@ fn vnano_started_with_an_ampersand_runs_serves_its_pty_and_ends_on_sigterm() {
     let link = dir.join("nano");
     let socket = format!("utile-bg-{}", std::process::id());
     let st = Command::new("tmux")
-        .args(["-L", &socket, "-f", "/dev/null", "new-session", "-d", "-x", "100", "-y", "30"])
+        .args([
+            "-L",
+            &socket,
+            "-f",
+            "/dev/null",
+            "new-session",
+            "-d",
+            "-x",
+            "100",
+            "-y",
+            "30",
+        ])
         .args(["env", "PS1=$ ", "bash", "--norc", "--noprofile", "-i"])
         .status()
         .unwrap();
@@ -50,7 +61,9 @@ fn vnano_started_with_an_ampersand_runs_serves_its_pty_and_ends_on_sigterm() {
     );
     tmux(&socket, &["send-keys", "-l", &cmd]);
     tmux(&socket, &["send-keys", "Enter"]);
-    wait_pane(&socket, "background notice", |p| p.contains("in the background: no rig keys"));
+    wait_pane(&socket, "background notice", |p| {
+        p.contains("in the background: no rig keys")
+    });
     // A key typed at the shell is the shell's (`q` would quit the Nano if it read it).
     tmux(&socket, &["send-keys", "-l", "q"]);
     tmux(&socket, &["send-keys", "Enter"]);
@@ -60,7 +73,11 @@ fn vnano_started_with_an_ampersand_runs_serves_its_pty_and_ends_on_sigterm() {
         assert!(t0.elapsed() < T, "no pty link");
         std::thread::sleep(Duration::from_millis(50));
     }
-    let f = std::fs::File::options().read(true).write(true).open(&link).unwrap();
+    let f = std::fs::File::options()
+        .read(true)
+        .write(true)
+        .open(&link)
+        .unwrap();
     let mut w = f.try_clone().unwrap();
     let mut tty = Stream::polled(f);
     use std::io::Write;
@@ -71,9 +88,14 @@ fn vnano_started_with_an_ampersand_runs_serves_its_pty_and_ends_on_sigterm() {
     let p = wait_pane(&socket, "jobs", |p| p.contains("Running"));
     assert!(!p.contains("Stopped"), "stopped in the background:\n{p}");
     // SIGTERM ends it.
-    tmux(&socket, &["send-keys", "-l", "kill -TERM %1; wait; echo status=$?"]);
+    tmux(
+        &socket,
+        &["send-keys", "-l", "kill -TERM %1; wait; echo status=$?"],
+    );
     tmux(&socket, &["send-keys", "Enter"]);
     let p = wait_pane(&socket, "exit status", |p| p.contains("status="));
     assert!(!p.contains("Stopped"), "{p}");
-    let _ = Command::new("tmux").args(["-L", &socket, "kill-server"]).status();
+    let _ = Command::new("tmux")
+        .args(["-L", &socket, "kill-server"])
+        .status();
 }

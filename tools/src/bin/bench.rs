@@ -135,7 +135,13 @@ fn opcode_rows(rows: &mut Vec<Row>, elf: &Path) {
     let base = match bench::measure_scans(elf, &bench::program(&["END"]), scans, 300) {
         Ok(r) => r.without_isr.median,
         Err(e) => {
-            row(rows, "cycles per command line", format!("not measurable: {e}"), "", "");
+            row(
+                rows,
+                "cycles per command line",
+                format!("not measurable: {e}"),
+                "",
+                "",
+            );
             return;
         }
     };
@@ -153,7 +159,12 @@ fn opcode_rows(rows: &mut Vec<Row>, elf: &Path) {
         (".S0 / .R0", &[".S0"], 0, "n/a"),
         (".TR0 with 0", &[".TR0"], 0, "n/a"),
         ("CLR + .TK0 (a 0 popped)", &["CLR", ".TK0"], 0, "n/a"),
-        ("SET + .TK0 (preset 10: restarts T0 every line)", &["SET", ".TK0"], 10, "n/a"),
+        (
+            "SET + .TK0 (preset 10: restarts T0 every line)",
+            &["SET", ".TK0"],
+            10,
+            "n/a",
+        ),
         ("SET + .TK4 (1 s unit)", &["SET", ".TK4"], 10, "n/a"),
         ("SET + .TKF (400 s unit)", &["SET", ".TKF"], 10, "n/a"),
         ("AND / OR / XOR", &["AND"], 0, "n/a"),

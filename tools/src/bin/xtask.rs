@@ -4,18 +4,20 @@
 //! `out/m328-nano-utile.hex` and `out/m328-nano-utile.elf` (with features: `m328-nano-utile-F.*`)
 //! and prints flash and RAM use against the budgets of `memory.x`.
 //!
-//! `cargo fw --size` also prints the flash by room (scan assembly, engine, each editor
-//! screen, storage, hal, tables, compiler runtime, ...): `tools/src/xtask/rooms.rs`.
+//! `cargo fw --size` adds the flash of each room (scan, engine, each editor file, storage,
+//! hal, main loop, runtime, progmem tables …), largest first (`tools/src/xtask/size.rs`).
 //!
-//! Every `cargo fw` fails when the image links a panic path (`core::panicking`, bounds
-//! checks, slice index failures): the firmware must have none (the panic guard).
+//! Every build FAILS when the image links a panic path (`core::panicking`, bounds checks,
+//! `unwrap` failures …), naming the source lines that call one (`tools/src/xtask/panics.rs`).
 //!
 //! `cargo fw --check-budget-enforced` links the firmware with shrunken budgets (a copy of
 //! `memory.x` with tiny flash, then tiny RAM) and succeeds only if both links FAIL, proving
 //! that an image over budget cannot be built.
 
-#[path = "../xtask/rooms.rs"]
-mod rooms;
+#[path = "../xtask/panics.rs"]
+mod panics;
+#[path = "../xtask/size.rs"]
+mod size;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
@@ -97,13 +99,13 @@ fn avr_build(features: Option<&str>, memory_x: Option<&Path>) -> Command {
 fn fw(args: &[String]) -> Result<(), String> {
     let mut features: Option<String> = None;
     let mut check = false;
-    let mut size = false;
+    let mut by_room = false;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
             "--features" => features = it.next().cloned(),
             "--check-budget-enforced" => check = true,
-            "--size" => size = true,
+            "--size" => by_room = true,
             other => match other.strip_prefix("--features=") {
                 Some(f) => features = Some(f.to_string()),
                 None => return Err(format!("unknown argument `{other}`")),
@@ -165,24 +167,15 @@ fn fw(args: &[String]) -> Result<(), String> {
     if let Some((table, gap)) = scan_table_gap(&out_elf) {
         println!("       scan dispatch table at 0x{table:04X}; {gap} bytes of alignment gap in front of it");
     }
+    if by_room {
+        size::print(&size::rooms(&out_elf, &root, text, data)?, flash_budget);
+    }
     println!("built in {:.1} s", started.elapsed().as_secs_f64());
-    if size {
-        rooms::report(&out_elf, text, data, flash_budget)?;
-    }
-    let panics = rooms::panic_symbols(&rooms::symbols(&out_elf)?);
-    if !panics.is_empty() {
-        for p in &panics {
-            eprintln!("panic path linked: {p}");
-        }
-        return Err(format!(
-            "the firmware links {} panic path symbol(s); find the callers with avr-objdump -d",
-            panics.len()
-        ));
-    }
-    println!("panic guard: no panic path linked");
     if flash > flash_budget || ram > static_budget {
         return Err("over budget".into());
     }
+    panics::guard(&out_elf, &root)?;
+    println!("no panic path linked");
     Ok(())
 }
 
