@@ -12,7 +12,6 @@
 mod vnano_util;
 
 use std::path::Path;
-use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 use vnano_util::*;
 
@@ -21,7 +20,7 @@ const T: Duration = Duration::from_secs(40);
 
 /// A terminal program in a private tmux server.
 struct Term {
-    socket: String,
+    tmux: Tmux,
     _nano: PtyNano,
 }
 
@@ -38,45 +37,17 @@ impl Term {
             "--link",
             link.to_str().unwrap(),
         ]);
-        let socket = format!("utile-{name}-{}", std::process::id());
         let cmd = program(&link);
-        let st = Command::new("tmux")
-            .args([
-                "-L",
-                &socket,
-                "-f",
-                "/dev/null",
-                "new-session",
-                "-d",
-                "-x",
-                "80",
-                "-y",
-                "24",
-            ])
-            .args([
-                "-e",
-                &format!("HOME={}", dir.display()),
-                "-c",
-                dir.to_str().unwrap(),
-            ])
-            .arg(&cmd)
-            .stdin(Stdio::null())
-            .status()
-            .expect("tmux (package tmux) must be installed");
-        assert!(st.success(), "tmux new-session {cmd:?}");
+        let home = format!("HOME={}", dir.display());
+        let extra = ["-e", home.as_str(), "-c", dir.to_str().unwrap()];
         Term {
-            socket,
+            tmux: Tmux::start(name, 80, 24, &extra, &cmd),
             _nano: nano,
         }
     }
 
     fn tmux(&self, args: &[&str]) -> String {
-        let out = Command::new("tmux")
-            .args(["-L", &self.socket])
-            .args(args)
-            .output()
-            .expect("tmux");
-        String::from_utf8_lossy(&out.stdout).into_owned()
+        self.tmux.run(args)
     }
 
     /// The visible screen.
@@ -98,17 +69,7 @@ impl Term {
 
     /// Waits until `ok` holds for the pane; panics with the pane after [`T`].
     fn wait(&self, what: &str, ok: impl Fn(&str) -> bool) -> String {
-        let t0 = Instant::now();
-        loop {
-            let p = self.pane();
-            if ok(&p) {
-                return p;
-            }
-            if t0.elapsed() > T {
-                panic!("{}: no {what} within {T:?}; the pane:\n{p}", self.socket);
-            }
-            std::thread::sleep(Duration::from_millis(50));
-        }
+        self.tmux.wait_pane(&[], what, T, ok)
     }
 
     fn wait_for(&self, needle: &str) -> String {
@@ -136,21 +97,13 @@ impl Term {
             if t0.elapsed() > T {
                 panic!(
                     "{}: line {line} shows {:?}, not {want:?}; the pane:\n{}",
-                    self.socket,
+                    self.tmux.socket(),
                     self.entry(line),
                     self.pane()
                 );
             }
             std::thread::sleep(Duration::from_millis(50));
         }
-    }
-}
-
-impl Drop for Term {
-    fn drop(&mut self) {
-        let _ = Command::new("tmux")
-            .args(["-L", &self.socket, "kill-server"])
-            .status();
     }
 }
 

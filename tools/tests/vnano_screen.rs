@@ -5,7 +5,6 @@
 
 mod vnano_util;
 
-use std::process::Command;
 use std::time::{Duration, Instant};
 use vnano_util::*;
 
@@ -13,51 +12,26 @@ const T: Duration = Duration::from_secs(20);
 const TITLE: &str = "<<<< Nano - u T I L E - ATmega328 >>>>";
 
 /// A tmux server of our own (private socket) running `vnano --fast`.
-struct Tmux {
-    socket: String,
+/// The virtual Nano in a tmux session named `nano`, 80 × 26 (the screen and the status line).
+struct Session {
+    t: Tmux,
 }
 
-impl Tmux {
-    fn start(args: &str) -> Tmux {
-        static N: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
-        let n = N.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-        let socket = format!("vnano-test-{}-{n}", std::process::id());
+impl Session {
+    fn start(args: &str) -> Session {
         let elf = firmware_elf();
         // The trailing sleep keeps the pane (and vnano's last words) after a quit.
         let cmd = format!(
             "'{VNANO}' --fast --elf '{}' {args}; sleep 30",
             elf.display()
         );
-        let ok = Command::new("tmux")
-            .args([
-                "-L",
-                &socket,
-                "-f",
-                "/dev/null",
-                "new-session",
-                "-d",
-                "-x",
-                "80",
-                "-y",
-                "26",
-                "-s",
-                "nano",
-            ])
-            .arg(cmd)
-            .env_remove("TMUX")
-            .status()
-            .expect("tmux must be installed");
-        assert!(ok.success(), "tmux new-session failed");
-        Tmux { socket }
+        Session {
+            t: Tmux::start("vnano-test", 80, 26, &["-s", "nano"], &cmd),
+        }
     }
 
     fn tmux(&self, args: &[&str]) -> String {
-        let out = Command::new("tmux")
-            .args(["-L", &self.socket])
-            .args(args)
-            .output()
-            .expect("tmux");
-        String::from_utf8_lossy(&out.stdout).into_owned()
+        self.t.run(args)
     }
 
     /// The screen as text, one string per row.
@@ -122,14 +96,6 @@ impl Tmux {
             }
             std::thread::sleep(Duration::from_millis(50));
         }
-    }
-}
-
-impl Drop for Tmux {
-    fn drop(&mut self) {
-        let _ = Command::new("tmux")
-            .args(["-L", &self.socket, "kill-server"])
-            .status();
     }
 }
 
@@ -244,7 +210,7 @@ fn screen_helpers_find_page_lines_and_the_reverse_video_cursor() {
 
 #[test]
 fn title_screen_and_status_line_below_it() {
-    let t = Tmux::start("");
+    let t = Session::start("");
     let screen = t.wait_text(TITLE);
     let screen = if screen.iter().any(|r| r.contains("*** User File 0 ***")) {
         screen
@@ -294,7 +260,7 @@ fn title_screen_and_status_line_below_it() {
 
 #[test]
 fn fill_set_y7_and_the_editing_keys() {
-    let t = Tmux::start("");
+    let t = Session::start("");
     t.wait_text("*** User File 0 ***");
 
     // Manual §3.1: fill puts NOP on every line.

@@ -265,3 +265,82 @@ impl Drop for PtyNano {
         let _ = self.child.wait();
     }
 }
+
+/// A private tmux server (its own socket, no user config) holding one detached session:
+/// how the tests look at a terminal program as a user sees it. Killed when dropped.
+pub struct Tmux {
+    socket: String,
+}
+
+impl Tmux {
+    /// Starts `cmd` in a `cols` × `rows` session; `extra` goes before the command (a session
+    /// name `-s`, environment `-e`, working directory `-c`).
+    pub fn start(tag: &str, cols: u16, rows: u16, extra: &[&str], cmd: &str) -> Tmux {
+        static N: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+        let n = N.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+        let t = Tmux {
+            socket: format!("utile-{tag}-{}-{n}", std::process::id()),
+        };
+        let (cols, rows) = (cols.to_string(), rows.to_string());
+        let ok = Command::new("tmux")
+            .args(["-L", &t.socket, "-f", "/dev/null", "new-session", "-d"])
+            .args(["-x", &cols, "-y", &rows])
+            .args(extra)
+            .arg(cmd)
+            .env_remove("TMUX")
+            .stdin(Stdio::null())
+            .status()
+            .expect("tmux (package tmux) must be installed");
+        assert!(ok.success(), "tmux new-session {cmd:?}");
+        t
+    }
+
+    /// The server's name, for messages.
+    pub fn socket(&self) -> &str {
+        &self.socket
+    }
+
+    /// One tmux command on this server; its standard output.
+    pub fn run(&self, args: &[&str]) -> String {
+        let out = Command::new("tmux")
+            .args(["-L", &self.socket])
+            .args(args)
+            .output()
+            .expect("tmux (package tmux) must be installed");
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    }
+
+    /// Polls `capture-pane -p` (plus `extra`) until `ok` holds; panics with the pane after
+    /// `timeout`.
+    pub fn wait_pane(
+        &self,
+        extra: &[&str],
+        what: &str,
+        timeout: Duration,
+        ok: impl Fn(&str) -> bool,
+    ) -> String {
+        let mut args = vec!["capture-pane", "-p"];
+        args.extend_from_slice(extra);
+        let t0 = Instant::now();
+        loop {
+            let p = self.run(&args);
+            if ok(&p) {
+                return p;
+            }
+            assert!(
+                t0.elapsed() < timeout,
+                "{}: no {what} within {timeout:?}; the pane:\n{p}",
+                self.socket
+            );
+            thread::sleep(Duration::from_millis(50));
+        }
+    }
+}
+
+impl Drop for Tmux {
+    fn drop(&mut self) {
+        let _ = Command::new("tmux")
+            .args(["-L", &self.socket, "kill-server"])
+            .status();
+    }
+}
