@@ -1,44 +1,33 @@
 //! Every text the editor sends, kept in flash as one progmem blob.
 //!
-//! A text is named by a [`Txt`] (offset and length into the blob), computed at compile time,
-//! so RAM holds no strings and no per-text pointers.
+//! A text is named by a [`Txt`] (bit offset and symbol count in the blob), computed at compile
+//! time, so RAM holds no strings and no per-text pointers.
 
 use avr_progmem::progmem;
 
 use super::super::board::Board;
 
-/// A text in the flash blob.
+/// A text in the flash blob: where its bits start and how many symbols it has.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Txt {
-    off: u16,
-    len: u16,
+    bit: u16,
+    symbols: u16,
 }
 
 impl Txt {
-    /// A packed byte of the text (0 past the blob).
-    fn raw(self, i: u16) -> u8 {
-        let at = usize::from(self.off) + usize::from(i);
-        if i < self.len && at < BLOB_LEN {
-            TEXT.load_at(at)
-        } else {
-            0
-        }
-    }
-
     /// Hand every byte of the text, unpacked, to `f`.
     pub fn each(self, mut f: impl FnMut(u8)) {
-        let mut i = 0;
-        while i < self.len {
-            let b = self.raw(i);
-            i += 1;
-            if b & RUN != 0 {
-                let c = self.raw(i);
-                i += 1;
-                for _ in 0..b & !RUN {
+        let mut at = Bits::at(self.bit);
+        for _ in 0..self.symbols {
+            let s = at.symbol();
+            if s == RUN {
+                let n = at.take(RUN_BITS);
+                let c = at.symbol();
+                for _ in 0..n {
                     f(c);
                 }
             } else {
-                f(b);
+                f(s);
             }
         }
     }
@@ -55,70 +44,270 @@ impl Txt {
     }
 }
 
-/// A packed byte with this bit set repeats the next byte (its low 7 bits) times: the texts
-/// are ASCII, and their runs of spaces, dashes and `=` would otherwise fill the flash.
-const RUN: u8 = 0x80;
-/// Runs shorter than this stay as they are (a run costs two bytes).
-const RUN_MIN: usize = 3;
+/// A reading position in the blob: bits leave each byte most significant first.
+struct Bits {
+    /// The next byte to load.
+    next: u16,
+    /// The bits of the current byte not yet taken, at the top.
+    byte: u8,
+    /// How many bits `byte` still holds.
+    left: u8,
+}
 
-/// Length of the run of `s[i]` starting at `i` (at most 127).
+impl Bits {
+    /// Reading from bit `bit` of the blob.
+    fn at(bit: u16) -> Self {
+        let mut at = Bits { next: bit >> 3, byte: 0, left: 0 };
+        at.take(bit as u8 & 7);
+        at
+    }
+
+    /// The next bit (0 past the blob).
+    fn bit(&mut self) -> u8 {
+        if self.left == 0 {
+            self.byte = rom(TEXT_AT as u16 + self.next);
+            self.next = self.next.wrapping_add(1);
+            self.left = 8;
+        }
+        self.left -= 1;
+        let b = self.byte >> 7;
+        self.byte <<= 1;
+        b
+    }
+
+    /// The next `n` bits as a number.
+    fn take(&mut self, n: u8) -> u8 {
+        let mut v = 0;
+        for _ in 0..n {
+            v = v << 1 | self.bit();
+        }
+        v
+    }
+
+    /// The next symbol of the canonical Huffman code: the counts give the number of codes of
+    /// each length, the symbols come in code order. `d` is how far the bits read so far lie
+    /// past the first code of their length.
+    fn symbol(&mut self) -> u8 {
+        let (mut d, mut index) = (0u8, 0u8);
+        for len in 1..=CODE.longest as u8 {
+            d |= self.bit();
+            let count = rom(COUNTS_AT as u16 + u16::from(len));
+            if d < count {
+                return rom(SYMBOLS_AT as u16 + u16::from(index.wrapping_add(d)));
+            }
+            index = index.wrapping_add(count);
+            d = d.wrapping_sub(count) << 1;
+        }
+        0
+    }
+}
+
+// The texts are ASCII, coded once at compile time: a run of 6 or more equal bytes (spaces,
+// dashes, `=`) becomes the symbol RUN, a 6-bit count and the byte; then every symbol gets a
+// canonical Huffman code from its frequency over all texts (2,285 bytes of text take 1,192,
+// about 4.2 bits each), and the blob is the texts' codes back to back.
+
+/// The symbol that starts a run (no text contains a NUL).
+const RUN: u8 = 0;
+/// Bits of a run's count.
+const RUN_BITS: u8 = 6;
+/// Runs shorter than this stay as they are.
+const RUN_MIN: usize = 6;
+/// The longest code the decoder reads (a compile-time check holds the texts to it).
+const MAX_LEN: usize = 15;
+
+/// Length of the run of `s[i]` starting at `i` (at most what `RUN_BITS` can count).
 const fn run_at(s: &[u8], i: usize) -> usize {
     let mut n = 1;
-    while i + n < s.len() && s[i + n] == s[i] && n < 127 {
+    while i + n < s.len() && s[i + n] == s[i] && n < (1 << RUN_BITS) - 1 {
         n += 1;
     }
     n
 }
 
-/// Packed length of `s`.
-const fn packed_len(s: &[u8]) -> usize {
-    let (mut i, mut len) = (0, 0);
-    while i < s.len() {
-        let n = run_at(s, i);
-        if n >= RUN_MIN {
-            len += 2;
-            i += n;
-        } else {
-            len += 1;
-            i += 1;
+/// How often each symbol occurs over all texts.
+const fn frequencies(parts: &[&str]) -> [u16; 128] {
+    let mut f = [0u16; 128];
+    let mut p = 0;
+    while p < parts.len() {
+        let s = parts[p].as_bytes();
+        let mut i = 0;
+        while i < s.len() {
+            assert!(s[i] != RUN && s[i] < 128, "texts are ASCII without NUL");
+            let n = run_at(s, i);
+            if n >= RUN_MIN {
+                f[RUN as usize] += 1;
+            }
+            f[s[i] as usize] += 1;
+            i += if n >= RUN_MIN { n } else { 1 };
         }
+        p += 1;
+    }
+    f
+}
+
+/// Huffman code lengths for the frequencies (0 for an unused symbol): join the two lightest
+/// trees until one is left; a symbol's length is its depth.
+const fn lengths(f: &[u16; 128]) -> [u8; 128] {
+    const NONE: usize = usize::MAX;
+    let mut weight = [0u32; 256];
+    let mut parent = [NONE; 256];
+    let mut alive = [false; 256];
+    let mut nodes = 128;
+    let mut i = 0;
+    while i < 128 {
+        weight[i] = f[i] as u32;
+        alive[i] = f[i] > 0;
+        i += 1;
+    }
+    loop {
+        let (mut a, mut b) = (NONE, NONE);
+        let mut j = 0;
+        while j < nodes {
+            if alive[j] {
+                if a == NONE || weight[j] < weight[a] {
+                    b = a;
+                    a = j;
+                } else if b == NONE || weight[j] < weight[b] {
+                    b = j;
+                }
+            }
+            j += 1;
+        }
+        if b == NONE {
+            break;
+        }
+        weight[nodes] = weight[a] + weight[b];
+        alive[nodes] = true;
+        alive[a] = false;
+        alive[b] = false;
+        parent[a] = nodes;
+        parent[b] = nodes;
+        nodes += 1;
+    }
+    let mut len = [0u8; 128];
+    let mut s = 0;
+    while s < 128 {
+        if f[s] > 0 {
+            let mut d = 0;
+            let mut n = s;
+            while parent[n] != NONE {
+                n = parent[n];
+                d += 1;
+            }
+            assert!(d >= 1 && d <= MAX_LEN, "code length out of range");
+            len[s] = d as u8;
+        }
+        s += 1;
     }
     len
 }
 
-/// Sum of the packed lengths of `parts[..n]`.
+/// The code: each symbol's length and value, and the decoder's tables.
+struct Code {
+    len: [u8; 128],
+    value: [u16; 128],
+    /// Symbols in code order (by length, then by symbol).
+    order: [u8; 128],
+    used: usize,
+    /// Codes of each length (index 0 unused).
+    counts: [u8; MAX_LEN + 1],
+    longest: usize,
+}
+
+/// The canonical code for the lengths: codes of one length are consecutive, in symbol order.
+const fn canonical(len: [u8; 128]) -> Code {
+    let mut c = Code {
+        len,
+        value: [0; 128],
+        order: [0; 128],
+        used: 0,
+        counts: [0; MAX_LEN + 1],
+        longest: 0,
+    };
+    let mut code = 0u16;
+    let mut l = 1;
+    while l <= MAX_LEN {
+        let mut s = 0;
+        while s < 128 {
+            if len[s] as usize == l {
+                c.value[s] = code;
+                code += 1;
+                c.order[c.used] = s as u8;
+                c.used += 1;
+                c.counts[l] += 1;
+                c.longest = l;
+            }
+            s += 1;
+        }
+        code <<= 1;
+        l += 1;
+    }
+    c
+}
+
+/// The code of every text.
+const CODE: Code = canonical(lengths(&frequencies(PARTS)));
+
+/// Bits and symbols of `s` coded.
+const fn coded_len(s: &[u8]) -> (usize, usize) {
+    let (mut i, mut bits, mut symbols) = (0, 0, 0);
+    while i < s.len() {
+        let n = run_at(s, i);
+        if n >= RUN_MIN {
+            bits += CODE.len[RUN as usize] as usize + RUN_BITS as usize;
+        }
+        bits += CODE.len[s[i] as usize] as usize;
+        symbols += 1;
+        i += if n >= RUN_MIN { n } else { 1 };
+    }
+    (bits, symbols)
+}
+
+/// Bit offset of `parts[n]` (the bits of the parts before it).
 const fn offset_of(parts: &[&str], n: usize) -> usize {
     let mut i = 0;
     let mut sum = 0;
     while i < n {
-        sum += packed_len(parts[i].as_bytes());
+        sum += coded_len(parts[i].as_bytes()).0;
         i += 1;
     }
     sum
 }
 
-/// All parts, packed and concatenated.
+/// Write the `len` low bits of `v` at bit `at` of `out`; the bit after them.
+const fn put<const N: usize>(out: &mut [u8; N], mut at: usize, v: u16, len: u8) -> usize {
+    let mut k = len;
+    while k > 0 {
+        k -= 1;
+        if v >> k & 1 != 0 {
+            out[at >> 3] |= 0x80 >> (at & 7);
+        }
+        at += 1;
+    }
+    at
+}
+
+/// All parts, coded and concatenated.
 const fn join<const N: usize>(parts: &[&str]) -> [u8; N] {
     let mut out = [0u8; N];
     let mut at = 0;
-    let mut i = 0;
-    while i < parts.len() {
-        let s = parts[i].as_bytes();
-        let mut j = 0;
-        while j < s.len() {
-            let n = run_at(s, j);
+    let mut p = 0;
+    while p < parts.len() {
+        let s = parts[p].as_bytes();
+        let mut i = 0;
+        while i < s.len() {
+            let n = run_at(s, i);
             if n >= RUN_MIN {
-                out[at] = RUN | n as u8;
-                out[at + 1] = s[j];
-                at += 2;
-                j += n;
-            } else {
-                out[at] = s[j];
-                at += 1;
-                j += 1;
+                let r = RUN as usize;
+                at = put(&mut out, at, CODE.value[r], CODE.len[r]);
+                at = put(&mut out, at, n as u16, RUN_BITS);
             }
+            let c = s[i] as usize;
+            at = put(&mut out, at, CODE.value[c], CODE.len[c]);
+            i += if n >= RUN_MIN { n } else { 1 };
         }
-        i += 1;
+        p += 1;
     }
     out
 }
@@ -139,8 +328,8 @@ macro_rules! texts {
         $(
             $(#[$m])*
             pub const $name: Txt = Txt {
-                off: offset_of(PARTS, Index::$name as usize) as u16,
-                len: packed_len(PARTS[Index::$name as usize].as_bytes()) as u16,
+                bit: offset_of(PARTS, Index::$name as usize) as u16,
+                symbols: coded_len(PARTS[Index::$name as usize].as_bytes()).1 as u16,
             };
         )*
         /// Every text with its source, for the unpacking test.
@@ -279,12 +468,54 @@ texts! {
     );
 }
 
-/// Length of the blob.
-const BLOB_LEN: usize = offset_of(PARTS, PARTS.len());
+/// Bits of the blob.
+const BLOB_BITS: usize = offset_of(PARTS, PARTS.len());
+/// Bytes of the blob.
+const BLOB_LEN: usize = BLOB_BITS.div_ceil(8);
+const _: () = assert!(BLOB_BITS <= u16::MAX as usize, "bit offsets are u16");
+
+/// Where the counts of codes of each length start in [`ROM`] (`[0]` unused).
+const COUNTS_AT: usize = 0;
+/// Where the symbols in code order start.
+const SYMBOLS_AT: usize = COUNTS_AT + CODE.longest + 1;
+/// Where the coded texts start.
+const TEXT_AT: usize = SYMBOLS_AT + CODE.used;
+/// Bytes in [`ROM`].
+const ROM_LEN: usize = TEXT_AT + BLOB_LEN;
+const _: () = assert!(ROM_LEN <= u16::MAX as usize);
+
+/// The decoder's tables and the coded texts, in one array so one loader reads them all.
+const fn tables() -> [u8; ROM_LEN] {
+    let mut out = [0u8; ROM_LEN];
+    let blob = join::<BLOB_LEN>(PARTS);
+    let mut i = 0;
+    while i < ROM_LEN {
+        out[i] = if i >= TEXT_AT {
+            blob[i - TEXT_AT]
+        } else if i >= SYMBOLS_AT {
+            CODE.order[i - SYMBOLS_AT]
+        } else {
+            CODE.counts[i - COUNTS_AT]
+        };
+        i += 1;
+    }
+    out
+}
 
 progmem! {
-    /// Every text of the editor, back to back.
-    static progmem TEXT: [u8; BLOB_LEN] = join::<BLOB_LEN>(PARTS);
+    /// Every text of the editor, coded, after the code's tables.
+    static progmem ROM: [u8; ROM_LEN] = tables();
+}
+
+/// Byte `i` of [`ROM`] (0 past its end); out of line, as the one reader of the texts.
+#[inline(never)]
+fn rom(i: u16) -> u8 {
+    let i = usize::from(i);
+    if i < ROM_LEN {
+        ROM.load_at(i)
+    } else {
+        0
+    }
 }
 
 #[cfg(test)]
@@ -299,7 +530,8 @@ mod tests {
             assert_eq!(out, s.as_bytes(), "{s:?}");
             assert!(s.is_ascii(), "{s:?}");
         }
-        assert!(BLOB_LEN < offset_of_plain(), "packing saves nothing");
+        let plain = offset_of_plain();
+        assert!(ROM_LEN * 10 < plain * 7, "coding saves less than 30 %");
     }
 
     fn offset_of_plain() -> usize {
