@@ -71,7 +71,7 @@ impl Editor {
     }
 
     /// One byte during READ. Returns `Some` when READ is over.
-    // Out of line: inlined into the key path it costs 166 B more (BENCHMARKS "Flash routes").
+    // Out of line: inlined into the key path it costs 176 B more (BENCHMARKS "Flash routes").
     #[inline(never)]
     pub(super) fn read_byte(
         rs: &mut ReadState,

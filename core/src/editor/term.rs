@@ -100,11 +100,13 @@ pub fn num_width<B: Board>(b: &mut B, v: u32, width: u8) {
 }
 
 /// A byte as 8 bits `7 6 .. 0`: `0 1 0 1 0 1 0 1` (15 characters).
-pub fn bits<B: Board>(b: &mut B, v: u8) {
-    for i in (0..8).rev() {
-        b.tx(if v & (1 << i) != 0 { b'1' } else { b'0' });
+pub fn bits<B: Board>(b: &mut B, mut v: u8) {
+    // Shift the byte out at the top: the AVR has no shift by a variable count.
+    for i in 0..8u8 {
         if i != 0 {
             b.tx(b' ');
         }
+        b.tx(b'0' + (v >> 7));
+        v <<= 1;
     }
 }
