@@ -143,6 +143,11 @@ fn backspace_delete_and_ctrl_x_edit_the_line() {
     // Case-insensitive, spaces around ignored.
     r.type_bytes(b" eNd \r");
     assert_eq!(r.eng.prog.uf[2], END);
+    r.type_bytes(b"   xOr \r");
+    assert_eq!(r.entry(3), "003 XOR", "runs of spaces on both sides");
+    r.type_bytes(b"  \r");
+    assert_eq!(r.eng.prog.uf[4], NOP, "a line of spaces is empty");
+    assert_eq!(r.cursor(), (22, 13));
 }
 
 #[test]

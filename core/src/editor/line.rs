@@ -59,20 +59,17 @@ impl Editor {
         if overlong {
             return None;
         }
-        // Trim spaces and fold case in place.
+        // Fold case in place, leaving out leading spaces, then trailing ones.
         let mut n = 0u8;
-        let mut start = 0u8;
-        while start < typed && self.line[usize::from(start & 7)] == b' ' {
-            start += 1;
+        for i in 0..typed {
+            let c = self.line[usize::from(i & 7)];
+            if c != b' ' || n > 0 {
+                self.line[usize::from(n & 7)] = c.to_ascii_uppercase();
+                n += 1;
+            }
         }
-        let mut end = typed;
-        while end > start && self.line[usize::from((end - 1) & 7)] == b' ' {
-            end -= 1;
-        }
-        for i in start..end {
-            let c = self.line[usize::from(i & 7)].to_ascii_uppercase();
-            self.line[usize::from(n & 7)] = c;
-            n += 1;
+        while n > 0 && self.line[usize::from((n - 1) & 7)] == b' ' {
+            n -= 1;
         }
         self.clear_message(b);
         Some(n)
