@@ -192,6 +192,9 @@ fn file_room(file: &str, root: &str) -> Option<String> {
         format!("hal::{}", stem(r))
     } else if rel == "src/main.rs" {
         "main.rs".into()
+    } else if rel.starts_with("target/") && rel.contains("avr-device") {
+        // The PAC that avr-device generates into the build directory.
+        "hal (avr-device register access)".into()
     } else {
         stem(rel)
     })
