@@ -79,6 +79,7 @@ pub fn slot_seq<B: Board>(b: &mut B, slot: u16) -> Option<u16> {
 
 /// The newest valid slot: (its address from [`SLOT_ADDR`], its sequence number). With
 /// equal (or exactly opposite) sequence numbers slot 0 wins.
+#[inline(always)]
 pub fn newest_slot<B: Board>(b: &mut B) -> Option<(u16, u16)> {
     let [a0, a1] = SLOT_ADDR;
     match (slot_seq(b, a0), slot_seq(b, a1)) {

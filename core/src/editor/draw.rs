@@ -57,6 +57,7 @@ impl Editor {
     }
 
     /// Half of a dashed row.
+    #[inline(always)]
     pub(super) fn dashes<B: Board>(b: &mut B, row: u8, second_half: bool) {
         if !second_half {
             goto(b, row, 1);
@@ -255,6 +256,7 @@ impl Editor {
     }
 
     /// Bring the bit stack and port displays up to date after an executed command.
+    #[inline(always)]
     pub(super) fn show_values<B: Board>(&mut self, eng: &mut Engine, b: &mut B) {
         eng.take_bs_view();
         if eng.bs != self.shown_bs {

@@ -11,6 +11,7 @@ pub(super) enum Parsed {
 
 impl Editor {
     /// One character for the input line; true when the line is submitted.
+    #[inline(always)]
     pub(super) fn line_char<B: Board>(&mut self, c: u8, b: &mut B) -> bool {
         match c {
             b'\r' | b'\n' => return true,

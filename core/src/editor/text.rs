@@ -76,6 +76,7 @@ impl Bits {
     }
 
     /// The next `n` bits as a number.
+    #[inline(always)]
     fn take(&mut self, n: u8) -> u8 {
         let mut v = 0;
         for _ in 0..n {

@@ -189,6 +189,7 @@ impl Engine {
     }
 
     /// Take the pending Port Byte value (the display is done).
+    #[inline(always)]
     pub fn take_port_view(&mut self) -> Option<u8> {
         let v = self.port_view();
         self.views &= !VIEW_PORT;
