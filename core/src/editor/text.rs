@@ -19,15 +19,14 @@ impl Txt {
     pub fn each(self, mut f: impl FnMut(u8)) {
         let mut at = Bits::at(self.bit);
         for _ in 0..self.symbols {
-            let s = at.symbol();
-            if s == RUN {
-                let n = at.take(RUN_BITS);
-                let c = at.symbol();
-                for _ in 0..n {
-                    f(c);
-                }
-            } else {
-                f(s);
+            let (mut c, mut n) = (at.symbol(), 1);
+            if c == RUN {
+                n = at.take(RUN_BITS);
+                c = at.symbol();
+            }
+            // One call of `f`, so that `send` inlines the board's output once.
+            for _ in 0..n {
+                f(c);
             }
         }
     }
