@@ -25,6 +25,7 @@
 
 mod draw;
 mod help;
+mod huffman;
 pub mod keys;
 mod layout;
 mod ldt;

@@ -49,7 +49,8 @@ impl Editor {
         // One instance of the drawing code: every entry point goes through `Tracked`.
         let b = &mut Tracked::new(b, false);
         if self.render < STEPS {
-            while self.render < STEPS && b.tx_room() >= STEP_MAX {
+            // One step per visit: the scan waits for at most one step's work.
+            if b.tx_room() >= STEP_MAX {
                 self.step(self.render, eng, b);
                 self.render += 1;
             }

@@ -6,6 +6,7 @@
 use avr_progmem::progmem;
 
 use super::super::board::Board;
+use super::huffman::{self, Code, RUN, RUN_BITS};
 
 /// A text in the flash blob: where its bits start and how many symbols it has.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -89,9 +90,8 @@ impl Bits {
     /// past the first code of their length.
     fn symbol(&mut self) -> u8 {
         let (mut d, mut index) = (0u8, 0u8);
-        for len in 1..=CODE.longest as u8 {
+        for &count in &COUNTS {
             d |= self.bit();
-            let count = rom(COUNTS_AT as u16 + u16::from(len));
             if d < count {
                 return rom(SYMBOLS_AT as u16 + u16::from(index.wrapping_add(d)));
             }
@@ -102,215 +102,8 @@ impl Bits {
     }
 }
 
-// The texts are ASCII, coded once at compile time: a run of 6 or more equal bytes (spaces,
-// dashes, `=`) becomes the symbol RUN, a 6-bit count and the byte; then every symbol gets a
-// canonical Huffman code from its frequency over all texts (2,285 bytes of text take 1,192,
-// about 4.2 bits each), and the blob is the texts' codes back to back.
-
-/// The symbol that starts a run (no text contains a NUL).
-const RUN: u8 = 0;
-/// Bits of a run's count.
-const RUN_BITS: u8 = 6;
-/// Runs shorter than this stay as they are.
-const RUN_MIN: usize = 6;
-/// The longest code the decoder reads (a compile-time check holds the texts to it).
-const MAX_LEN: usize = 15;
-
-/// Length of the run of `s[i]` starting at `i` (at most what `RUN_BITS` can count).
-const fn run_at(s: &[u8], i: usize) -> usize {
-    let mut n = 1;
-    while i + n < s.len() && s[i + n] == s[i] && n < (1 << RUN_BITS) - 1 {
-        n += 1;
-    }
-    n
-}
-
-/// How often each symbol occurs over all texts.
-const fn frequencies(parts: &[&str]) -> [u16; 128] {
-    let mut f = [0u16; 128];
-    let mut p = 0;
-    while p < parts.len() {
-        let s = parts[p].as_bytes();
-        let mut i = 0;
-        while i < s.len() {
-            assert!(s[i] != RUN && s[i] < 128, "texts are ASCII without NUL");
-            let n = run_at(s, i);
-            if n >= RUN_MIN {
-                f[RUN as usize] += 1;
-            }
-            f[s[i] as usize] += 1;
-            i += if n >= RUN_MIN { n } else { 1 };
-        }
-        p += 1;
-    }
-    f
-}
-
-/// Huffman code lengths for the frequencies (0 for an unused symbol): join the two lightest
-/// trees until one is left; a symbol's length is its depth.
-const fn lengths(f: &[u16; 128]) -> [u8; 128] {
-    const NONE: usize = usize::MAX;
-    let mut weight = [0u32; 256];
-    let mut parent = [NONE; 256];
-    let mut alive = [false; 256];
-    let mut nodes = 128;
-    let mut i = 0;
-    while i < 128 {
-        weight[i] = f[i] as u32;
-        alive[i] = f[i] > 0;
-        i += 1;
-    }
-    loop {
-        let (mut a, mut b) = (NONE, NONE);
-        let mut j = 0;
-        while j < nodes {
-            if alive[j] {
-                if a == NONE || weight[j] < weight[a] {
-                    b = a;
-                    a = j;
-                } else if b == NONE || weight[j] < weight[b] {
-                    b = j;
-                }
-            }
-            j += 1;
-        }
-        if b == NONE {
-            break;
-        }
-        weight[nodes] = weight[a] + weight[b];
-        alive[nodes] = true;
-        alive[a] = false;
-        alive[b] = false;
-        parent[a] = nodes;
-        parent[b] = nodes;
-        nodes += 1;
-    }
-    let mut len = [0u8; 128];
-    let mut s = 0;
-    while s < 128 {
-        if f[s] > 0 {
-            let mut d = 0;
-            let mut n = s;
-            while parent[n] != NONE {
-                n = parent[n];
-                d += 1;
-            }
-            assert!(d >= 1 && d <= MAX_LEN, "code length out of range");
-            len[s] = d as u8;
-        }
-        s += 1;
-    }
-    len
-}
-
-/// The code: each symbol's length and value, and the decoder's tables.
-struct Code {
-    len: [u8; 128],
-    value: [u16; 128],
-    /// Symbols in code order (by length, then by symbol).
-    order: [u8; 128],
-    used: usize,
-    /// Codes of each length (index 0 unused).
-    counts: [u8; MAX_LEN + 1],
-    longest: usize,
-}
-
-/// The canonical code for the lengths: codes of one length are consecutive, in symbol order.
-const fn canonical(len: [u8; 128]) -> Code {
-    let mut c = Code {
-        len,
-        value: [0; 128],
-        order: [0; 128],
-        used: 0,
-        counts: [0; MAX_LEN + 1],
-        longest: 0,
-    };
-    let mut code = 0u16;
-    let mut l = 1;
-    while l <= MAX_LEN {
-        let mut s = 0;
-        while s < 128 {
-            if len[s] as usize == l {
-                c.value[s] = code;
-                code += 1;
-                c.order[c.used] = s as u8;
-                c.used += 1;
-                c.counts[l] += 1;
-                c.longest = l;
-            }
-            s += 1;
-        }
-        code <<= 1;
-        l += 1;
-    }
-    c
-}
-
 /// The code of every text.
-const CODE: Code = canonical(lengths(&frequencies(PARTS)));
-
-/// Bits and symbols of `s` coded.
-const fn coded_len(s: &[u8]) -> (usize, usize) {
-    let (mut i, mut bits, mut symbols) = (0, 0, 0);
-    while i < s.len() {
-        let n = run_at(s, i);
-        if n >= RUN_MIN {
-            bits += CODE.len[RUN as usize] as usize + RUN_BITS as usize;
-        }
-        bits += CODE.len[s[i] as usize] as usize;
-        symbols += 1;
-        i += if n >= RUN_MIN { n } else { 1 };
-    }
-    (bits, symbols)
-}
-
-/// Bit offset of `parts[n]` (the bits of the parts before it).
-const fn offset_of(parts: &[&str], n: usize) -> usize {
-    let mut i = 0;
-    let mut sum = 0;
-    while i < n {
-        sum += coded_len(parts[i].as_bytes()).0;
-        i += 1;
-    }
-    sum
-}
-
-/// Write the `len` low bits of `v` at bit `at` of `out`; the bit after them.
-const fn put<const N: usize>(out: &mut [u8; N], mut at: usize, v: u16, len: u8) -> usize {
-    let mut k = len;
-    while k > 0 {
-        k -= 1;
-        if v >> k & 1 != 0 {
-            out[at >> 3] |= 0x80 >> (at & 7);
-        }
-        at += 1;
-    }
-    at
-}
-
-/// All parts, coded and concatenated.
-const fn join<const N: usize>(parts: &[&str]) -> [u8; N] {
-    let mut out = [0u8; N];
-    let mut at = 0;
-    let mut p = 0;
-    while p < parts.len() {
-        let s = parts[p].as_bytes();
-        let mut i = 0;
-        while i < s.len() {
-            let n = run_at(s, i);
-            if n >= RUN_MIN {
-                let r = RUN as usize;
-                at = put(&mut out, at, CODE.value[r], CODE.len[r]);
-                at = put(&mut out, at, n as u16, RUN_BITS);
-            }
-            let c = s[i] as usize;
-            at = put(&mut out, at, CODE.value[c], CODE.len[c]);
-            i += if n >= RUN_MIN { n } else { 1 };
-        }
-        p += 1;
-    }
-    out
-}
+const CODE: Code = huffman::code(PARTS);
 
 /// The date this firmware version was built (shown by VER and the help screen).
 macro_rules! build_date {
@@ -328,8 +121,9 @@ macro_rules! texts {
         $(
             $(#[$m])*
             pub const $name: Txt = Txt {
-                bit: offset_of(PARTS, Index::$name as usize) as u16,
-                symbols: coded_len(PARTS[Index::$name as usize].as_bytes()).1 as u16,
+                bit: huffman::offset_of(&CODE, PARTS, Index::$name as usize) as u16,
+                symbols: huffman::coded_len(&CODE, PARTS[Index::$name as usize].as_bytes()).1
+                    as u16,
             };
         )*
         /// Every text with its source, for the unpacking test.
@@ -469,33 +263,45 @@ texts! {
 }
 
 /// Bits of the blob.
-const BLOB_BITS: usize = offset_of(PARTS, PARTS.len());
+const BLOB_BITS: usize = huffman::offset_of(&CODE, PARTS, PARTS.len());
 /// Bytes of the blob.
 const BLOB_LEN: usize = BLOB_BITS.div_ceil(8);
 const _: () = assert!(BLOB_BITS <= u16::MAX as usize, "bit offsets are u16");
 
-/// Where the counts of codes of each length start in [`ROM`] (`[0]` unused).
-const COUNTS_AT: usize = 0;
-/// Where the symbols in code order start.
-const SYMBOLS_AT: usize = COUNTS_AT + CODE.longest + 1;
+/// The number of codes of each length, from length 1: in RAM (12 bytes), because the
+/// reader looks one up for every bit of a code, and RUN mode's screen drawing between two
+/// scans must stay short (BENCHMARKS.md, press → output latency).
+static COUNTS: [u8; CODE.longest] = counts();
+
+/// [`COUNTS`]'s values.
+const fn counts() -> [u8; CODE.longest] {
+    let mut out = [0u8; CODE.longest];
+    let mut i = 0;
+    while i < CODE.longest {
+        out[i] = CODE.counts[i + 1];
+        i += 1;
+    }
+    out
+}
+
+/// Where the symbols in code order start in [`ROM`].
+const SYMBOLS_AT: usize = 0;
 /// Where the coded texts start.
 const TEXT_AT: usize = SYMBOLS_AT + CODE.used;
 /// Bytes in [`ROM`].
 const ROM_LEN: usize = TEXT_AT + BLOB_LEN;
 const _: () = assert!(ROM_LEN <= u16::MAX as usize);
 
-/// The decoder's tables and the coded texts, in one array so one loader reads them all.
+/// The symbols in code order and the coded texts, in one array so one loader reads both.
 const fn tables() -> [u8; ROM_LEN] {
     let mut out = [0u8; ROM_LEN];
-    let blob = join::<BLOB_LEN>(PARTS);
+    let blob = huffman::join::<BLOB_LEN>(&CODE, PARTS);
     let mut i = 0;
     while i < ROM_LEN {
         out[i] = if i >= TEXT_AT {
             blob[i - TEXT_AT]
-        } else if i >= SYMBOLS_AT {
-            CODE.order[i - SYMBOLS_AT]
         } else {
-            CODE.counts[i - COUNTS_AT]
+            CODE.order[i - SYMBOLS_AT]
         };
         i += 1;
     }
