@@ -8,22 +8,31 @@ use avr_progmem::progmem;
 use super::super::board::Board;
 use super::huffman::{self, Code, RUN, RUN_BITS};
 
-/// A text in the flash blob: where its bits start and how many symbols it has.
+/// A text in the flash blob: a coded text's first bit and number of symbols, or a plain
+/// text's first byte and length (with [`PLAIN_TEXT`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Txt {
-    bit: u16,
-    symbols: u16,
+    at: u16,
+    len: u16,
 }
+
+/// [`Txt::len`] flag: a plain text, its bytes as they are.
+const PLAIN_TEXT: u16 = 0x8000;
 
 impl Txt {
     /// Hand every byte of the text, unpacked, to `f`.
     pub fn each(self, mut f: impl FnMut(u8)) {
-        let mut at = Bits::at(self.bit);
-        for _ in 0..self.symbols {
-            let (mut c, mut n) = (at.symbol(), 1);
-            if c == RUN {
-                n = at.take(RUN_BITS);
-                c = at.symbol();
+        let plain = self.len & PLAIN_TEXT != 0;
+        let mut bits = Bits::at(if plain { 0 } else { self.at });
+        for i in 0..self.len & !PLAIN_TEXT {
+            let (mut c, mut n) = if plain {
+                (rom(PLAIN_AT as u16 + self.at + i), 1)
+            } else {
+                (bits.symbol(), 1)
+            };
+            if c == RUN && !plain {
+                n = bits.take(RUN_BITS);
+                c = bits.symbol();
             }
             // One call of `f`, so that `send` inlines the board's output once.
             for _ in 0..n {
@@ -114,49 +123,74 @@ macro_rules! build_date {
 
 /// Declares the texts: each becomes a public [`Txt`] constant; all go into one blob.
 macro_rules! texts {
-    ($($(#[$m:meta])* $name:ident = $s:expr;)*) => {
+    (
+        plain { $($(#[$pm:meta])* $pname:ident = $ps:expr;)* }
+        $($(#[$m:meta])* $name:ident = $s:expr;)*
+    ) => {
+        const PLAIN: &[&str] = &[$($ps),*];
         const PARTS: &[&str] = &[$($s),*];
+        #[allow(non_camel_case_types, clippy::upper_case_acronyms, dead_code)]
+        enum PlainIndex { $($pname),* }
         #[allow(non_camel_case_types, clippy::upper_case_acronyms, dead_code)]
         enum Index { $($name),* }
         $(
+            $(#[$pm])*
+            pub const $pname: Txt = Txt {
+                at: plain_offset(PlainIndex::$pname as usize) as u16,
+                len: PLAIN[PlainIndex::$pname as usize].len() as u16 | PLAIN_TEXT,
+            };
+        )*
+        $(
             $(#[$m])*
             pub const $name: Txt = Txt {
-                bit: huffman::offset_of(&CODE, PARTS, Index::$name as usize) as u16,
-                symbols: huffman::coded_len(&CODE, PARTS[Index::$name as usize].as_bytes()).1
-                    as u16,
+                at: huffman::offset_of(&CODE, PARTS, Index::$name as usize) as u16,
+                len: huffman::coded_len(&CODE, PARTS[Index::$name as usize].as_bytes()).1 as u16,
             };
         )*
         /// Every text with its source, for the unpacking test.
         #[cfg(test)]
-        const ALL: &[(Txt, &str)] = &[$(($name, $s)),*];
+        const ALL: &[(Txt, &str)] = &[$(($pname, $ps),)* $(($name, $s)),*];
     };
 }
 
+/// Bytes of the plain texts before `PLAIN[n]`.
+const fn plain_offset(n: usize) -> usize {
+    let (mut i, mut sum) = (0, 0);
+    while i < n {
+        sum += PLAIN[i].len();
+        i += 1;
+    }
+    sum
+}
+
 texts! {
-    /// Screen title, row 1.
-    TITLE = "<<<< Nano - u T I L E - ATmega328 >>>>";
+    // Drawn by RUN mode between two scans: plain, so that a drawing step is quick.
+    plain {
+        /// Screen title, row 1.
+        TITLE = "<<<< Nano - u T I L E - ATmega328 >>>>";
+        /// Bit Stack label.
+        BIT_STACK = "Bit Stack";
+        /// Port Byte label.
+        PORT_BYTE = "Port Byte";
+        /// Data label.
+        DATA = "Data";
+        /// Bit numbers over a byte display.
+        BIT_NUMBERS = "7 6 5 4 3 2 1 0";
+        /// The prompt.
+        ENTER = "Enter: ";
+        /// A blank line's name field.
+        DOTS = ".....";
+        /// EDIT mode status.
+        USER_FILE = "*** User File 0 ***";
+        /// RUN mode status.
+        RUNNING = "*** Running User File Program ***";
+    }
     /// Half a dashed separator row.
     DASHES40 = "----------------------------------------";
-    /// Bit Stack label.
-    BIT_STACK = "Bit Stack";
-    /// Port Byte label.
-    PORT_BYTE = "Port Byte";
-    /// Data label.
-    DATA = "Data";
-    /// Bit numbers over a byte display.
-    BIT_NUMBERS = "7 6 5 4 3 2 1 0";
     /// Underline of a byte display.
     EQ15 = "===============";
     /// Underline of the data display.
     EQ5 = "=====";
-    /// The prompt.
-    ENTER = "Enter: ";
-    /// A blank line's name field.
-    DOTS = ".....";
-    /// EDIT mode status.
-    USER_FILE = "*** User File 0 ***";
-    /// RUN mode status.
-    RUNNING = "*** Running User File Program ***";
     /// Waiting for a key.
     STRIKE = "Strike any key -->";
     /// Unknown input.
@@ -286,13 +320,28 @@ const fn counts() -> [u8; CODE.longest] {
 
 /// Where the symbols in code order start in [`ROM`].
 const SYMBOLS_AT: usize = 0;
+/// Where the plain texts start.
+const PLAIN_AT: usize = SYMBOLS_AT + CODE.used;
+/// Bytes of the plain texts.
+const PLAIN_LEN: usize = plain_offset(PLAIN.len());
 /// Where the coded texts start.
-const TEXT_AT: usize = SYMBOLS_AT + CODE.used;
+const TEXT_AT: usize = PLAIN_AT + PLAIN_LEN;
 /// Bytes in [`ROM`].
 const ROM_LEN: usize = TEXT_AT + BLOB_LEN;
 const _: () = assert!(ROM_LEN <= u16::MAX as usize);
 
-/// The symbols in code order and the coded texts, in one array so one loader reads both.
+/// Byte `i` of the plain texts back to back.
+const fn plain_byte(mut i: usize) -> u8 {
+    let mut p = 0;
+    while i >= PLAIN[p].len() {
+        i -= PLAIN[p].len();
+        p += 1;
+    }
+    PLAIN[p].as_bytes()[i]
+}
+
+/// The symbols in code order, the plain texts and the coded texts, in one array so one
+/// loader reads them all.
 const fn tables() -> [u8; ROM_LEN] {
     let mut out = [0u8; ROM_LEN];
     let blob = huffman::join::<BLOB_LEN>(&CODE, PARTS);
@@ -300,6 +349,8 @@ const fn tables() -> [u8; ROM_LEN] {
     while i < ROM_LEN {
         out[i] = if i >= TEXT_AT {
             blob[i - TEXT_AT]
+        } else if i >= PLAIN_AT {
+            plain_byte(i - PLAIN_AT)
         } else {
             CODE.order[i - SYMBOLS_AT]
         };
