@@ -289,6 +289,34 @@ pub fn measure_latency(elf: &Path, presses: usize, seed: u64) -> Result<(Spread,
     ))
 }
 
+/// The longest time (ms) between two scans while RUN mode draws its screen after an
+/// autostart: `Y0. ! .Y0 END` inverts Y0 every scan, and the longest time Y0 holds still
+/// is one scan plus whatever the main loop did between two scans (a drawing step, the
+/// displays). It bounds what a drawing step adds to a press → output latency.
+pub fn measure_run_gap(elf: &Path) -> Result<f64, String> {
+    let prog = program(&["Y0.", "!", ".Y0", "END"]);
+    let mut chip = autostarting(elf, &prog)?;
+    // The screen (about 1,070 bytes at 19200 baud) takes about 560 ms to go out.
+    let end = chip.cycle() + 800 * CYCLES_PER_MS;
+    // From the first scan on (the time before it is the autostart's).
+    let first = chip
+        .run_until(50 * CYCLES_PER_MS, |c| c.y(0))
+        .ok_or("Y0 never came on")?;
+    let (mut level, mut since, mut longest) = (true, first, 0u64);
+    while chip.cycle() < end {
+        let Some(at) = chip.run_until(end - chip.cycle(), |c| c.y(0) != level) else {
+            break;
+        };
+        longest = longest.max(at - since);
+        level = !level;
+        since = at;
+    }
+    if longest == 0 {
+        return Err("Y0 never changed".into());
+    }
+    Ok(longest as f64 / CYCLES_PER_MS as f64)
+}
+
 /// The timer test program for unit `m`: A0 pressed triggers timer m; Y1 shows the trigger
 /// (so its fall marks the debounced release as the program saw it), Y0 shows TQm.
 pub fn timer_program(m: u8, preset: u8) -> Program {

@@ -216,6 +216,17 @@ fn latency_rows(rows: &mut Vec<Row>, elf: &Path) {
             "≤ 8 ms",
         ),
     }
+    let gap = match bench::measure_run_gap(elf) {
+        Ok(g) => format!("{g:.2} ms"),
+        Err(e) => format!("not measurable: {e}"),
+    };
+    row(
+        rows,
+        "longest time between two scans while RUN mode draws its screen (`Y0. ! .Y0 END`)",
+        gap,
+        "n/a",
+        "≤ 1 ms",
+    );
 }
 
 /// Longest timer run done in simavr: 10 s with `--quick`, 60 s by default, 600 s with
