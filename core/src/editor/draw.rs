@@ -81,35 +81,26 @@ impl Editor {
                 self.blank = true;
             }
             S_TITLE => {
-                goto(b, 1, COL_TITLE);
-                text::TITLE.send(b);
+                text::TITLE.send_at(b, 1, COL_TITLE);
             }
             S_DASH2 | 3 => Self::dashes(b, 2, i != S_DASH2),
             S_LABELS => {
-                goto(b, 3, COL_BS + 3);
-                text::BIT_STACK.send(b);
-                goto(b, 3, COL_PORT + 3);
-                text::PORT_BYTE.send(b);
+                text::BIT_STACK.send_at(b, 3, COL_BS + 3);
+                text::PORT_BYTE.send_at(b, 3, COL_PORT + 3);
             }
             S_BITNUMS => {
-                goto(b, 4, COL_BS);
-                text::BIT_NUMBERS.send(b);
-                goto(b, 4, COL_DATA);
-                text::DATA.send(b);
+                text::BIT_NUMBERS.send_at(b, 4, COL_BS);
+                text::DATA.send_at(b, 4, COL_DATA);
             }
             S_BITNUMS_PORT => {
-                goto(b, 4, COL_PORT);
-                text::BIT_NUMBERS.send(b);
+                text::BIT_NUMBERS.send_at(b, 4, COL_PORT);
             }
             S_UNDERLINE => {
-                goto(b, 5, COL_BS);
-                text::EQ15.send(b);
-                goto(b, 5, COL_DATA);
-                text::EQ5.send(b);
+                text::EQ15.send_at(b, 5, COL_BS);
+                text::EQ5.send_at(b, 5, COL_DATA);
             }
             S_UNDERLINE_PORT => {
-                goto(b, 5, COL_PORT);
-                text::EQ15.send(b);
+                text::EQ15.send_at(b, 5, COL_PORT);
             }
             S_BS => self.draw_bs(b, eng.bs),
             S_DATA => self.draw_data(b),
@@ -120,8 +111,7 @@ impl Editor {
             }
             S_DASH7 | 13 => Self::dashes(b, 7, i != S_DASH7),
             S_PROMPT => {
-                goto(b, ROW_PROMPT, COL_PROMPT);
-                text::ENTER.send(b);
+                text::ENTER.send_at(b, ROW_PROMPT, COL_PROMPT);
                 if typing {
                     raw(b, &self.line[..usize::from(self.len.min(LINE_MAX))]);
                 }
@@ -131,14 +121,12 @@ impl Editor {
             }
             S_DASH23 | 48 => Self::dashes(b, 23, i != S_DASH23),
             S_STATUS_A => {
-                goto(b, ROW_STATUS, COL_STATUS_A);
-                text::USER_FILE.send(b);
+                text::USER_FILE.send_at(b, ROW_STATUS, COL_STATUS_A);
             }
             S_SCREEN => self.overlay(eng, b),
             S_STATUS_B => {
                 if matches!(self.screen, Screen::Running | Screen::Break) {
-                    goto(b, ROW_STATUS, COL_STATUS_B);
-                    text::RUNNING.send(b);
+                    text::RUNNING.send_at(b, ROW_STATUS, COL_STATUS_B);
                 } else if typing {
                     if self.lost {
                         self.message(b, text::INPUT_LOST);
@@ -188,8 +176,7 @@ impl Editor {
                 goto(b, row, at);
             }
             Screen::Break => {
-                goto(b, ROW_STATUS, COL_STRIKE);
-                text::STRIKE.send(b);
+                text::STRIKE.send_at(b, ROW_STATUS, COL_STRIKE);
             }
             Screen::Page | Screen::Running => {}
         }
@@ -292,8 +279,7 @@ impl Editor {
 
     /// A message on the status line (after `*** User File 0 ***`).
     pub(super) fn message<B: Board>(&mut self, b: &mut B, t: Txt) {
-        goto(b, ROW_STATUS, self.status_col());
-        t.send(b);
+        t.send_at(b, ROW_STATUS, self.status_col());
         ceol(b);
         self.msg = Some(t);
     }

@@ -16,9 +16,7 @@ impl Editor {
     pub(super) fn help<B: Board>(&mut self, b: &mut B) {
         self.screen = Screen::Help;
         self.clear_area(b);
-        goto(b, ROW_AREA, 1);
-        text::HELP.send(b);
-        goto(b, ROW_STATUS, COL_STRIKE);
-        text::STRIKE.send(b);
+        text::HELP.send_at(b, ROW_AREA, 1);
+        text::STRIKE.send_at(b, ROW_STATUS, COL_STRIKE);
     }
 }

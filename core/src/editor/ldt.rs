@@ -51,12 +51,10 @@ impl Editor {
                 text::LDT_LABELS1
             })
             .send(b);
-            goto(b, row + 1, LDT_COL);
-            text::LDT_EQ.send(b);
+            text::LDT_EQ.send_at(b, row + 1, LDT_COL);
         }
         self.ldt_values(eng, b, sel);
-        goto(b, ROW_STATUS, COL_STATUS_A);
-        text::LDT_STATUS.send(b);
+        text::LDT_STATUS.send_at(b, ROW_STATUS, COL_STATUS_A);
         ceol(b);
     }
 
@@ -108,8 +106,7 @@ impl Editor {
                 self.screen = Screen::Page;
                 self.clear_area(b);
                 self.draw_page(eng, b, false);
-                goto(b, ROW_STATUS, COL_STATUS_A);
-                text::USER_FILE.send(b);
+                text::USER_FILE.send_at(b, ROW_STATUS, COL_STATUS_A);
                 ceol(b);
                 self.msg = None;
             }

@@ -29,8 +29,7 @@ impl Editor {
     /// RUN mode from the editor: the status line says so.
     pub(super) fn start_run<B: Board>(&mut self, b: &mut B) -> Mode {
         self.begin_run(b);
-        goto(b, ROW_STATUS, COL_STATUS_B);
-        text::RUNNING.send(b);
+        text::RUNNING.send_at(b, ROW_STATUS, COL_STATUS_B);
         ceol(b);
         self.msg = None;
         Mode::Run
@@ -86,8 +85,7 @@ impl Editor {
         self.stats.run_ms = now.wrapping_sub(self.run_start_ms);
         self.screen = Screen::Break;
         if self.render >= STEPS {
-            goto(b, ROW_STATUS, COL_STRIKE);
-            text::STRIKE.send(b);
+            text::STRIKE.send_at(b, ROW_STATUS, COL_STRIKE);
         } else {
             // The screen is redrawn whole at the next key.
             raw(b, b"\r\n");

@@ -6,8 +6,7 @@ impl Editor {
     pub(super) fn stat<B: Board>(&mut self, b: &mut B) {
         let s = self.stats;
         let (min, max) = if s.count == 0 { (0, 0) } else { (s.min, s.max) };
-        goto(b, ROW_INFO, 1);
-        text::STAT_MIN.send(b);
+        text::STAT_MIN.send_at(b, ROW_INFO, 1);
         num(b, ScanStats::ticks_to_us(u32::from(min)));
         text::STAT_AVG.send(b);
         // The mean scan period: run time over scans, in µs.

@@ -41,6 +41,12 @@ impl Txt {
         }
     }
 
+    /// Send the text at `row`, `col` (1-based).
+    pub fn send_at<B: Board>(self, b: &mut B, row: u8, col: u8) {
+        super::term::goto(b, row, col);
+        self.send(b);
+    }
+
     /// Send the text (waits while the transmit buffer is full).
     pub fn send<B: Board>(self, b: &mut B) {
         if b.tx_dropped() {
@@ -66,7 +72,11 @@ struct Bits {
 impl Bits {
     /// Reading from bit `bit` of the blob.
     fn at(bit: u16) -> Self {
-        let mut at = Bits { next: bit >> 3, byte: 0, left: 0 };
+        let mut at = Bits {
+            next: bit >> 3,
+            byte: 0,
+            left: 0,
+        };
         at.take(bit as u8 & 7);
         at
     }

@@ -39,8 +39,7 @@ impl Editor {
         self.clear_area(b);
         goto(b, 9, col);
         prompt.send(b);
-        goto(b, ROW_STATUS, COL_STATUS_A);
-        text::TRANSFER.send(b);
+        text::TRANSFER.send_at(b, ROW_STATUS, COL_STATUS_A);
         ceol(b);
         self.msg = None;
     }
