@@ -133,15 +133,13 @@ impl Editor {
                     } else if let Some(m) = self.msg {
                         self.message(b, m);
                     } else if !self.blank {
-                        goto(b, ROW_STATUS, self.status_col());
-                        ceol(b);
+                        erase_at(b, ROW_STATUS, self.status_col());
                     }
                     // STAT's report as it stands (a muted line may have erased it).
                     if self.info {
                         self.stat(b);
                     } else if !self.blank {
-                        goto(b, ROW_INFO, 1);
-                        ceol(b);
+                        erase_at(b, ROW_INFO, 1);
                     }
                 }
             }
@@ -163,7 +161,7 @@ impl Editor {
             Screen::Ldt { sel } => self.ldt_draw(eng, b, sel),
             Screen::List { .. } => {
                 text::LIST_PROMPT.send(b);
-                raw(b, b"\r\n");
+                crlf(b);
             }
             Screen::Write { .. } | Screen::Read(_) => {
                 let write = matches!(self.screen, Screen::Write { .. });
@@ -286,8 +284,7 @@ impl Editor {
 
     pub(super) fn clear_message<B: Board>(&mut self, b: &mut B) {
         if self.msg.is_some() {
-            goto(b, ROW_STATUS, self.status_col());
-            ceol(b);
+            erase_at(b, ROW_STATUS, self.status_col());
             self.msg = None;
         }
         // Lost input stays reported until a line is entered on an up-to-date screen.
@@ -295,8 +292,7 @@ impl Editor {
             self.lost = false;
         }
         if self.info {
-            goto(b, ROW_INFO, 1);
-            ceol(b);
+            erase_at(b, ROW_INFO, 1);
             self.info = false;
         }
     }

@@ -8,8 +8,7 @@ impl Editor {
         self.screen = Screen::Page;
         self.clear_area(b);
         self.draw_page(eng, b, false);
-        goto(b, ROW_STATUS, COL_STRIKE);
-        ceol(b);
+        erase_at(b, ROW_STATUS, COL_STRIKE);
         Mode::Edit
     }
 

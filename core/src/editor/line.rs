@@ -25,8 +25,7 @@ impl Editor {
             0x18 => {
                 self.len = 0;
                 self.overlong = false;
-                goto(b, ROW_PROMPT, COL_INPUT);
-                ceol(b);
+                erase_at(b, ROW_PROMPT, COL_INPUT);
             }
             0x20..=0x7E => {
                 if self.overlong {
@@ -54,8 +53,7 @@ impl Editor {
         self.len = 0;
         self.overlong = false;
         if typed > 0 || overlong {
-            goto(b, ROW_PROMPT, COL_INPUT);
-            ceol(b);
+            erase_at(b, ROW_PROMPT, COL_INPUT);
         }
         if overlong {
             return None;

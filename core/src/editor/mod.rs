@@ -52,7 +52,7 @@ use core::mem::discriminant;
 use layout::*;
 use line::Parsed;
 use read::{ReadPhase, ReadState};
-use term::{bits, ceol, goto, normal, num, num_width, raw, reverse};
+use term::{bits, ceol, crlf, erase_at, goto, normal, num, num_width, raw, reverse};
 use text::Txt;
 use tracked::Tracked;
 

@@ -134,7 +134,7 @@ impl Editor {
                         self.screen = Screen::List { sent: false };
                         term::clear(b);
                         text::LIST_PROMPT.send(b);
-                        raw(b, b"\r\n");
+                        crlf(b);
                     }
                     Some(W_STAT) => self.stat(b),
                     Some(W_STORE) => {

@@ -10,8 +10,7 @@ impl Editor {
         if self.render < STEPS {
             self.full_redraw();
         } else {
-            goto(b, ROW_STATUS, COL_STATUS_B);
-            ceol(b);
+            erase_at(b, ROW_STATUS, COL_STATUS_B);
             self.show_values(eng, b);
         }
         Mode::Edit
@@ -88,7 +87,7 @@ impl Editor {
             text::STRIKE.send_at(b, ROW_STATUS, COL_STRIKE);
         } else {
             // The screen is redrawn whole at the next key.
-            raw(b, b"\r\n");
+            crlf(b);
             text::STRIKE.send(b);
         }
     }

@@ -35,6 +35,17 @@ pub fn ceol<B: Board>(b: &mut B) {
     raw(b, b"\x1b[K");
 }
 
+/// A new line.
+pub fn crlf<B: Board>(b: &mut B) {
+    raw(b, b"\r\n");
+}
+
+/// Erase from `row`, `col` (1-based) to the end of that line.
+pub fn erase_at<B: Board>(b: &mut B, row: u8, col: u8) {
+    goto(b, row, col);
+    ceol(b);
+}
+
 /// Reverse video on.
 pub fn reverse<B: Board>(b: &mut B) {
     raw(b, b"\x1b[7m");

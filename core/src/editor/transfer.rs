@@ -37,8 +37,7 @@ impl Editor {
 
     pub(super) fn transfer_screen<B: Board>(&mut self, b: &mut B, col: u8, prompt: Txt) {
         self.clear_area(b);
-        goto(b, 9, col);
-        prompt.send(b);
+        prompt.send_at(b, 9, col);
         text::TRANSFER.send_at(b, ROW_STATUS, COL_STATUS_A);
         ceol(b);
         self.msg = None;
@@ -46,15 +45,15 @@ impl Editor {
 
     /// LIST's text: `NNN NAME` per programmed line, `Tm = preset` per timer, `#` comments.
     pub(super) fn send_listing<B: Board>(eng: &Engine, b: &mut B) {
-        raw(b, b"\r\n");
+        crlf(b);
         text::LIST_HEAD.send(b);
-        raw(b, b"\r\n");
+        crlf(b);
         for (line, &op) in eng.prog.uf.iter().enumerate() {
             if let Some(n) = opcodes::name(op) {
                 num_width(b, line as u32, 3);
                 b.tx(b' ');
                 raw(b, n.as_bytes());
-                raw(b, b"\r\n");
+                crlf(b);
             }
         }
         for (m, &p) in eng.prog.presets.iter().enumerate() {
@@ -62,7 +61,7 @@ impl Editor {
             b.tx(term::hex_digit(m as u8));
             text::PRESET_EQ.send(b);
             num(b, u32::from(p));
-            raw(b, b"\r\n");
+            crlf(b);
         }
         text::LIST_END.send(b);
     }
