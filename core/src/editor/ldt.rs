@@ -6,7 +6,6 @@ pub(super) const LDT_COL: u8 = 15;
 pub(super) const LDT_ROWS: [u8; 2] = [9, 14];
 
 /// Screen position of a timer preset in LDT.
-#[inline(always)]
 pub(super) fn preset_pos(m: u8) -> (u8, u8) {
     let row = LDT_ROWS[usize::from((m >> 3) & 1)] + 2;
     (row, LDT_COL + 7 * (m & 7))
@@ -83,7 +82,6 @@ impl Editor {
         }
     }
 
-    #[inline(always)]
     pub(super) fn preset_cell<B: Board>(eng: &Engine, b: &mut B, m: u8, rev: bool) {
         let (row, col) = preset_pos(m);
         goto(b, row, col);
