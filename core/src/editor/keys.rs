@@ -70,7 +70,6 @@ impl Default for KeyDecoder {
 }
 
 /// The key a final letter names after `ESC[` or `ESC O`.
-#[inline(always)]
 fn letter_key(c: u8) -> Option<Key> {
     match c {
         b'A' => Some(Key::Up),
