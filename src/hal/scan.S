@@ -47,16 +47,23 @@
 .endm
 
 ; Push and clear sticky edge bit \bit at \addr. The tick sets these bits, so the clear is
-; done with interrupts off; a 0 (the usual case) needs no clear.
-.macro TAKE_EDGE addr, bit
+; done with interrupts off (in \tail, shared by the six bits of \addr, with the mask in
+; r23); a 0 (the usual case) needs no clear.
+.macro TAKE_EDGE addr, bit, tail
     lsl r18
     lds r22, \addr
     sbrc r22, \bit
     rjmp 1f
     NEXT
-1:  cli
+1:  ldi r23, 0xFF - (1 << \bit)
+    rjmp \tail
+.endm
+
+; The slow half of TAKE_EDGE: clear the bits of \addr that r23 holds at 0, push a 1.
+.macro EDGE_TAIL addr
+    cli
     lds r22, \addr
-    cbr r22, (1 << \bit)
+    and r22, r23
     sts \addr, r22
     sei
     ori r18, 1
@@ -709,13 +716,19 @@ utile_scan_clkb:
 utile_scan_clkc:
     PUSH_RAM U_CLOCKS, 2
 
+; ALn. / ATn. with the edge seen (TAKE_EDGE).
+utile_scan_leading:
+    EDGE_TAIL U_LEADING
+utile_scan_trailing:
+    EDGE_TAIL U_TRAILING
+
     .irp n,0,1,2,3,4,5
 utile_scan_a\n:
     PUSH_RAM U_LEVEL, \n
 utile_scan_al\n:
-    TAKE_EDGE U_LEADING, \n
+    TAKE_EDGE U_LEADING, \n, utile_scan_leading
 utile_scan_at\n:
-    TAKE_EDGE U_TRAILING, \n
+    TAKE_EDGE U_TRAILING, \n, utile_scan_trailing
 utile_scan_ad\n:
     PUSH_RAM U_TOGGLES, \n
     .endr
