@@ -12,6 +12,10 @@
 //! ```
 //!
 //! Times are `ms`, `s` or `min`, with decimals down to 1 ms (`1500ms`, `1.5s`).
+//!
+//! Long (about 530 lines) on purpose: the timeline parser, the signal list, the simulation
+//! loop and the VCD/table output are one job (`utile sim`) whose parts share the event, signal
+//! and trace types; its tests are tools/tests/utile_sim.rs.
 
 use std::fmt::Write as _;
 use std::string::String;

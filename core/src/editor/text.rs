@@ -2,6 +2,9 @@
 //!
 //! A text is named by a [`Txt`] (bit offset and symbol count in the blob), computed at compile
 //! time, so RAM holds no strings and no per-text pointers.
+//!
+//! Long (about 410 lines) on purpose: the `texts!` list is every string the editor sends, one
+//! per line; the coder lives in `huffman.rs`.
 
 use avr_progmem::progmem;
 

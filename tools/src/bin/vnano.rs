@@ -1,6 +1,10 @@
 //! `cargo nano`: the virtual Nano. Runs the real firmware image in simavr, paced to the
 //! wall clock, with its UART on this terminal (or a pty with `--pty`) and a virtual test
 //! rig on the keyboard. See `cargo nano --help`.
+//!
+//! Long (about 480 lines) on purpose: the one loop that ties the terminal or pty, the rig keys,
+//! the loader and the wall-clock pacing together; each of those parts has its own file in
+//! tools/src/vnano/, and the simulator is the kit's (`utile_kit::simavr`).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
