@@ -131,13 +131,19 @@ mod firmware {
         editor.on_break(eng, board);
     }
 
-    // SAFETY (all three handlers): an AVR interrupt handler runs with interrupts disabled
+    // SAFETY (all four handlers): an AVR interrupt handler runs with interrupts disabled
     // (the I flag is cleared on entry and not set again here), which is what a
     // `CriticalSection` token stands for.
     #[avr_device::interrupt(atmega328p)]
     fn TIMER0_COMPA() {
         // SAFETY: see above: interrupts are disabled inside a handler.
         hal::on_tick(unsafe { CriticalSection::new() });
+    }
+
+    #[avr_device::interrupt(atmega328p)]
+    fn ADC() {
+        // SAFETY: see above.
+        hal::adc::on_conversion(unsafe { CriticalSection::new() });
     }
 
     #[avr_device::interrupt(atmega328p)]

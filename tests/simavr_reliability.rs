@@ -20,11 +20,11 @@ fn old_program() -> Program {
     prog
 }
 
-/// FILL's program: every line NOP, the presets of the program it replaced.
+/// FILL's program: every line NOP, the presets and set-points of the program it replaced.
 fn filled(from: &Program) -> Program {
     Program {
         uf: [NOP; 256],
-        presets: from.presets,
+        ..from.clone()
     }
 }
 

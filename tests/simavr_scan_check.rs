@@ -7,7 +7,8 @@
 //!
 //! The test asserts a PASS over the expected number of trials and scans, and that every
 //! coverage counter is non-zero, so the check really exercised outputs, flip-flops, timer
-//! starts and retirements, edges, display requests, the END guard and the clock's wrap.
+//! starts and retirements, edges, display requests, the END guard, the clock's wrap, and
+//! counters (counting, resets, saturation at 65535, CQ changes).
 
 mod common;
 
@@ -24,8 +25,9 @@ const SCANS: u64 = 6;
 const LIMIT_MS: u64 = 120_000;
 
 /// The coverage counters the PASS line must report, each non-zero.
-const COVERAGE: [&str; 9] = [
-    "py", "q", "tk", "retired", "edges", "views", "guard", "wraps", "bursts",
+const COVERAGE: [&str; 13] = [
+    "py", "q", "tk", "retired", "edges", "views", "guard", "wraps", "bursts", "counted",
+    "counter_resets", "saturated", "cq",
 ];
 
 fn scan_check_elf() -> PathBuf {

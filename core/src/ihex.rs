@@ -7,7 +7,7 @@
 //! before the first `:` (a captured file may start with screen output).
 
 use crate::hex;
-use crate::image::IMAGE_LEN;
+use crate::image::{IMAGE_LEN, IMAGE_LEN_V1};
 
 /// Data bytes per record written by [`write_hex`].
 pub const RECORD_LEN: usize = 16;
@@ -106,7 +106,7 @@ enum State {
 /// Streaming Intel HEX reader into a fixed staging buffer.
 ///
 /// Feed it one byte at a time; it never stores a line, only the image bytes, so its RAM is
-/// the 278-byte staging buffer plus a few counters. Once it says `Done` or `Error`, every
+/// the 298-byte staging buffer plus a few counters. Once it says `Done` or `Error`, every
 /// further byte gets the same answer.
 #[derive(Clone, Debug)]
 pub struct HexReader {
@@ -231,7 +231,9 @@ impl HexReader {
                 HexEvent::More
             }
             0x01 if self.count == 0 => {
-                if usize::from(self.next) != IMAGE_LEN {
+                // A version-1 file (278 bytes) is whole too; the image check says which
+                // length its header wants.
+                if !matches!(usize::from(self.next), IMAGE_LEN | IMAGE_LEN_V1) {
                     return self.fail(HexError::Short);
                 }
                 self.state = State::Done;
@@ -247,8 +249,8 @@ impl HexReader {
         HexEvent::Error(e)
     }
 
-    /// The staged bytes (valid after `Done`).
+    /// The staged bytes (valid after `Done`: the whole image, of either version's length).
     pub fn data(&self) -> &[u8] {
-        &self.buf
+        self.buf.get(..usize::from(self.next)).unwrap_or(&self.buf)
     }
 }

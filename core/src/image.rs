@@ -1,24 +1,35 @@
 //! The stored-image format: what STORE keeps in EEPROM, WRITE sends and READ accepts.
 //!
-//! Layout (format version 1, 278 bytes, documented in `docs/FORMAT.md`):
+//! Layout (format version 2, 298 bytes, documented in `docs/FORMAT.md`):
 //!
 //! | offset | len | content                                              |
 //! |--------|-----|------------------------------------------------------|
 //! | 0      | 2   | magic `uT` (0x75 0x54)                               |
-//! | 2      | 1   | format version (1)                                   |
-//! | 3      | 1   | reserved, written 0, ignored by version-1 readers    |
+//! | 2      | 1   | format version (2)                                   |
+//! | 3      | 1   | reserved, written 0, ignored by readers              |
 //! | 4      | 256 | UF0, one opcode per line, line 0 first               |
 //! | 260    | 16  | timer presets T0..TF                                 |
-//! | 276    | 2   | CRC-16/CCITT-FALSE of bytes 0..276, high byte first  |
+//! | 276    | 16  | counter presets C0..C7, u16 high byte first          |
+//! | 292    | 4   | analog set-points S6, S7 (0..1023), high byte first  |
+//! | 296    | 2   | CRC-16/CCITT-FALSE of bytes 0..296, high byte first  |
+//!
+//! Version 1 (278 bytes) ends after the timer presets with its CRC at 276; it still loads,
+//! with counter presets and set-points 0. A newer version is refused.
 
-use super::engine::{Program, LINES, UNITS};
+use super::engine::{Program, COUNTERS, LINES, SET_POINTS, UNITS};
 
 /// Image magic, bytes 0..2.
 pub const MAGIC: [u8; 2] = *b"uT";
-/// Format version, byte 2. Bump it when the layout or the opcode table gains meaning.
-pub const VERSION: u8 = 1;
-/// Total image length: magic 2 + version 1 + reserved 1 + UF 256 + presets 16 + CRC 2.
-pub const IMAGE_LEN: usize = 278;
+/// Format version, byte 2, of the images this firmware writes. Bump it when the layout or
+/// the opcode table gains meaning.
+pub const VERSION: u8 = 2;
+/// The first format (uTile version 1): no counter presets, no set-points.
+pub const VERSION_1: u8 = 1;
+/// Total image length: magic 2 + version 1 + reserved 1 + UF 256 + presets 16 + counter
+/// presets 16 + set-points 4 + CRC 2.
+pub const IMAGE_LEN: usize = 298;
+/// Length of a version-1 image.
+pub const IMAGE_LEN_V1: usize = 278;
 
 /// Offset of the format version byte.
 pub const VERSION_OFFSET: usize = 2;
@@ -28,16 +39,24 @@ pub const RESERVED_OFFSET: usize = 3;
 pub const UF_OFFSET: usize = 4;
 /// Offset of preset T0.
 pub const PRESETS_OFFSET: usize = UF_OFFSET + LINES;
+/// Offset of counter preset C0 (high byte).
+pub const COUNTER_PRESETS_OFFSET: usize = PRESETS_OFFSET + UNITS;
+/// Offset of set-point S6 (high byte).
+pub const SET_POINTS_OFFSET: usize = COUNTER_PRESETS_OFFSET + 2 * COUNTERS;
 /// Offset of the CRC (high byte first); the CRC covers every byte before it.
-pub const CRC_OFFSET: usize = PRESETS_OFFSET + UNITS;
+pub const CRC_OFFSET: usize = SET_POINTS_OFFSET + 2 * SET_POINTS;
 
-// The layout adds up.
+// The layout adds up, and version 1 is version 2 cut after the timer presets.
 const _: () = assert!(CRC_OFFSET + 2 == IMAGE_LEN);
+const _: () = assert!(COUNTER_PRESETS_OFFSET + 2 == IMAGE_LEN_V1);
+
+/// Highest analog set-point an image may hold (10 bits).
+pub const SET_POINT_MAX: u16 = crate::analog::MAX;
 
 /// Why bytes are not a valid image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ImageError {
-    /// Fewer or more bytes than [`IMAGE_LEN`].
+    /// Not the length its version has ([`IMAGE_LEN`], [`IMAGE_LEN_V1`]).
     Length,
     /// The magic bytes are wrong: not a uTile image.
     Magic,
@@ -45,6 +64,8 @@ pub enum ImageError {
     Version(u8),
     /// CRC-16 mismatch: damaged.
     Crc,
+    /// A set-point above 1023.
+    Value,
 }
 
 /// One byte of CRC-16/CCITT-FALSE: feed bytes one at a time starting from 0xFFFF
@@ -71,7 +92,7 @@ pub fn crc16(bytes: &[u8]) -> u16 {
 }
 
 /// Byte `i` of `prog`'s image, where `crc` is [`image_crc`]`(prog)`. Lets STORE and WRITE
-/// stream the image without a 278-byte copy on the chip's small stack.
+/// stream the image without a 298-byte copy on the chip's small stack.
 pub fn image_byte(prog: &Program, crc: u16, i: usize) -> u8 {
     match i {
         0 => MAGIC[0],
@@ -79,10 +100,34 @@ pub fn image_byte(prog: &Program, crc: u16, i: usize) -> u8 {
         VERSION_OFFSET => VERSION,
         RESERVED_OFFSET => 0,
         _ if i < PRESETS_OFFSET => prog.uf.get(i - UF_OFFSET).copied().unwrap_or(0),
-        _ if i < CRC_OFFSET => prog.presets.get(i - PRESETS_OFFSET).copied().unwrap_or(0),
+        _ if i < COUNTER_PRESETS_OFFSET => {
+            prog.presets.get(i - PRESETS_OFFSET).copied().unwrap_or(0)
+        }
+        _ if i < SET_POINTS_OFFSET => {
+            word_byte(&prog.counter_presets, i - COUNTER_PRESETS_OFFSET)
+        }
+        _ if i < CRC_OFFSET => word_byte(&prog.set_points, i - SET_POINTS_OFFSET),
         CRC_OFFSET => crc.to_be_bytes()[0],
         _ => crc.to_be_bytes()[1],
     }
+}
+
+/// Byte `j` of `words` stored high byte first.
+fn word_byte(words: &[u16], j: usize) -> u8 {
+    let w = words.get(j / 2).copied().unwrap_or(0);
+    if j & 1 == 0 {
+        (w >> 8) as u8
+    } else {
+        w as u8
+    }
+}
+
+/// The big-endian word at `at` in `img`.
+fn word_at(img: &[u8], at: usize) -> u16 {
+    u16::from_be_bytes([
+        img.get(at).copied().unwrap_or(0),
+        img.get(at + 1).copied().unwrap_or(0),
+    ])
 }
 
 /// The CRC of `prog`'s image (over every byte before the CRC).
@@ -100,19 +145,23 @@ pub fn encode(prog: &Program) -> [u8; IMAGE_LEN] {
     out
 }
 
-/// Check the header (magic, version) of an image; `Ok` says nothing about the CRC.
-pub fn check_header(magic: [u8; 2], version: u8) -> Result<(), ImageError> {
+/// Check the header (magic, version) of an image and give the image's length for its
+/// version; `Ok` says nothing about the CRC.
+pub fn check_header(magic: [u8; 2], version: u8) -> Result<usize, ImageError> {
     if magic != MAGIC {
         Err(ImageError::Magic)
-    } else if version != VERSION {
-        Err(ImageError::Version(version))
+    } else if version == VERSION {
+        Ok(IMAGE_LEN)
+    } else if version == VERSION_1 {
+        Ok(IMAGE_LEN_V1)
     } else {
-        Ok(())
+        Err(ImageError::Version(version))
     }
 }
 
-/// Check and decode an image: length, magic, version, then CRC. Any opcode byte is
-/// accepted (unassigned opcodes run as NOP), and so is any preset 0..255.
+/// Check and decode an image (version 2, or version 1 with counter presets and set-points
+/// 0): magic, version, length, CRC, set-points ≤ 1023. Any opcode byte is accepted
+/// (unassigned opcodes run as NOP), and so is any timer or counter preset.
 pub fn decode(bytes: &[u8]) -> Result<Program, ImageError> {
     let mut prog = Program::blank();
     decode_into(bytes, &mut prog)?;
@@ -120,22 +169,94 @@ pub fn decode(bytes: &[u8]) -> Result<Program, ImageError> {
 }
 
 /// [`decode`] straight into `prog`, which changes only if the image is valid (no
-/// 272-byte temporary on the chip's stack).
-pub fn decode_into(bytes: &[u8], prog: &mut Program) -> Result<(), ImageError> {
-    let img: &[u8; IMAGE_LEN] = bytes.try_into().map_err(|_| ImageError::Length)?;
-    check_header([img[0], img[1]], img[VERSION_OFFSET])?;
-    let stored = u16::from_be_bytes([img[CRC_OFFSET], img[CRC_OFFSET + 1]]);
-    if crc16(&img[..CRC_OFFSET]) != stored {
+/// 292-byte temporary on the chip's stack).
+pub fn decode_into(img: &[u8], prog: &mut Program) -> Result<(), ImageError> {
+    let (Some(&m0), Some(&m1), Some(&version)) = (img.first(), img.get(1), img.get(2)) else {
+        return Err(ImageError::Length);
+    };
+    let len = check_header([m0, m1], version)?;
+    if img.len() != len {
+        return Err(ImageError::Length);
+    }
+    let crc_at = len - 2;
+    let body = img.get(..crc_at).ok_or(ImageError::Length)?;
+    if crc16(body) != word_at(img, crc_at) {
         return Err(ImageError::Crc);
     }
-    prog.uf.copy_from_slice(&img[UF_OFFSET..PRESETS_OFFSET]);
-    prog.presets.copy_from_slice(&img[PRESETS_OFFSET..CRC_OFFSET]);
+    let v2 = len == IMAGE_LEN;
+    let set_point = |k: usize| if v2 { word_at(img, SET_POINTS_OFFSET + 2 * k) } else { 0 };
+    if (0..SET_POINTS).any(|k| set_point(k) > SET_POINT_MAX) {
+        return Err(ImageError::Value);
+    }
+    for (i, line) in prog.uf.iter_mut().enumerate() {
+        *line = img.get(UF_OFFSET + i).copied().unwrap_or(0);
+    }
+    for (i, p) in prog.presets.iter_mut().enumerate() {
+        *p = img.get(PRESETS_OFFSET + i).copied().unwrap_or(0);
+    }
+    for (k, p) in prog.counter_presets.iter_mut().enumerate() {
+        *p = if v2 { word_at(img, COUNTER_PRESETS_OFFSET + 2 * k) } else { 0 };
+    }
+    for (k, p) in prog.set_points.iter_mut().enumerate() {
+        *p = set_point(k);
+    }
     Ok(())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn prog() -> Program {
+        let mut p = Program::blank();
+        p.uf[0] = 0x20;
+        p.uf[1] = 0xD8;
+        p.presets[3] = 7;
+        p.counter_presets = [1, 2, 300, 0, 0, 0, 0, 65535];
+        p.set_points = [512, 1023];
+        p
+    }
+
+    #[test]
+    fn version_2_round_trips_with_words_high_byte_first() {
+        let img = encode(&prog());
+        assert_eq!(img.len(), IMAGE_LEN);
+        assert_eq!(img[VERSION_OFFSET], 2);
+        assert_eq!(&img[COUNTER_PRESETS_OFFSET + 4..COUNTER_PRESETS_OFFSET + 6], &[0x01, 0x2C]);
+        assert_eq!(&img[SET_POINTS_OFFSET..SET_POINTS_OFFSET + 2], &[0x02, 0x00]);
+        assert_eq!(decode(&img), Ok(prog()));
+    }
+
+    #[test]
+    fn version_1_loads_with_counters_and_set_points_0() {
+        let v2 = encode(&prog());
+        let mut v1 = v2[..PRESETS_OFFSET + UNITS].to_vec();
+        v1[VERSION_OFFSET] = 1;
+        let crc = crc16(&v1);
+        v1.extend_from_slice(&crc.to_be_bytes());
+        assert_eq!(v1.len(), IMAGE_LEN_V1);
+        let mut want = prog();
+        want.counter_presets = [0; COUNTERS];
+        want.set_points = [0; SET_POINTS];
+        assert_eq!(decode(&v1), Ok(want));
+        // A version-1 header on a version-2 length (or the reverse) is refused.
+        let mut wrong = v2.to_vec();
+        wrong[VERSION_OFFSET] = 1;
+        assert_eq!(decode(&wrong), Err(ImageError::Length));
+    }
+
+    #[test]
+    fn newer_versions_and_set_points_above_1023_are_refused_and_change_nothing() {
+        let mut img = encode(&prog());
+        img[VERSION_OFFSET] = 3;
+        let mut p = Program::blank();
+        assert_eq!(decode_into(&img, &mut p), Err(ImageError::Version(3)));
+        assert_eq!(p, Program::blank());
+        let mut q = prog();
+        q.set_points[1] = 1024;
+        assert_eq!(decode_into(&encode(&q), &mut p), Err(ImageError::Value));
+        assert_eq!(p, Program::blank());
+    }
 
     #[test]
     fn crc16_check_value() {

@@ -13,6 +13,7 @@
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic, clippy::unreachable)
 )]
 
+pub mod analog;
 pub mod board;
 pub mod editor;
 pub mod engine;

@@ -10,8 +10,8 @@
 //! | range       | family                                    | operand            |
 //! |-------------|-------------------------------------------|--------------------|
 //! | `0x00-0x1E` | single commands (`NOP`, `END`, `AND`, ...) | none               |
-//! | `0x20-0x7F` | push a bit: `An.` `ALn.` `ATn.` `ADn.` `Yn.` `Un.` `Vn.` `Qm.` `TQm.` | low 3 or 4 bits |
-//! | `0x80-0xD7` | pop a bit: `.Yn` `.Un` `.Vn` `.Sm` `.Rm` `.TKm` `.TRm` | low 3 or 4 bits |
+//! | `0x20-0x7F` | push a bit: `An.` `H6.` `H7.` `ALn.` `ATn.` `ADn.` `Yn.` `Un.` `Vn.` `Qm.` `TQm.` `CQm.` | low 3 or 4 bits |
+//! | `0x80-0xE7` | pop a bit: `.Yn` `.Un` `.Vn` `.Sm` `.Rm` `.TKm` `.TRm` `.CUm` `.CRm` | low 3 or 4 bits |
 //! | `0xFF`      | blank (never programmed) line, shown as `.....`, runs as NOP | |
 //!
 //! Every other byte is unassigned: it is shown as `.....` and runs as NOP.
@@ -87,6 +87,9 @@ pub const CLKC: u8 = 0x1E;
 
 /// `An.` base: push debounced input n (n = 0..5).
 pub const PUSH_A: u8 = 0x20;
+/// `H6.` and `H7.`: push analog threshold 6 or 7 (SPEC §15), in the slots that inputs A6 and
+/// A7 would have (the Nano's A6/A7 are analog only). Image format 2.
+pub const PUSH_H: u8 = 0x26;
 /// `ALn.` base: push and clear the leading-edge (0→1) bit of input n.
 pub const PUSH_AL: u8 = 0x28;
 /// `ATn.` base: push and clear the trailing-edge (1→0) bit of input n.
@@ -103,6 +106,9 @@ pub const PUSH_V: u8 = 0x50;
 pub const PUSH_Q: u8 = 0x58;
 /// `TQm.` base: push timer output m (m = 0..F).
 pub const PUSH_TQ: u8 = 0x68;
+/// `CQm.` base: push counter output m (m = 0..7: count ≥ preset, preset 0 disables), SPEC §14.
+/// Image format 2.
+pub const PUSH_CQ: u8 = 0x78;
 /// `.Yn` base: pop into output image bit n.
 pub const POP_Y: u8 = 0x80;
 /// `.Un` base: pop into virtual bit Un.
@@ -117,6 +123,12 @@ pub const POP_R: u8 = 0xA8;
 pub const POP_TK: u8 = 0xB8;
 /// `.TRm` base: pop the reset of timer m.
 pub const POP_TR: u8 = 0xC8;
+/// `.CUm` base: pop the count input of counter m (m = 0..7). Image format 2.
+pub const POP_CU: u8 = 0xD8;
+/// `.CRm` base: pop the reset of counter m. Image format 2.
+pub const POP_CR: u8 = 0xE0;
+/// Highest assigned opcode of the pop family (`.CR7`).
+pub const POP_LAST: u8 = 0xE7;
 /// A never-programmed line (and erased EEPROM): shown as `.....`, runs as NOP.
 pub const BLANK: u8 = 0xFF;
 
@@ -132,8 +144,10 @@ const SINGLES: [&str; 31] = [
 pub struct Family {
     /// Opcode of number 0.
     pub base: u8,
-    /// How many numbers exist (6 inputs, 8 port bits or 16 flip-flops / timers).
+    /// How many numbers exist (6 inputs, 8 port bits or counters, 16 flip-flops / timers).
     pub count: u8,
+    /// The number of the opcode `base` (0, except `H6.`/`H7.`, which start at 6).
+    pub first: u8,
     /// Name text before the number.
     pub prefix: &'static str,
     /// Name text after the number.
@@ -141,110 +155,155 @@ pub struct Family {
 }
 
 /// Every numbered family, in opcode order.
-pub const FAMILIES: [Family; 16] = [
+pub const FAMILIES: [Family; 20] = [
     Family {
         base: PUSH_A,
         count: 6,
         prefix: "A",
         suffix: ".",
+        first: 0,
+    },
+    Family {
+        base: PUSH_H,
+        count: 2,
+        prefix: "H",
+        suffix: ".",
+        first: 6,
     },
     Family {
         base: PUSH_AL,
         count: 6,
         prefix: "AL",
         suffix: ".",
+        first: 0,
     },
     Family {
         base: PUSH_AT,
         count: 6,
         prefix: "AT",
         suffix: ".",
+        first: 0,
     },
     Family {
         base: PUSH_AD,
         count: 6,
         prefix: "AD",
         suffix: ".",
+        first: 0,
     },
     Family {
         base: PUSH_Y,
         count: 8,
         prefix: "Y",
         suffix: ".",
+        first: 0,
     },
     Family {
         base: PUSH_U,
         count: 8,
         prefix: "U",
         suffix: ".",
+        first: 0,
     },
     Family {
         base: PUSH_V,
         count: 8,
         prefix: "V",
         suffix: ".",
+        first: 0,
     },
     Family {
         base: PUSH_Q,
         count: 16,
         prefix: "Q",
         suffix: ".",
+        first: 0,
     },
     Family {
         base: PUSH_TQ,
         count: 16,
         prefix: "TQ",
         suffix: ".",
+        first: 0,
+    },
+    Family {
+        base: PUSH_CQ,
+        count: 8,
+        prefix: "CQ",
+        suffix: ".",
+        first: 0,
     },
     Family {
         base: POP_Y,
         count: 8,
         prefix: ".Y",
         suffix: "",
+        first: 0,
     },
     Family {
         base: POP_U,
         count: 8,
         prefix: ".U",
         suffix: "",
+        first: 0,
     },
     Family {
         base: POP_V,
         count: 8,
         prefix: ".V",
         suffix: "",
+        first: 0,
     },
     Family {
         base: POP_S,
         count: 16,
         prefix: ".S",
         suffix: "",
+        first: 0,
     },
     Family {
         base: POP_R,
         count: 16,
         prefix: ".R",
         suffix: "",
+        first: 0,
     },
     Family {
         base: POP_TK,
         count: 16,
         prefix: ".TK",
         suffix: "",
+        first: 0,
     },
     Family {
         base: POP_TR,
         count: 16,
         prefix: ".TR",
         suffix: "",
+        first: 0,
+    },
+    Family {
+        base: POP_CU,
+        count: 8,
+        prefix: ".CU",
+        suffix: "",
+        first: 0,
+    },
+    Family {
+        base: POP_CR,
+        count: 8,
+        prefix: ".CR",
+        suffix: "",
+        first: 0,
     },
 ];
 
 /// Longest command name (`CLKA.`, `.TK0`): 5 characters.
 pub const MAX_NAME: usize = 5;
 
-/// Bytes of one family record in flash: base, count, prefix (3, NUL-padded), suffix (or NUL).
-const FAM_REC: usize = 6;
+/// Bytes of one family record in flash: base, count, prefix (3, NUL-padded), suffix (or NUL),
+/// first number.
+const FAM_REC: usize = 7;
 
 /// The single names as NUL-padded 5-byte slots, built at compile time.
 const fn single_slots() -> [[u8; MAX_NAME]; SINGLES.len()] {
@@ -280,6 +339,7 @@ const fn family_records() -> [[u8; FAM_REC]; FAMILIES.len()] {
         if !s.is_empty() {
             out[i][5] = s[0];
         }
+        out[i][6] = f.first;
         i += 1;
     }
     out
@@ -325,14 +385,17 @@ impl FamRec {
             s
         }
     }
+    fn first(&self) -> u8 {
+        self.0[6]
+    }
     fn holds(&self, op: u8) -> bool {
         op >= self.base() && op - self.base() < self.count()
     }
 }
 
-/// Index of the family holding `op`, with the number.
+/// The family holding `op`, with the command's number.
 fn find_family(op: u8) -> Option<(FamRec, u8)> {
-    FamRec::all().find_map(|f| f.holds(op).then(|| (f, op - f.base())))
+    FamRec::all().find_map(|f| f.holds(op).then(|| (f, op - f.base() + f.first())))
 }
 
 /// A command name, spelled into a small fixed buffer (no heap, no RAM tables).
@@ -366,7 +429,7 @@ pub fn family_of(op: u8) -> Option<(&'static Family, u8)> {
     FAMILIES
         .iter()
         .find(|f| op >= f.base && op - f.base < f.count)
-        .map(|f| (f, op - f.base))
+        .map(|f| (f, op - f.base + f.first))
 }
 
 /// The command name of an opcode, or `None` for a blank or unassigned byte (shown `.....`).
@@ -428,7 +491,7 @@ pub fn lookup(word: &[u8]) -> Option<u8> {
         if !eq_fold(head, p) || !eq_fold(tail, s) {
             return None;
         }
-        let n = hex::value(*digit.first()?)?;
+        let n = hex::value(*digit.first()?)?.checked_sub(f.first())?;
         (n < f.count()).then_some(f.base() + n)
     })
 }
@@ -451,8 +514,9 @@ mod tests {
                 None => assert!(!is_valid(op), "{op:#04x}"),
             }
         }
-        // 31 singles + 4*6 input + 3*8 bit + 2*16 push + 3*8 + 4*16 pop
-        assert_eq!(count, 31 + 24 + 24 + 32 + 24 + 64);
+        // 31 singles + 4*6 input + 3*8 bit + 2*16 push + 3*8 + 4*16 pop; format 2: H6 H7,
+        // CQ0..7, .CU0..7, .CR0..7
+        assert_eq!(count, 31 + 24 + 24 + 32 + 24 + 64 + 2 + 24);
     }
 
     #[test]
@@ -487,6 +551,15 @@ mod tests {
             (".TKF", 0xC7),
             (".TR0", 0xC8),
             (".TRF", 0xD7),
+            // Image format 2.
+            ("H6.", 0x26),
+            ("H7.", 0x27),
+            ("CQ0.", 0x78),
+            ("CQ7.", 0x7F),
+            (".CU0", 0xD8),
+            (".CU7", 0xDF),
+            (".CR0", 0xE0),
+            (".CR7", 0xE7),
         ];
         for &(n, op) in fixed {
             assert_eq!(lookup(n.as_bytes()), Some(op), "{n}");
@@ -497,12 +570,13 @@ mod tests {
     fn near_misses_are_rejected() {
         for w in [
             "A6.", "A0", "AL6.", ".Y8", "Q0", "QG.", ".TK", "TQ10.", "", "NOPE", "A.", "Y0..", ".S",
+            "H0.", "H5.", "H8.", "CQ8.", ".CU8", ".CR8", "C0.", ".C0",
         ] {
             assert_eq!(lookup(w.as_bytes()), None, "{w}");
         }
         assert_eq!(name(BLANK), None);
         assert_eq!(name(0x1F), None);
-        assert_eq!(name(0x26), None);
-        assert_eq!(name(0xD8), None);
+        assert_eq!(name(0x2E), None);
+        assert_eq!(name(0xE8), None);
     }
 }

@@ -1,13 +1,14 @@
 //! Two-slot EEPROM storage of the program image with sequence numbers and CRC.
 //!
-//! Each slot is `[sequence number, u16 little-endian][image, 278 bytes]` (`docs/FORMAT.md`).
+//! Each slot is `[sequence number, u16 little-endian][image, 298 bytes]` (`docs/FORMAT.md`);
+//! a slot that version 1 wrote holds a 278-byte version-1 image, which still loads.
 //! STORE writes the older (or an invalid) slot, so the newest good program is never touched;
 //! LOAD takes the newest slot whose image is valid. Write order inside the slot makes a
 //! reset at any moment harmless:
 //!
 //! 1. if the image body is about to change, the first magic byte is cleared, so the slot
 //!    is invalid (not merely "probably invalid by CRC") while it is half written;
-//! 2. image bytes 1..278 are written (only those that differ);
+//! 2. image bytes 1..298 are written (only those that differ);
 //! 3. the first magic byte is restored: the slot now holds a complete, valid image;
 //! 4. the sequence number is written last, making the slot the newest.
 //!
@@ -16,7 +17,10 @@
 
 use super::board::Board;
 use super::engine::Program;
-use super::image::{self, crc16_update, CRC_OFFSET, IMAGE_LEN, PRESETS_OFFSET, UF_OFFSET};
+use super::image::{
+    self, crc16_update, COUNTER_PRESETS_OFFSET, IMAGE_LEN, PRESETS_OFFSET, SET_POINTS_OFFSET,
+    UF_OFFSET,
+};
 
 /// EEPROM address of each slot.
 pub const SLOT_ADDR: [u16; 2] = [0x000, 0x200];
@@ -54,38 +58,49 @@ fn image_addr(slot: u16, i: usize) -> u16 {
 /// The sequence number of `slot` if it holds a valid image (header and CRC checked
 /// straight from EEPROM, with no RAM copy).
 pub fn slot_seq<B: Board>(b: &mut B, slot: u16) -> Option<u16> {
+    slot_check(b, slot).map(|(seq, _)| seq)
+}
+
+/// The sequence number and image length of `slot` if it holds a valid image, of either
+/// version. Set-points are not range-checked here: STORE never writes one above 1023.
+fn slot_check<B: Board>(b: &mut B, slot: u16) -> Option<(u16, usize)> {
     let magic = [
         b.eeprom_read(image_addr(slot, 0)),
         b.eeprom_read(image_addr(slot, 1)),
     ];
     let version = b.eeprom_read(image_addr(slot, image::VERSION_OFFSET));
-    image::check_header(magic, version).ok()?;
+    let len = image::check_header(magic, version).ok()?;
+    let crc_at = len - 2;
     let mut crc: u16 = 0xFFFF;
-    for i in 0..CRC_OFFSET {
+    for i in 0..crc_at {
         crc = crc16_update(crc, b.eeprom_read(image_addr(slot, i)));
     }
     let stored = u16::from_be_bytes([
-        b.eeprom_read(image_addr(slot, CRC_OFFSET)),
-        b.eeprom_read(image_addr(slot, CRC_OFFSET + 1)),
+        b.eeprom_read(image_addr(slot, crc_at)),
+        b.eeprom_read(image_addr(slot, crc_at + 1)),
     ]);
     if crc != stored {
         return None;
     }
-    Some(u16::from_le_bytes([
-        b.eeprom_read(slot),
-        b.eeprom_read(slot.wrapping_add(1)),
-    ]))
+    let seq = u16::from_le_bytes([b.eeprom_read(slot), b.eeprom_read(slot.wrapping_add(1))]);
+    Some((seq, len))
 }
 
 /// The newest valid slot: (its address from [`SLOT_ADDR`], its sequence number). With
 /// equal (or exactly opposite) sequence numbers slot 0 wins.
 #[inline(always)]
 pub fn newest_slot<B: Board>(b: &mut B) -> Option<(u16, u16)> {
+    newest(b).map(|(a, s, _)| (a, s))
+}
+
+/// [`newest_slot`] with the image length of its version.
+#[inline(always)]
+fn newest<B: Board>(b: &mut B) -> Option<(u16, u16, usize)> {
     let [a0, a1] = SLOT_ADDR;
-    match (slot_seq(b, a0), slot_seq(b, a1)) {
-        (Some(s0), Some(s1)) if seq_newer(s1, s0) => Some((a1, s1)),
-        (Some(s0), _) => Some((a0, s0)),
-        (None, Some(s1)) => Some((a1, s1)),
+    match (slot_check(b, a0), slot_check(b, a1)) {
+        (Some((s0, _)), Some((s1, l1))) if seq_newer(s1, s0) => Some((a1, s1, l1)),
+        (Some((s0, l0)), _) => Some((a0, s0, l0)),
+        (None, Some((s1, l1))) => Some((a1, s1, l1)),
         (None, None) => None,
     }
 }
@@ -138,15 +153,30 @@ pub fn load<B: Board>(b: &mut B) -> Result<Program, LoadError> {
     Ok(prog)
 }
 
-/// [`load`] straight into `prog`, which changes only if a valid image exists (no 272-byte
-/// temporary on the chip's stack).
+/// [`load`] straight into `prog`, which changes only if a valid image exists (no 292-byte
+/// temporary on the chip's stack). A version-1 image gives counter presets and set-points
+/// 0.
 pub fn load_into<B: Board>(b: &mut B, prog: &mut Program) -> Result<(), LoadError> {
-    let (slot, _) = newest_slot(b).ok_or(LoadError::NoValidImage)?;
+    let (slot, _, len) = newest(b).ok_or(LoadError::NoValidImage)?;
+    let v2 = len == IMAGE_LEN;
     for (i, line) in prog.uf.iter_mut().enumerate() {
         *line = b.eeprom_read(image_addr(slot, UF_OFFSET + i));
     }
     for (i, preset) in prog.presets.iter_mut().enumerate() {
         *preset = b.eeprom_read(image_addr(slot, PRESETS_OFFSET + i));
+    }
+    let mut word = |at: usize| {
+        if v2 {
+            u16::from_be_bytes([b.eeprom_read(image_addr(slot, at)), b.eeprom_read(image_addr(slot, at + 1))])
+        } else {
+            0
+        }
+    };
+    for (k, p) in prog.counter_presets.iter_mut().enumerate() {
+        *p = word(COUNTER_PRESETS_OFFSET + 2 * k);
+    }
+    for (k, p) in prog.set_points.iter_mut().enumerate() {
+        *p = word(SET_POINTS_OFFSET + 2 * k).min(image::SET_POINT_MAX);
     }
     b.feed_watchdog();
     Ok(())

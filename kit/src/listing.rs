@@ -8,17 +8,20 @@
 //! 000 AL0.        # a 3-digit line number puts the command on that line
 //! DUP             # no number: the line after the previous command
 //! T0 = 50         # timer preset, T0..TF, 0..255
+//! C0 = 100        # counter preset, C0..C7, 0..65535 (image format 2)
+//! S6 = 512        # analog set-point, S6 or S7, 0..1023 (image format 2)
 //! ```
 //!
 //! `#` or `;` start a comment. `.....` is an explicit blank line and `$1F` a raw byte (an
 //! unassigned opcode, which runs as NOP); [`print`] uses it only for such bytes. LIST's output
-//! (`NNN NAME` lines and `Tm = value` lines) is a valid listing.
+//! (`NNN NAME` lines, then `Tm = value`, `Cm = value` and `Sn = value` lines) is a valid
+//! listing.
 
 use std::fmt;
 use std::string::String;
 use std::vec::Vec;
 
-use utile_core::engine::{Program, LINES, UNITS};
+use utile_core::engine::{Program, COUNTERS, LINES, SET_POINTS, UNITS};
 use utile_core::hex;
 use utile_core::ihex::{write_hex, HexError, HexEvent, HexReader};
 use utile_core::image::{self, ImageError};
@@ -81,6 +84,8 @@ pub fn parse(file: &str, text: &str) -> Result<Program, FileErrors> {
     // Where each UF line and preset was given (text line), to report duplicates.
     let mut line_src: [Option<usize>; LINES] = [None; LINES];
     let mut preset_src: [Option<usize>; UNITS] = [None; UNITS];
+    let mut counter_src: [Option<usize>; COUNTERS] = [None; COUNTERS];
+    let mut set_point_src: [Option<usize>; SET_POINTS] = [None; SET_POINTS];
     let mut fill = false;
     let mut next: usize = 0;
     let mut problems = Vec::new();
@@ -94,13 +99,44 @@ pub fn parse(file: &str, text: &str) -> Result<Program, FileErrors> {
         }
         if let Some((name, value)) = body.split_once('=') {
             let (name, value) = (name.trim(), value.trim());
+            if let Some(setting) = setting(name) {
+                let (label, max, src, index) = match setting {
+                    Setting::Counter(m) => ("counter preset", 65_535u64, &mut counter_src[m], m),
+                    Setting::SetPoint(k) => ("set-point", 1023, &mut set_point_src[k], k),
+                };
+                let name = name.to_ascii_uppercase();
+                let v = match value.parse::<u64>() {
+                    Ok(v) if v <= max => v as u16,
+                    Ok(v) => {
+                        problem(at, format!("{label} {name} = {v} is past {max}"));
+                        continue;
+                    }
+                    Err(_) => {
+                        problem(at, format!("bad {label} value '{value}' for {name} (expected 0..{max})"));
+                        continue;
+                    }
+                };
+                if let Some(first) = *src {
+                    problem(at, format!("{label} {name} given twice (first on line {first})"));
+                    continue;
+                }
+                *src = Some(at);
+                match setting {
+                    Setting::Counter(_) => prog.counter_presets[index] = v,
+                    Setting::SetPoint(_) => prog.set_points[index] = v,
+                }
+                continue;
+            }
             let unit = name
                 .strip_prefix(['T', 't'])
                 .and_then(hex_digit)
                 .map(usize::from)
                 .filter(|&m| m < UNITS);
             let Some(m) = unit else {
-                problem(at, format!("bad timer name '{name}' (expected T0..TF)"));
+                problem(
+                    at,
+                    format!("bad setting name '{name}' (expected T0..TF, C0..C7, S6 or S7)"),
+                );
                 continue;
             };
             let v = match value.parse::<u64>() {
@@ -226,8 +262,31 @@ pub fn commands(names: &[&str]) -> Program {
     parse("commands", &text).unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// A counter preset `Cm` or an analog set-point `S6`/`S7` named on the left of `=`.
+#[derive(Clone, Copy)]
+enum Setting {
+    Counter(usize),
+    SetPoint(usize),
+}
+
+/// Which counter preset or set-point `name` is (any case), if it is one.
+fn setting(name: &str) -> Option<Setting> {
+    let n = name.as_bytes();
+    let (&letter, &digit) = (n.first()?, n.get(1)?);
+    if n.len() != 2 || !digit.is_ascii_digit() {
+        return None;
+    }
+    let d = usize::from(digit - b'0');
+    match letter.to_ascii_uppercase() {
+        b'C' if d < COUNTERS => Some(Setting::Counter(d)),
+        b'S' if (6..6 + SET_POINTS).contains(&d) => Some(Setting::SetPoint(d - 6)),
+        _ => None,
+    }
+}
+
 /// The canonical listing of a program: `NNN NAME` for every non-blank line (NOP included),
-/// then `Tm = v` for every non-zero preset. Unassigned bytes are written `$XX`.
+/// then `Tm = v`, `Cm = v` and `Sn = v` for every preset and set-point that is not 0.
+/// Unassigned bytes are written `$XX`.
 pub fn print(prog: &Program) -> String {
     let mut out = String::new();
     for (line, &op) in prog.uf.iter().enumerate() {
@@ -242,6 +301,16 @@ pub fn print(prog: &Program) -> String {
     for (m, &v) in prog.presets.iter().enumerate() {
         if v != 0 {
             out.push_str(&format!("T{m:X} = {v}\n"));
+        }
+    }
+    for (m, &v) in prog.counter_presets.iter().enumerate() {
+        if v != 0 {
+            out.push_str(&format!("C{m} = {v}\n"));
+        }
+    }
+    for (k, &v) in prog.set_points.iter().enumerate() {
+        if v != 0 {
+            out.push_str(&format!("S{} = {v}\n", k + 6));
         }
     }
     out
@@ -274,6 +343,7 @@ fn image_error_text(e: ImageError) -> String {
         ImageError::Magic => "not a uTile image (wrong magic bytes)".into(),
         ImageError::Version(v) => format!("image format version {v} is not known"),
         ImageError::Crc => "the image CRC does not match (damaged)".into(),
+        ImageError::Value => "an analog set-point is above 1023".into(),
     }
 }
 

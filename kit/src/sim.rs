@@ -7,6 +7,7 @@
 use std::collections::VecDeque;
 use std::vec::Vec;
 
+use utile_core::analog::{Analog, CHANNELS};
 use utile_core::board::Board;
 use utile_core::engine::{Engine, Flow};
 use utile_core::ticker::Ticker;
@@ -76,6 +77,10 @@ pub struct SimBoard {
     pub writes_since_feed: u32,
     /// The most EEPROM byte writes seen between two watchdog feeds.
     pub max_writes_between_feeds: u32,
+    /// Raw levels on A6 and A7, 0..1023 (the ADC's counts).
+    pub analog_levels: [u16; CHANNELS],
+    /// The analog sampler, fed one conversion per ms as the chip's ADC interrupt does.
+    pub analog: Analog,
 }
 
 impl Default for SimBoard {
@@ -102,13 +107,27 @@ impl SimBoard {
             watchdog_feeds: 0,
             writes_since_feed: 0,
             max_writes_between_feeds: 0,
+            analog_levels: [0; CHANNELS],
+            analog: Analog::new(),
         }
+    }
+
+    /// One ms of the board: the tick, and one ADC conversion.
+    fn tick(&mut self) {
+        self.ticker.tick(self.raw_inputs);
+        let c = usize::from(self.analog.channel() - utile_core::analog::FIRST_CHANNEL);
+        self.analog.sample(self.analog_levels[c & 1]);
+    }
+
+    /// Set the level on A6 (`n` = 6) or A7 (`n` = 7) in ADC counts, 0..1023.
+    pub fn set_analog(&mut self, n: u8, counts: u16) {
+        self.analog_levels[usize::from(n.wrapping_sub(6) & 1)] = counts.min(1023);
     }
 
     /// Let `ms` milliseconds pass without scanning.
     pub fn advance_ms(&mut self, ms: u32) {
         for _ in 0..ms {
-            self.ticker.tick(self.raw_inputs);
+            self.tick();
         }
     }
 
@@ -145,7 +164,7 @@ impl SimBoard {
                     return Flow::Break;
                 }
             }
-            self.ticker.tick(self.raw_inputs);
+            self.tick();
         }
         Flow::End
     }
@@ -238,5 +257,14 @@ impl Board for SimBoard {
     fn feed_watchdog(&mut self) {
         self.watchdog_feeds += 1;
         self.writes_since_feed = 0;
+    }
+    fn analog_bits(&mut self) -> u8 {
+        self.analog.bits()
+    }
+    fn analog_readings(&mut self) -> [u16; CHANNELS] {
+        self.analog.readings()
+    }
+    fn set_points(&mut self, sp: [u16; CHANNELS]) {
+        self.analog.set_points(sp);
     }
 }

@@ -375,6 +375,13 @@ impl Board for Clock {
         0xFF
     }
     fn eeprom_update(&mut self, _: u16, _: u8) {}
+    fn analog_bits(&mut self) -> u8 {
+        0
+    }
+    fn analog_readings(&mut self) -> [u16; utile_core::analog::CHANNELS] {
+        [0; utile_core::analog::CHANNELS]
+    }
+    fn set_points(&mut self, _: [u16; utile_core::analog::CHANNELS]) {}
 }
 
 /// Timer outputs as the program would read them now: a TQ bit whose time has passed but

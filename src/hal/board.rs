@@ -6,7 +6,7 @@ use core::sync::atomic::Ordering;
 use avr_device::interrupt;
 use utile_core::board::Board;
 
-use super::{eeprom, pins, serial, stack, tick, watchdog};
+use super::{adc, eeprom, pins, serial, stack, tick, watchdog};
 
 /// Why the chip started.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -33,6 +33,7 @@ pub fn init() -> (Nano, BootInfo) {
     let cold = mcusr & 0x05 != 0; // PORF or BORF
     stack::paint();
     tick::init();
+    adc::init();
     serial::init();
     // SAFETY: all shared state is initialised; the handlers may run from now on.
     unsafe { interrupt::enable() };
@@ -126,5 +127,18 @@ impl Board for Nano {
     #[inline]
     fn feed_watchdog(&mut self) {
         watchdog::feed();
+    }
+
+    #[inline]
+    fn analog_bits(&mut self) -> u8 {
+        adc::BITS.load(Ordering::Relaxed)
+    }
+
+    fn analog_readings(&mut self) -> [u16; utile_core::analog::CHANNELS] {
+        adc::readings()
+    }
+
+    fn set_points(&mut self, sp: [u16; utile_core::analog::CHANNELS]) {
+        adc::set_points(sp);
     }
 }

@@ -6,6 +6,7 @@
 //! | `board.rs` | bring-up order (`init`) and `Board` for [`Nano`] |
 //! | `pins.rs` | Y0..Y7 with out_sense, A0..A5, the D8/D9 jumpers |
 //! | `tick.rs` | Timer0's 1 ms tick (the core's `Ticker`), Timer1 for STAT |
+//! | `adc.rs` | A6/A7 in the background (the core's `Analog`: H6, H7) |
 //! | `watchdog.rs` | the watchdog and the reset flags |
 //! | `eeprom.rs` | EEPROM bytes |
 //! | `serial.rs` | USART0 and its receive/transmit rings |
@@ -16,8 +17,10 @@
 //! | `regs.rs`, `isr_cell.rs` | register access, state shared with interrupts |
 //!
 //! The interrupt vectors themselves are declared in `src/main.rs` (they need a crate
-//! feature) and call [`on_tick`], [`serial::on_rx`] and [`serial::on_udre`].
+//! feature) and call [`on_tick`], [`adc::on_conversion`], [`serial::on_rx`] and
+//! [`serial::on_udre`].
 
+pub mod adc;
 mod board;
 mod eeprom;
 mod isr_cell;
@@ -41,4 +44,5 @@ pub(crate) use tick::publish;
 pub(crate) use pins::{LAST_PY, OUTPUTS, OUTPUTS_INVERT_AT, OUTPUTS_PY_AT};
 pub(crate) use regs::{regs, wr};
 pub(crate) use tick::{CLOCKS, LEVEL, TICKER, TOGGLES};
+pub(crate) use adc::BITS as ANALOG_BITS;
 pub use tick::on_tick;

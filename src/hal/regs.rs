@@ -19,6 +19,7 @@ pub(crate) use wr;
 /// The register blocks this layer uses.
 #[allow(non_snake_case)]
 pub(crate) struct Regs {
+    pub ADC: atmega328p::ADC,
     pub CPU: atmega328p::CPU,
     pub EEPROM: atmega328p::EEPROM,
     pub PORTB: atmega328p::PORTB,
@@ -40,6 +41,7 @@ pub(crate) fn regs() -> Regs {
     // above), not by the handles.
     unsafe {
         Regs {
+            ADC: atmega328p::ADC::steal(),
             CPU: atmega328p::CPU::steal(),
             EEPROM: atmega328p::EEPROM::steal(),
             PORTB: atmega328p::PORTB::steal(),

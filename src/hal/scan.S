@@ -15,7 +15,8 @@
 ;   r10:r11 Timer1 at the last END   r12:r13 shortest scan   r14:r15 longest scan
 ;   r16:r17 scans (wraps: exit)
 ;   r18 bit stack (bit 0 = TOS)   r19 PY   r20 PU   r21 PV
-;   r22..r25, r0, r1, r30 scratch   X next line   Y line 0   r31 table page
+;   r28 counter inputs CU   r29 counter inputs at the last END
+;   r22..r25, r0, r1, r30 scratch   X next line   r31 table page
 ; Interrupts stay enabled; `cli`/`sei` only guard the read-modify-write of state that the
 ; 1 ms tick also writes (edge bits, ms clock, output pins).
 
@@ -208,11 +209,12 @@ utile_run:
     lds r7, U_Q + 1
     lds r8, U_TQ
     lds r9, U_TQ + 1
-    ldi r28, lo8(U_UF)
-    ldi r29, hi8(U_UF)
+    lds r28, U_CU
+    lds r29, U_CU_PREV
     ldi r31, pm_hi8(utile_scan_table)
     ; next = 0: a new scan (sweep first); else the line after a KEY.
-    movw r26, r28
+    ldi r26, lo8(U_UF)
+    ldi r27, hi8(U_UF)
     add r26, r24
     adc r27, r25
     or r24, r25
@@ -234,10 +236,12 @@ utile_scan_exit:
     sts U_Q + 1, r7
     sts U_TQ, r8
     sts U_TQ + 1, r9
+    sts U_CU, r28
+    sts U_CU_PREV, r29
     pop r31
     pop r30
-    sub r26, r28
-    sbc r27, r29
+    subi r26, lo8(U_UF)
+    sbci r27, hi8(U_UF)
     std Z+ST_NEXT, r26
     std Z+ST_NEXT+1, r27
     std Z+ST_LAST, r10
@@ -299,8 +303,10 @@ utile_scan_outputs:
 1:  sei
     rjmp utile_scan_stats
 
-; Every 16th END: leave for the editor if it asked, and when the scan count wrapped.
+; Every 16th END (the scan count's high byte not yet carried into): leave for the editor
+; if it asked, and when the scan count wrapped.
 utile_scan_every16:
+    sbci r17, 0xFF
     mov r22, r16
     or r22, r17
     breq 1f
@@ -310,10 +316,10 @@ utile_scan_every16:
     brne 2f
     rjmp utile_scan_start
 1:  ldi r24, EXIT_WRAP
-    movw r26, r28
-    rjmp utile_scan_exit
+    rjmp 3f
 2:  ldi r24, EXIT_SCANS
-    movw r26, r28
+3:  ldi r26, lo8(U_UF)
+    ldi r27, hi8(U_UF)
     rjmp utile_scan_exit
 
 ; Start of a scan with timers running, once per ms: retire those whose time has come
@@ -466,9 +472,8 @@ utile_scan_table:
     .irp n,0,1,2,3,4,5
     rjmp utile_scan_a\n             ; 0x20 An.
     .endr
-    .rept 2
-    rjmp utile_scan_next
-    .endr
+    rjmp utile_scan_h6              ; 0x26 H6.
+    rjmp utile_scan_h7              ; 0x27 H7.
     .irp n,0,1,2,3,4,5
     rjmp utile_scan_al\n            ; 0x28 ALn.
     .endr
@@ -502,8 +507,8 @@ utile_scan_table:
     .irp n,0,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15
     rjmp utile_scan_tq\n            ; 0x68 TQm.
     .endr
-    .rept 8
-    rjmp utile_scan_next            ; 0x78..0x7F unassigned
+    .irp n,0,1,2,3,4,5,6,7
+    rjmp utile_scan_cq\n            ; 0x78 CQm.
     .endr
     .irp n,0,1,2,3,4,5,6,7
     rjmp utile_scan_pop_y\n         ; 0x80 .Yn
@@ -526,8 +531,14 @@ utile_scan_table:
     .irp n,0,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15
     rjmp utile_scan_tr\n            ; 0xC8 .TRm
     .endr
-    .rept 40
-    rjmp utile_scan_next            ; 0xD8..0xFF unassigned, 0xFF blank
+    .irp n,0,1,2,3,4,5,6,7
+    rjmp utile_scan_cu\n            ; 0xD8 .CUm
+    .endr
+    .irp n,0,1,2,3,4,5,6,7
+    rjmp utile_scan_cr\n            ; 0xE0 .CRm
+    .endr
+    .rept 24
+    rjmp utile_scan_next            ; 0xE8..0xFF unassigned, 0xFF blank
     .endr
     .if . - utile_scan_table - 512
     .error "the dispatch table must have exactly 256 entries"
@@ -539,12 +550,15 @@ utile_scan_next:
 
 ; END: flip-flops, outputs, statistics, then the next scan.
 utile_scan_end:
-    ; Q = (Q or S) and not R, skipped while every S and R is 0.
-    mov r22, r2
+    ; Q = (Q or S) and not R, and the counters, skipped while every S and R is 0 and the
+    ; count inputs are as at the last END.
+    mov r22, r28
+    eor r22, r29
+    or r22, r2
     or r22, r3
     or r22, r4
     or r22, r5
-    breq 1f
+    breq utile_scan_end_out
     or r6, r2
     or r7, r3
     mov r22, r4
@@ -553,7 +567,10 @@ utile_scan_end:
     mov r22, r5
     com r22
     and r7, r22
-1:  lds r22, U_OUT_PY
+    cpse r28, r29
+    rjmp utile_scan_count
+utile_scan_end_out:
+    lds r22, U_OUT_PY
     cp r22, r19
     breq utile_scan_stats
     rjmp utile_scan_outputs
@@ -573,20 +590,22 @@ utile_scan_stats:
     cpc r15, r23
     brsh 3f
     movw r14, r22
+    ; One scan more. H clear after `subi` (no borrow from bit 3) means the low nibble
+    ; went from 15 to 0: every 16th scan. The high byte's carry is added after the branch.
 3:  subi r16, 0xFF
+    brhc utile_scan_16th
     sbci r17, 0xFF
-    mov r22, r16
-    andi r22, 0x0F
-    brne utile_scan_start
-    rjmp utile_scan_every16
 utile_scan_start:
     wdr
-    movw r26, r28
+    ldi r26, lo8(U_UF)
+    ldi r27, hi8(U_UF)
     mov r22, r8
     or r22, r9
     brne utile_scan_timers
 utile_scan_go:
     NEXT
+utile_scan_16th:
+    rjmp utile_scan_every16
 utile_scan_timers:
     lds r22, U_MS
     lds r23, U_SWEPT_MS
@@ -716,6 +735,60 @@ utile_scan_clkb:
 utile_scan_clkc:
     PUSH_RAM U_CLOCKS, 2
 
+; END with a count input changed: each 0 -> 1 change since the last END counts (saturating
+; at 65535) unless the reset latch is 1, and sets CQ when the count reaches a preset other
+; than 0, as `Engine::count_edges` does. Counts are 16 bits at U_COUNT, presets CP_OFF
+; bytes further on.
+utile_scan_count:
+    lds r23, U_CR
+    com r23
+    mov r22, r29
+    com r22
+    and r22, r28
+    mov r29, r28
+    and r22, r23
+    breq 5f
+    ldi r30, lo8(U_COUNT)
+    ldi r31, hi8(U_COUNT)
+    ldi r23, 1
+1:  sbrs r22, 0
+    rjmp 4f
+    ld r24, Z
+    ldd r25, Z+1
+    adiw r24, 1
+    breq 4f
+    st Z, r24
+    std Z+1, r25
+    ldd r0, Z+CP_OFF
+    ldd r1, Z+CP_OFF+1
+    cp r24, r0
+    cpc r25, r1
+    brlo 4f
+    tst r0
+    brne 3f
+    tst r1
+    breq 4f
+3:  lds r0, U_CQ
+    or r0, r23
+    sts U_CQ, r0
+4:  adiw r30, 2
+    lsl r23
+    lsr r22
+    brne 1b
+5:  ldi r31, pm_hi8(utile_scan_table)
+    rjmp utile_scan_end_out
+
+; .CRm with a 1: count m (at Z) and CQm (r23 = its mask, inverted) are 0 at once.
+utile_scan_cr_tail:
+    clr r22
+    st Z, r22
+    std Z+1, r22
+    lds r22, U_CQ
+    and r22, r23
+    sts U_CQ, r22
+    ldi r31, pm_hi8(utile_scan_table)
+    NEXT
+
 ; ALn. / ATn. with the edge seen (TAKE_EDGE).
 utile_scan_leading:
     EDGE_TAIL U_LEADING
@@ -765,6 +838,30 @@ utile_scan_pop_s\n:
     POP_REG r3, (\n-8)
 utile_scan_pop_r\n:
     POP_REG r5, (\n-8)
+    .endr
+
+; H6. H7. CQm. .CUm .CRm (image format 2).
+utile_scan_h6:
+    PUSH_RAM U_HBITS, 6
+utile_scan_h7:
+    PUSH_RAM U_HBITS, 7
+    .irp n,0,1,2,3,4,5,6,7
+utile_scan_cq\n:
+    PUSH_RAM U_CQ, \n
+utile_scan_cu\n:
+    POP_REG r28, \n
+utile_scan_cr\n:
+    bst r18, 0
+    lsr r18
+    lds r22, U_CR
+    bld r22, \n
+    sts U_CR, r22
+    brts 1f
+    NEXT
+1:  ldi r30, lo8(U_COUNT + 2 * \n)
+    ldi r31, hi8(U_COUNT + 2 * \n)
+    ldi r23, 0xFF - (1 << \n)
+    rjmp utile_scan_cr_tail
     .endr
 
     .irp n,0,1,2,3

@@ -77,6 +77,10 @@ pub fn run(eng: &mut Engine, st: &mut RunState, want: bool) -> Exit {
 
 const ENGINE: usize = kept::ENGINE_AT;
 
+/// From a count to its counter preset, for the assembly's `ldd` (displacement ≤ 63).
+const CP_OFF: usize = eng::COUNTER_PRESETS - eng::COUNT;
+const _: () = assert!(CP_OFF + 1 <= 63);
+
 /// Call `utile_run` (scan.S): runs the engine from `st.next` until an exit; returns
 /// `EXIT_*`. The assembly is emitted here, inside this function's inline `asm!`, because
 /// LLVM assembles a library's `global_asm!` without the CPU's instruction set
@@ -110,6 +114,13 @@ fn enter(eng: *mut Engine, st: *mut RunState) -> u8 {
     ".set U_DEADLINE, {kept} + {deadline}",
     ".set U_PRESETS, {kept} + {presets}",
     ".set U_UF, {kept} + {uf}",
+    ".set U_CU, {kept} + {cu}",
+    ".set U_CU_PREV, {kept} + {cu_prev}",
+    ".set U_CR, {kept} + {cr}",
+    ".set U_CQ, {kept} + {cq}",
+    ".set U_COUNT, {kept} + {count}",
+    ".set CP_OFF, {cp_off}",
+    ".set U_HBITS, {hbits}",
     ".set U_MS, {ticker} + {ms}",
     ".set U_LEADING, {ticker} + {leading}",
     ".set U_TRAILING, {ticker} + {trailing}",
@@ -162,6 +173,13 @@ fn enter(eng: *mut Engine, st: *mut RunState) -> u8 {
     deadline = const ENGINE + eng::DEADLINE,
     presets = const ENGINE + eng::PRESETS,
     uf = const ENGINE + eng::UF,
+    cu = const ENGINE + eng::CU,
+    cu_prev = const ENGINE + eng::CU_PREV,
+    cr = const ENGINE + eng::CR,
+    cq = const ENGINE + eng::CQ,
+    count = const ENGINE + eng::COUNT,
+    cp_off = const CP_OFF,
+    hbits = sym super::ANALOG_BITS,
     ticker = sym super::TICKER,
     ms = const tick::MS,
     leading = const tick::LEADING,

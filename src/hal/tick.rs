@@ -7,7 +7,7 @@ use avr_device::interrupt::{self, CriticalSection};
 use utile_core::ticker::{Ticker, INPUT_MASK};
 
 use super::isr_cell::IsrCell;
-use super::pins;
+use super::{adc, pins};
 use super::regs::{regs, wr};
 
 /// The core's ticker, advanced by the tick interrupt.
@@ -66,10 +66,11 @@ pub(crate) fn resync() {
     });
 }
 
-/// The 1 kHz tick (Timer0 compare A interrupt): time base, debouncer, clocks, and
-/// re-applying the outputs when the out_sense jumper D9 changes.
+/// The 1 kHz tick (Timer0 compare A interrupt): time base, debouncer, clocks, one ADC
+/// conversion, and re-applying the outputs when the out_sense jumper D9 changes.
 #[inline(always)]
 pub fn on_tick(cs: CriticalSection) {
+    adc::start();
     let raw = pins::raw_inputs();
     // SAFETY: the closure does not re-enter TICKER.
     unsafe {

@@ -39,6 +39,7 @@ pub(super) fn image_reason(e: ImageError) -> Txt {
         ImageError::Magic => text::WHY_MAGIC,
         ImageError::Version(_) => text::WHY_VERSION,
         ImageError::Crc => text::WHY_CRC,
+        ImageError::Value => text::WHY_VALUE,
     }
 }
 

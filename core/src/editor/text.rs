@@ -272,6 +272,8 @@ texts! {
     WHY_VERSION = "unknown image version";
     /// Read error reason.
     WHY_CRC = "image CRC error";
+    /// Read error reason.
+    WHY_VALUE = "set-point above 1023";
     /// LIST prompt.
     LIST_PROMPT = "# LIST .... 'CR' to send .... '/' to abort";
     /// LIST header comment.

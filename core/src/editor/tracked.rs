@@ -110,4 +110,13 @@ impl<B: Board> Board for Tracked<'_, B> {
     fn feed_watchdog(&mut self) {
         self.b.feed_watchdog()
     }
+    fn analog_bits(&mut self) -> u8 {
+        self.b.analog_bits()
+    }
+    fn analog_readings(&mut self) -> [u16; crate::analog::CHANNELS] {
+        self.b.analog_readings()
+    }
+    fn set_points(&mut self, sp: [u16; crate::analog::CHANNELS]) {
+        self.b.set_points(sp)
+    }
 }

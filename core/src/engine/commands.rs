@@ -56,8 +56,11 @@ impl Engine {
         let mask = bit_mask(op);
         let low_half = op & 0x08 != 0;
         Some(if op < 0x40 {
-            // Inputs A, AL, AT, AD: numbers 6 and 7 do not exist.
+            // Inputs A, AL, AT, AD: numbers 6 and 7 do not exist, except H6. and H7.
             if op & 0x06 == 0x06 {
+                if op < 0x28 {
+                    return Some(b.analog_bits() & mask != 0);
+                }
                 return None;
             }
             if op < 0x30 {
@@ -85,14 +88,14 @@ impl Engine {
         } else if op < 0x78 {
             self.tq & bit16(op - PUSH_TQ) != 0
         } else {
-            return None;
+            self.cq & mask != 0
         })
     }
 
-    /// A pop command (`0x80..=0xD7`); unassigned opcodes above do nothing.
+    /// A pop command (`0x80..=0xE7`); unassigned opcodes above do nothing.
     #[inline(always)]
     pub(super) fn exec_pop<B: Board>(&mut self, op: u8, bs: &mut u8, b: &mut B) {
-        if op > 0xD7 {
+        if op > POP_LAST {
             return;
         }
         let v = pop(bs);
@@ -121,8 +124,30 @@ impl Engine {
             }
         } else if op < 0xC8 {
             self.trigger(op - POP_TK, v, b);
-        } else if v {
-            self.tq &= !bit16(op - POP_TR);
+        } else if op < 0xD8 {
+            if v {
+                self.tq &= !bit16(op - POP_TR);
+            }
+        } else {
+            self.counter_pop(op, v, mask);
+        }
+    }
+
+    /// `.CUm` latches the count input (counted at END); `.CRm` latches the reset, and a 1
+    /// clears the count and CQm at once (END then keeps it 0 whatever the order).
+    #[inline(never)]
+    fn counter_pop(&mut self, op: u8, v: bool, mask: u8) {
+        let latch = if op < POP_CR { &mut self.cu } else { &mut self.cr };
+        if v {
+            *latch |= mask;
+        } else {
+            *latch &= !mask;
+        }
+        if v && op >= POP_CR {
+            if let Some(c) = self.count.get_mut(usize::from(op & 7)) {
+                *c = 0;
+            }
+            self.cq &= !mask;
         }
     }
 

@@ -1,4 +1,5 @@
-//! The logic engine: the bit stack, ports, flip-flops, timers, and the byte-threaded scan.
+//! The logic engine: the bit stack, ports, flip-flops, timers, counters, and the
+//! byte-threaded scan.
 //!
 //! Here: the [`Engine`]'s state (laid out for the firmware's assembly scan, see [`offsets`]),
 //! a scan and END. `program.rs` holds the user's program, `commands.rs` executes one command.
@@ -10,7 +11,7 @@ mod commands;
 mod program;
 
 use commands::bit16;
-pub use program::{unit_ms, Program, LINES, TIMER_UNIT_MS, UNITS};
+pub use program::{unit_ms, Program, COUNTERS, LINES, SET_POINTS, TIMER_UNIT_MS, UNITS};
 
 /// How a command ends.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -63,6 +64,16 @@ pub struct Engine {
     bs_view: u8,
     /// Time (ms) at which each running timer falls.
     deadline: [u32; UNITS],
+    /// Count inputs of C0..C7 as last popped by `.CUm` (a latch, like S and R).
+    pub cu: u8,
+    /// The count inputs at the last END (all 1 after RUN/EX0: no count on the first scan).
+    pub cu_prev: u8,
+    /// Counter reset latches, as last popped by `.CRm`.
+    pub cr: u8,
+    /// Counter outputs CQ0..CQ7: count ≥ preset, with preset 0 giving 0.
+    pub cq: u8,
+    /// Counts C0..C7 (saturating at 65535).
+    pub count: [u16; COUNTERS],
     /// UF0 and the timer presets.
     pub prog: Program,
     /// Always END: line "256", so a scan that runs past line 255 ends there.
@@ -102,6 +113,19 @@ pub mod offsets {
     pub const DEADLINE: usize = offset_of!(Engine, deadline);
     /// Timer presets.
     pub const PRESETS: usize = offset_of!(Engine, prog) + offset_of!(Program, presets);
+    /// [`Engine::cu`].
+    pub const CU: usize = offset_of!(Engine, cu);
+    /// [`Engine::cu_prev`].
+    pub const CU_PREV: usize = offset_of!(Engine, cu_prev);
+    /// [`Engine::cr`].
+    pub const CR: usize = offset_of!(Engine, cr);
+    /// [`Engine::cq`].
+    pub const CQ: usize = offset_of!(Engine, cq);
+    /// Counts, 2 bytes each, little-endian.
+    pub const COUNT: usize = offset_of!(Engine, count);
+    /// Counter presets, 2 bytes each, little-endian.
+    pub const COUNTER_PRESETS: usize =
+        offset_of!(Engine, prog) + offset_of!(Program, counter_presets);
     /// UF0 line 0.
     pub const UF: usize = offset_of!(Engine, prog) + offset_of!(Program, uf);
     /// The END guard after line 255.
@@ -135,13 +159,19 @@ impl Engine {
             port_view: 0,
             bs_view: 0,
             deadline: [0; UNITS],
+            cu: 0,
+            cu_prev: 0xFF,
+            cr: 0,
+            cq: 0,
+            count: [0; COUNTERS],
             prog,
             scan_end: END,
         }
     }
 
-    /// Clear the runtime state (EX0): bit stack, ports, flip-flops, timers, edges, toggles,
-    /// pending displays. The program and presets stay. Outputs are driven off.
+    /// Clear the runtime state (EX0, RUN): bit stack, ports, flip-flops, timers, counters,
+    /// edges, toggles, pending displays. The program and presets stay, and the board's
+    /// analog thresholds take the program's set-points. Outputs are driven off.
     pub fn clear_runtime<B: Board>(&mut self, b: &mut B) {
         // Field by field: rebuilding the whole Engine would put two copies of the 272-byte
         // Program on the AVR stack.
@@ -156,7 +186,9 @@ impl Engine {
         self.deadline = [0; UNITS];
         self.swept_ms = 0;
         self.views = 0;
+        self.clear_counters();
         self.scan_end = END;
+        b.set_points(self.prog.set_points);
         b.resync_inputs();
         b.write_outputs(0);
     }
@@ -174,6 +206,56 @@ impl Engine {
             // Signed difference: correct for any deadline within 24 days of now.
             if now.wrapping_sub(due) as i32 >= 0 {
                 self.tq &= !bit16(m);
+            }
+        }
+    }
+
+    /// Counts 0, latches 0, outputs 0, and no count on the next END (RUN, EX0, power-up).
+    pub fn clear_counters(&mut self) {
+        self.cu = 0;
+        self.cu_prev = 0xFF;
+        self.cr = 0;
+        self.cq = 0;
+        self.count = [0; COUNTERS];
+    }
+
+    /// Counter m's output for its count and preset: count ≥ preset, preset 0 giving 0.
+    fn counter_output(&self, m: usize) -> bool {
+        let preset = self.prog.counter_presets.get(m).copied().unwrap_or(0);
+        preset != 0 && self.count.get(m).copied().unwrap_or(0) >= preset
+    }
+
+    /// Recompute every CQ bit from the counts and presets (after presets changed: LDC,
+    /// LOAD, READ, a Modbus write).
+    pub fn refresh_counter_outputs(&mut self) {
+        let mut cq = 0;
+        for m in 0..COUNTERS {
+            if self.counter_output(m) {
+                cq |= commands::BITS[m];
+            }
+        }
+        self.cq = cq;
+    }
+
+    /// END's counter step (only when a count input changed since the last END): each
+    /// 0 → 1 change counts, saturating at 65535, unless the counter's reset latch is 1.
+    fn count_edges(&mut self) {
+        let rising = self.cu & !self.cu_prev & !self.cr;
+        self.cu_prev = self.cu;
+        if rising == 0 {
+            return;
+        }
+        for m in 0..COUNTERS {
+            let mask = commands::BITS[m];
+            let Some(c) = self.count.get_mut(m) else {
+                continue;
+            };
+            // A count at 65535 stays there, and so does its output.
+            if rising & mask != 0 && *c != u16::MAX {
+                *c += 1;
+                if self.counter_output(m) {
+                    self.cq |= mask;
+                }
             }
         }
     }
@@ -250,11 +332,16 @@ impl Engine {
         flow
     }
 
-    /// END: flip-flops update (reset wins), outputs reach the pins.
+    /// END: flip-flops update (reset wins), counters count the rising edges of their inputs
+    /// (reset wins), outputs reach the pins.
     pub fn end<B: Board>(&mut self, b: &mut B) {
         // Programs without flip-flops (S and R all 0) skip the update.
         if self.set | self.reset != 0 {
             self.q = (self.q | self.set) & !self.reset;
+        }
+        // Programs without counters never change `cu` after the first END.
+        if self.cu != self.cu_prev {
+            self.count_edges();
         }
         b.write_outputs(self.py);
     }

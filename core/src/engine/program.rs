@@ -1,4 +1,5 @@
-//! The user's program (UF0 and the timer presets) and the timers' units.
+//! The user's program (UF0, the timer and counter presets, the analog set-points) and the
+//! timers' units.
 
 use crate::opcodes::BLANK;
 
@@ -6,6 +7,10 @@ use crate::opcodes::BLANK;
 pub const LINES: usize = 256;
 /// Number of one-shot timers and of flip-flops.
 pub const UNITS: usize = 16;
+/// Number of counters C0..C7 (SPEC §14).
+pub const COUNTERS: usize = 8;
+/// Number of analog set-points, S6 and S7 (SPEC §15).
+pub const SET_POINTS: usize = crate::analog::CHANNELS;
 
 /// Timer unit in milliseconds for each timer: T0..T3 0.1 s, T4..TB 1 s, TC..TE 1 min,
 /// TF 400 s (6 2/3 min).
@@ -26,7 +31,8 @@ pub fn unit_ms(m: u8) -> u32 {
     }
 }
 
-/// The user's program: UF0 and the 16 timer presets. This is what STORE/LOAD/READ/WRITE move.
+/// The user's program: UF0, the 16 timer presets, the 8 counter presets and the 2 analog
+/// set-points. This is what STORE/LOAD/READ/WRITE move.
 ///
 /// `repr(C)` with UF0 last: in an [`Engine`] the byte after line 255 is then the END guard
 /// that the firmware's threaded scan runs into (see [`Engine`]).
@@ -35,6 +41,10 @@ pub fn unit_ms(m: u8) -> u32 {
 pub struct Program {
     /// Timer presets T0..TF (0 disables a timer).
     pub presets: [u8; UNITS],
+    /// Counter presets C0..C7 (0 disables a counter's output).
+    pub counter_presets: [u16; COUNTERS],
+    /// Analog set-points S6, S7, 0..1023 (0 disables a threshold).
+    pub set_points: [u16; SET_POINTS],
     /// One opcode per line.
     pub uf: [u8; LINES],
 }
@@ -45,6 +55,8 @@ impl Program {
         Self {
             uf: [BLANK; LINES],
             presets: [0; UNITS],
+            counter_presets: [0; COUNTERS],
+            set_points: [0; SET_POINTS],
         }
     }
 }

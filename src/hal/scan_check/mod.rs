@@ -21,8 +21,10 @@ use avr_device::interrupt;
 use avr_progmem::wrapper::ProgMem;
 
 use super::scan::{self, Exit, RunState};
-use super::{drive_pins, publish, regs, serial, wr, Nano, LAST_PY, OUTPUTS, TICKER};
-use utile_core::engine::{offsets, Engine, Flow, Program, LINES, UNITS};
+use super::{
+    drive_pins, publish, regs, serial, wr, Nano, ANALOG_BITS, LAST_PY, OUTPUTS, TICKER,
+};
+use utile_core::engine::{offsets, Engine, Flow, Program, COUNTERS, LINES, SET_POINTS, UNITS};
 use utile_core::opcodes::{is_valid, BLANK, END, NOP, POP_TK, SET};
 use utile_core::ticker::{Ticker, INPUT_MASK};
 
@@ -39,12 +41,16 @@ const SEED: u32 = 0x2545_F491;
 const RUNTIME: usize = offsets::PRESETS;
 
 // The byte views below rely on an engine without padding (every alignment is 1 on the AVR).
-const _: () = assert!(offsets::SCAN_END == 16 + 4 * UNITS + UNITS + LINES);
+const _: () = assert!(
+    offsets::SCAN_END
+        == 16 + 4 * UNITS + 4 + 2 * COUNTERS + UNITS + 2 * COUNTERS + 2 * SET_POINTS + LINES
+);
 const _: () = assert!(size_of::<Engine>() == offsets::SCAN_END + 1);
 // The layout line of the FAIL report.
 const _: () = assert!(offsets::TQ == 0x0A && offsets::BS_VIEW == 0x0F);
-const _: () = assert!(offsets::DEADLINE == 0x10 && offsets::PRESETS == 0x50);
-const _: () = assert!(offsets::UF == 0x60 && offsets::SCAN_END == 0x160);
+const _: () = assert!(offsets::DEADLINE == 0x10 && offsets::CU == 0x50 && offsets::COUNT == 0x54);
+const _: () = assert!(offsets::PRESETS == 0x64 && offsets::COUNTER_PRESETS == 0x74);
+const _: () = assert!(offsets::UF == 0x88 && offsets::SCAN_END == 0x188);
 
 /// The core's copy of the engine; the kept engine is the assembly's.
 static mut REFERENCE: Engine = Engine::new(Program::blank());
@@ -132,6 +138,13 @@ fn check_scan(
     let views = offsets::VIEWS..offsets::BS_VIEW + 1;
     cov.views += u16::from(before.get(views.clone()) != after.get(views));
     cov.guard += u16::from(!eng.prog.uf.contains(&END));
+    let counts = offsets::COUNT..offsets::COUNT + 2 * COUNTERS;
+    let changed = before.get(counts.clone()) != after.get(counts);
+    let resets = before.get(offsets::CR).copied().unwrap_or(0) != eng.cr || eng.cr != 0;
+    cov.counted += u16::from(changed && eng.count.iter().any(|&c| c != 0));
+    cov.counter_resets += u16::from(changed && resets);
+    cov.saturated += u16::from(eng.count.contains(&u16::MAX));
+    cov.cq += u16::from(before.get(offsets::CQ).copied().unwrap_or(0) != eng.cq);
 
     if exit == Exit::Scans && flow == Flow::End && *eng == *reference && asm == core {
         Ok(())
@@ -164,6 +177,7 @@ pub fn run(eng: &mut Engine, board: &mut Nano) -> ! {
         trailing: 0,
         toggles: 0,
         clocks: 0,
+        analog: 0,
         py: 0,
         invert: 0,
     };

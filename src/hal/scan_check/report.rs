@@ -72,7 +72,7 @@ pub(super) fn report(trial: u16, scan: u8, w: &World, m: &Mismatch, eng: &Engine
     tx_hex(w.py);
     say!(b" invert ");
     tx_hex(w.invert);
-    say!(b"\r\nlayout bs 00 py 01 pu 02 pv 03 set 04 reset 06 q 08 tq 0A swept_ms 0C views 0D port_view 0E bs_view 0F deadline 10 (4 B LE each) presets 50 uf 60 guard 160");
+    say!(b"\r\nlayout bs 00 py 01 pu 02 pv 03 set 04 reset 06 q 08 tq 0A swept_ms 0C views 0D port_view 0E bs_view 0F deadline 10 (4 B LE each) cu 50 cu_prev 51 cr 52 cq 53 count 54 (2 B LE each) presets 64 counter_presets 74 set_points 84 uf 88 guard 188");
     say!(b"\r\nbefore ");
     tx_hex_bytes(&m.before);
     say!(b"\r\nasm    ");
@@ -125,5 +125,13 @@ pub(super) fn pass(cov: &Coverage) {
     tx_dec(u32::from(cov.wraps));
     say!(b" bursts=");
     tx_dec(u32::from(cov.bursts));
+    say!(b" counted=");
+    tx_dec(u32::from(cov.counted));
+    say!(b" counter_resets=");
+    tx_dec(u32::from(cov.counter_resets));
+    say!(b" saturated=");
+    tx_dec(u32::from(cov.saturated));
+    say!(b" cq=");
+    tx_dec(u32::from(cov.cq));
     say!(b"\r\nscan-check END\r\n");
 }

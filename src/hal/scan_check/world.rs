@@ -43,6 +43,8 @@ pub(super) struct World {
     pub(super) trailing: u8,
     pub(super) toggles: u8,
     pub(super) clocks: u8,
+    /// Analog threshold bits (H6 bit 6, H7 bit 7), as the ADC interrupt publishes them.
+    pub(super) analog: u8,
     /// Output image already at the pins (OUTPUTS and LAST_PY).
     pub(super) py: u8,
     /// out_sense mask (D9).
@@ -70,6 +72,7 @@ impl World {
             drive_pins(cs, self.py ^ self.invert);
         });
         LAST_PY.store(self.py, Ordering::Relaxed);
+        ANALOG_BITS.store(self.analog, Ordering::Relaxed);
     }
 }
 
@@ -138,6 +141,14 @@ pub(super) struct Coverage {
     pub(super) views: u16,
     /// No END in UF0: the scan ran into the guard after line 255.
     pub(super) guard: u16,
+    /// A count rose at END.
+    pub(super) counted: u16,
+    /// A count changed with a counter reset latch at 1 or changing.
+    pub(super) counter_resets: u16,
+    /// A count stood at 65535 after the scan.
+    pub(super) saturated: u16,
+    /// A CQ bit changed.
+    pub(super) cq: u16,
     /// The ms clock wrapped through 2^32 before the scan.
     pub(super) wraps: u16,
     /// Checks of a burst of [`BURST`] scans rather than one.
@@ -231,6 +242,27 @@ pub(super) fn new_trial(eng: &mut Engine, board: &mut Nano, rng: &mut Rng, w: &m
     }
     eng.q = rng.word();
     eng.tq = if rng.one_in(3) { 0 } else { rng.word() };
+    // Counters: small presets and counts so that outputs change; sometimes at the top.
+    for (p, c) in eng.prog.counter_presets.iter_mut().zip(eng.count.iter_mut()) {
+        *p = match rng.below(8) {
+            0..=4 => rng.below(4),
+            5 => u16::MAX,
+            6 => 0,
+            _ => rng.word(),
+        };
+        *c = match rng.below(8) {
+            0..=4 => rng.below(4),
+            5 => u16::MAX - rng.below(2),
+            _ => rng.word(),
+        };
+    }
+    eng.cu = rng.byte();
+    eng.cu_prev = if rng.one_in(4) { eng.cu } else { rng.byte() };
+    eng.cr = if rng.one_in(2) { 0 } else { rng.byte() & rng.byte() };
+    eng.refresh_counter_outputs();
+    if rng.one_in(8) {
+        eng.cq = rng.byte();
+    }
     if rng.one_in(2) {
         eng.request_port_view(rng.byte());
     } else {
@@ -277,6 +309,7 @@ pub(super) fn next_world(eng: &mut Engine, rng: &mut Rng, w: &mut World, cov: &m
     w.trailing = if rng.one_in(2) { 0 } else { rng.byte() };
     w.toggles = rng.byte();
     w.clocks = rng.byte();
+    w.analog = rng.byte() & 0xC0;
     // Usually the image at the pins is the engine's PY (END wrote it last), sometimes not.
     w.py = if rng.one_in(2) { eng.py } else { rng.byte() };
     if rng.one_in(16) {

@@ -1,0 +1,86 @@
+//! The ADC: A6 and A7 read in the background for the analog thresholds H6/H7 (SPEC §15).
+//!
+//! The 1 ms tick starts one conversion (AVcc reference, clk/128: 104 µs); its interrupt hands
+//! the result to the core's [`Analog`] (averaging, hysteresis) and selects the next channel.
+//! So each channel has a fresh mean of 4 samples every 8 ms, and a scan never waits: `H6.`
+//! and `H7.` read the published [`BITS`] byte.
+
+use core::sync::atomic::{AtomicU8, Ordering};
+
+use avr_device::interrupt::{self, CriticalSection};
+use utile_core::analog::{Analog, CHANNELS};
+
+use super::isr_cell::IsrCell;
+use super::regs::{regs, wr};
+
+/// The sampler, fed by the ADC interrupt.
+static ANALOG: IsrCell<Analog> = IsrCell::new(Analog::new());
+
+/// The threshold bits (H6 in bit 6, H7 in bit 7), published by the ADC interrupt: a
+/// one-byte load is atomic, so the scan reads them without a critical section.
+pub(crate) static BITS: AtomicU8 = AtomicU8::new(0);
+
+/// ADMUX: REFS0 (AVcc with the Nano's capacitor on AREF), right-adjusted, channel `ch`.
+const fn admux(ch: u8) -> u8 {
+    0x40 | (ch & 0x0F)
+}
+
+/// ADCSRA: ADEN, ADIE, prescaler 128 (125 kHz ADC clock at 16 MHz).
+const ADCSRA_ON: u8 = 0x8F;
+/// [`ADCSRA_ON`] with ADSC: start a conversion.
+const ADCSRA_START: u8 = ADCSRA_ON | 0x40;
+
+/// Enable the ADC on A6 with its interrupt (no conversion yet: the tick starts them).
+#[inline(always)]
+pub(super) fn init() {
+    let dp = regs();
+    // ADMUX: AVcc reference, channel 6.
+    wr!(dp.ADC.admux(), admux(6));
+    // ADCSRA: enabled, interrupt on, clk/128.
+    wr!(dp.ADC.adcsra(), ADCSRA_ON);
+}
+
+/// Start one conversion (called by the 1 ms tick; the previous one ended 0.9 ms ago).
+#[inline(always)]
+pub(super) fn start() {
+    // ADCSRA: enabled, interrupt on, clk/128, ADSC.
+    wr!(regs().ADC.adcsra(), ADCSRA_START);
+}
+
+/// The ADC conversion-complete interrupt: feed the sampler, publish the bits, and select
+/// the channel of the next conversion.
+#[inline(always)]
+pub fn on_conversion(cs: CriticalSection) {
+    let dp = regs();
+    let raw = dp.ADC.adc().read().bits();
+    // SAFETY: the closure does not re-enter ANALOG.
+    let (bits, ch) = unsafe {
+        ANALOG.with(cs, |a| {
+            a.sample(raw);
+            (a.bits(), a.channel())
+        })
+    };
+    BITS.store(bits, Ordering::Relaxed);
+    // ADMUX: AVcc reference, the next channel (6 or 7).
+    wr!(dp.ADC.admux(), admux(ch));
+}
+
+/// The last readings of A6 and A7.
+pub(super) fn readings() -> [u16; CHANNELS] {
+    // SAFETY: the closure does not re-enter ANALOG.
+    interrupt::free(|cs| unsafe { ANALOG.with(cs, |a| a.readings()) })
+}
+
+/// New set-points for the thresholds.
+pub(super) fn set_points(sp: [u16; CHANNELS]) {
+    interrupt::free(|cs| {
+        // SAFETY: the closure does not re-enter ANALOG.
+        let bits = unsafe {
+            ANALOG.with(cs, |a| {
+                a.set_points(sp);
+                a.bits()
+            })
+        };
+        BITS.store(bits, Ordering::Relaxed);
+    });
+}
