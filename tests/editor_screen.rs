@@ -525,7 +525,7 @@ fn blank_lines_and_unassigned_bytes_show_dots() {
     let mut r = Session::bare();
     r.eng.prog.uf[3] = 0x1F;
     r.eng.prog.uf[4] = BLANK;
-    r.eng.prog.uf[5] = 0xE0;
+    r.eng.prog.uf[5] = 0xE8;
     r.ed.boot(&r.eng, &mut r.b);
     r.sync();
     assert_eq!(r.entry(3), "003 .....");

@@ -61,6 +61,10 @@ fn family(prefix: &str, suffix: &str) -> (&'static str, &'static str) {
         (".R", "") => ("( a -- )", "Pop into the reset latch of flip-flop m (reset wins at END)."),
         (".TK", "") => ("( a -- )", "Pop the trigger of timer m: 1 (re)starts it and sets TQm; the time runs from the last scan with 1."),
         (".TR", "") => ("( a -- )", "Pop the reset of timer m: 1 stops it and clears TQm at once."),
+        ("H", ".") => ("( -- Hn )", "Push analog threshold n (A6, A7): 1 from reading ≥ set-point Sn until it falls 8 counts below; set-point 0 gives 0. Image format 2."),
+        ("CQ", ".") => ("( -- CQm )", "Push counter output m: count ≥ preset (preset 0 gives 0). Image format 2."),
+        (".CU", "") => ("( a -- )", "Pop the count input of counter m: each 0→1 change from one END to the next counts, up to 65535. Image format 2."),
+        (".CR", "") => ("( a -- )", "Pop the reset of counter m: while 1 the count is 0 (cleared at once, and at END it wins over counting). Image format 2."),
         _ => panic!("no description for family {prefix}n{suffix}: add one here"),
     }
 }

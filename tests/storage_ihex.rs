@@ -65,25 +65,25 @@ fn writer_text_is_exact() {
     let img = image::encode(&Program::blank());
     let text = hex_text(&img);
     let lines: Vec<&str> = text.split_terminator("\r\n").collect();
-    assert_eq!(lines.len(), 19, "17 full records, 1 short, EOF");
-    assert_eq!(lines[0], ":1000000075540100FFFFFFFFFFFFFFFFFFFFFFFF32");
-    for (k, line) in lines[..17].iter().enumerate() {
+    assert_eq!(lines.len(), 20, "18 full records, 1 short, EOF");
+    assert_eq!(lines[0], ":1000000075540200FFFFFFFFFFFFFFFFFFFFFFFF31");
+    for (k, line) in lines[..18].iter().enumerate() {
         assert_eq!(line.len(), 43);
         assert_eq!(&line[..9], format!(":10{:04X}00", k * 16));
     }
     assert!(
-        lines[17].starts_with(":06011000"),
-        "last record: 6 bytes at 0x0110"
+        lines[18].starts_with(":0A012000"),
+        "last record: 10 bytes at 0x0120"
     );
-    assert_eq!(lines[17].len(), 1 + 8 + 12 + 2);
-    assert_eq!(lines[18], ":00000001FF");
+    assert_eq!(lines[18].len(), 1 + 8 + 20 + 2);
+    assert_eq!(lines[19], ":00000001FF");
     assert!(text.ends_with(":00000001FF\r\n"));
     assert!(!text.contains('\n') || text.matches('\n').count() == text.matches("\r\n").count());
     assert!(
         !text.bytes().any(|b| b.is_ascii_lowercase()),
         "upper case only"
     );
-    assert_eq!(text.len(), 17 * 45 + 25 + 13, "WRITE sends 803 bytes");
+    assert_eq!(text.len(), 18 * 45 + 33 + 13, "WRITE sends 856 bytes");
     // Every record sums to zero.
     for line in &lines {
         let bytes: Vec<u8> = (1..line.len())
@@ -108,7 +108,7 @@ fn round_trip_is_bit_exact() {
         let text = hex_text(&img);
         let mut r = HexReader::new();
         let (ev, first) = feed_all(&mut r, text.as_bytes());
-        assert_eq!(ev, HexEvent::Done { len: 278 });
+        assert_eq!(ev, HexEvent::Done { len: 298 });
         assert_eq!(
             first,
             Some(text.len() - 3),
@@ -123,9 +123,9 @@ fn round_trip_is_bit_exact() {
 fn done_and_errors_are_latched() {
     let img = image::encode(&Program::blank());
     let (ev, mut r) = read(&hex_text(&img));
-    assert_eq!(ev, HexEvent::Done { len: 278 });
-    assert_eq!(r.feed(b'x'), HexEvent::Done { len: 278 });
-    assert_eq!(r.feed(b':'), HexEvent::Done { len: 278 });
+    assert_eq!(ev, HexEvent::Done { len: 298 });
+    assert_eq!(r.feed(b'x'), HexEvent::Done { len: 298 });
+    assert_eq!(r.feed(b':'), HexEvent::Done { len: 298 });
 
     let (ev, mut r) = read(":1G");
     assert_eq!(ev, HexEvent::Error(HexError::BadChar));
@@ -142,15 +142,15 @@ fn blank_lines_control_chars_and_lower_case_accepted() {
     for sep in ["\r\n\n", "\r\n\r\n   \t\r\n", "\n", "\r", "\r\n\0\x7f\n"] {
         let t = text.replace("\r\n", sep);
         let (ev, r) = read(&t);
-        assert_eq!(ev, HexEvent::Done { len: 278 }, "separator {sep:?}");
+        assert_eq!(ev, HexEvent::Done { len: 298 }, "separator {sep:?}");
         assert_eq!(r.data(), &img[..]);
     }
     let (ev, r) = read(&text.to_lowercase());
-    assert_eq!(ev, HexEvent::Done { len: 278 });
+    assert_eq!(ev, HexEvent::Done { len: 298 });
     assert_eq!(r.data(), &img[..]);
     // Screen output before the first record (a captured session) is skipped.
     let (ev, r) = read(&format!("\x1b[11;1H WRITE junk ;-)\r\n{text}"));
-    assert_eq!(ev, HexEvent::Done { len: 278 });
+    assert_eq!(ev, HexEvent::Done { len: 298 });
     assert_eq!(r.data(), &img[..]);
 }
 
@@ -160,7 +160,7 @@ fn other_record_sizes_accepted_when_contiguous() {
     let img = random_image(&mut rng);
     for size in [1, 8, 15, 32, 255] {
         let (ev, r) = read(&file_with_records(&img, size));
-        assert_eq!(ev, HexEvent::Done { len: 278 }, "records of {size}");
+        assert_eq!(ev, HexEvent::Done { len: 298 }, "records of {size}");
         assert_eq!(r.data(), &img[..]);
     }
 }
@@ -170,10 +170,10 @@ fn bad_checksum() {
     let img = image::encode(&Program::blank());
     let text = hex_text(&img);
     let mut lines: Vec<String> = text.split_inclusive("\r\n").map(String::from).collect();
-    for k in [0, 5, 17, 18] {
+    for k in [0, 5, 17, 18, 19] {
         let mut l = lines.clone();
         // Change one data digit (or the EOF's checksum) without fixing the checksum.
-        let pos = if k == 18 { 10 } else { 12 };
+        let pos = if k == 19 { 10 } else { 12 };
         let c = l[k].as_bytes()[pos];
         let new = if c == b'0' { '1' } else { '0' };
         l[k].replace_range(pos..pos + 1, &new.to_string());
@@ -199,7 +199,8 @@ fn bad_chars() {
         );
     }
     // A truncated record line (line end inside the record).
-    let t = text.replacen("FFFF32\r\n", "FF\r\n", 1);
+    let first_end = format!("FFFF{}\r\n", &text[41..43]);
+    let t = text.replacen(&first_end, "FF\r\n", 1);
     assert_eq!(read(&t).0, HexEvent::Error(HexError::BadChar));
     // Printable junk between records.
     let t = text.replacen("\r\n", "\r\nhello\r\n", 1);
@@ -249,17 +250,17 @@ fn wrong_addresses_gaps_and_overlaps() {
     t.push(eof.clone());
     assert_eq!(read(&t.concat()).0, HexEvent::Error(HexError::Address));
 
-    // Past the end of the image: a full 16-byte last record (0x110..0x120).
-    let mut t = recs[..17].to_vec();
-    let mut last = img[0x110..].to_vec();
+    // Past the end of the image: a full 16-byte last record (0x120..0x130).
+    let mut t = recs[..18].to_vec();
+    let mut last = img[0x120..].to_vec();
     last.resize(16, 0);
-    t.push(rec(0x0110, 0, &last));
+    t.push(rec(0x0120, 0, &last));
     t.push(eof.clone());
     assert_eq!(read(&t.concat()).0, HexEvent::Error(HexError::Address));
 
     // An extra record after the whole image.
     let mut t = recs.clone();
-    t.push(rec(0x0116, 0, &[0]));
+    t.push(rec(0x012A, 0, &[0]));
     t.push(eof.clone());
     assert_eq!(read(&t.concat()).0, HexEvent::Error(HexError::Address));
 
@@ -338,19 +339,33 @@ fn random_bytes_never_give_an_image() {
 #[test]
 fn valid_hex_with_a_bad_image_is_caught_by_decode() {
     let mut img = image::encode(&Program::blank());
-    img[2] = 2; // a future version
+    img[2] = 3; // a future version
     let (ev, r) = read(&hex_text(&img));
-    assert_eq!(ev, HexEvent::Done { len: 278 });
-    assert_eq!(image::decode(r.data()), Err(ImageError::Version(2)));
+    assert_eq!(ev, HexEvent::Done { len: 298 });
+    assert_eq!(image::decode(r.data()), Err(ImageError::Version(3)));
 
     let mut img = image::encode(&Program::blank());
     img[100] ^= 1; // damaged in a text editor, checksums recomputed
     let (ev, r) = read(&hex_text(&img));
-    assert_eq!(ev, HexEvent::Done { len: 278 });
+    assert_eq!(ev, HexEvent::Done { len: 298 });
     assert_eq!(image::decode(r.data()), Err(ImageError::Crc));
 
-    // A hex file of some other 278 bytes (not a uTile image).
+    // A hex file of some other 298 bytes (not a uTile image).
     let (ev, r) = read(&hex_text(&[0x55; IMAGE_LEN]));
-    assert_eq!(ev, HexEvent::Done { len: 278 });
+    assert_eq!(ev, HexEvent::Done { len: 298 });
     assert_eq!(image::decode(r.data()), Err(ImageError::Magic));
+}
+
+#[test]
+fn a_version_1_file_is_whole_at_278_bytes_and_decodes() {
+    let mut prog = Program::blank();
+    prog.uf[0] = 0x20;
+    prog.presets[1] = 3;
+    let mut v1 = image::encode(&prog)[..image::COUNTER_PRESETS_OFFSET].to_vec();
+    v1[image::VERSION_OFFSET] = image::VERSION_1;
+    let crc = image::crc16(&v1);
+    v1.extend_from_slice(&crc.to_be_bytes());
+    let (ev, r) = read(&hex_text(&v1));
+    assert_eq!(ev, HexEvent::Done { len: 278 });
+    assert_eq!(image::decode(r.data()), Ok(prog));
 }

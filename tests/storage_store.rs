@@ -129,7 +129,7 @@ fn store_then_load_round_trip_and_slots_alternate() {
     let mut b = SimBoard::new();
     let mut expect_slot = 0;
     for k in 1..=10u16 {
-        let p = rng.program();
+        let p = rng.program_v2();
         assert_eq!(store::store(&p, &mut b), Ok(()));
         assert_eq!(
             slot_image(&b, expect_slot),
@@ -141,9 +141,9 @@ fn store_then_load_round_trip_and_slots_alternate() {
         // The other slot still holds the previous program (if any).
         expect_slot ^= 1;
     }
-    // Slot layout: nothing outside the two slots is touched.
-    assert!(b.eeprom[0x118..0x200].iter().all(|&x| x == 0xFF));
-    assert!(b.eeprom[0x318..].iter().all(|&x| x == 0xFF));
+    // Slot layout: nothing outside the two slots (2 + 298 bytes each) is touched.
+    assert!(b.eeprom[0x12C..0x200].iter().all(|&x| x == 0xFF));
+    assert!(b.eeprom[0x32C..].iter().all(|&x| x == 0xFF));
 }
 
 #[test]
@@ -352,4 +352,51 @@ fn store_feeds_the_watchdog() {
         d.max_writes_between_feeds, 1,
         "at most one byte write between feeds"
     );
+}
+
+/// A slot as the version-1 firmware left it: sequence number, then the 278-byte image.
+fn version_1_slot(b: &mut SimBoard, at: usize, seq: u16, prog: &Program) {
+    let mut v1 = image::encode(prog)[..image::COUNTER_PRESETS_OFFSET].to_vec();
+    v1[image::VERSION_OFFSET] = image::VERSION_1;
+    let crc = image::crc16(&v1);
+    v1.extend_from_slice(&crc.to_be_bytes());
+    b.eeprom[at..at + 2].copy_from_slice(&seq.to_le_bytes());
+    b.eeprom[at + 2..at + 2 + v1.len()].copy_from_slice(&v1);
+}
+
+#[test]
+fn version_1_slots_load_and_the_next_store_writes_version_2_beside_them() {
+    let mut rng = Rng(77);
+    let old = rng.program();
+    let mut b = SimBoard::new();
+    version_1_slot(&mut b, 0, 7, &old);
+    assert_eq!(store::load(&mut b), Ok(old.clone()), "counter presets and set-points 0");
+    // STORE goes to the other slot, as version 2; the version-1 slot stays as it was.
+    let new = rng.program_v2();
+    let slot0: Vec<u8> = b.eeprom[..280].to_vec();
+    store::store(&new, &mut b).unwrap();
+    assert_eq!(&b.eeprom[..280], &slot0[..]);
+    assert_eq!(slot_image(&b, 1), &image::encode(&new)[..]);
+    assert_eq!(store::load(&mut b), Ok(new.clone()));
+    // The next STORE overwrites the version-1 slot with a whole version-2 image.
+    let newer = rng.program_v2();
+    store::store(&newer, &mut b).unwrap();
+    assert_eq!(slot_image(&b, 0), &image::encode(&newer)[..]);
+    assert_eq!(store::load(&mut b), Ok(newer));
+}
+
+#[test]
+fn a_stored_set_point_above_1023_makes_the_slot_invalid() {
+    let mut b = SimBoard::new();
+    let mut p = Program::blank();
+    p.set_points = [1023, 0];
+    store::store(&p, &mut b).unwrap();
+    assert_eq!(store::load(&mut b), Ok(p.clone()));
+    // 1024 with a CRC that matches (only a damaged or foreign EEPROM holds that).
+    let mut img = image::encode(&p);
+    img[image::SET_POINTS_OFFSET..image::SET_POINTS_OFFSET + 2].copy_from_slice(&1024u16.to_be_bytes());
+    let crc = image::crc16(&img[..image::CRC_OFFSET]);
+    img[image::CRC_OFFSET..].copy_from_slice(&crc.to_be_bytes());
+    b.eeprom[2..2 + image::IMAGE_LEN].copy_from_slice(&img);
+    assert_eq!(store::load(&mut b), Err(store::LoadError::NoValidImage));
 }

@@ -62,7 +62,7 @@ pub fn slot_seq<B: Board>(b: &mut B, slot: u16) -> Option<u16> {
 }
 
 /// The sequence number and image length of `slot` if it holds a valid image, of either
-/// version. Set-points are not range-checked here: STORE never writes one above 1023.
+/// version, by the same rules as READ's.
 fn slot_check<B: Board>(b: &mut B, slot: u16) -> Option<(u16, usize)> {
     let magic = [
         b.eeprom_read(image_addr(slot, 0)),
@@ -80,6 +80,17 @@ fn slot_check<B: Board>(b: &mut B, slot: u16) -> Option<(u16, usize)> {
         b.eeprom_read(image_addr(slot, crc_at + 1)),
     ]);
     if crc != stored {
+        return None;
+    }
+    // As READ would: a set-point above 1023 makes the image invalid.
+    if len == IMAGE_LEN
+        && (0..2).any(|k| {
+            let at = SET_POINTS_OFFSET + 2 * k;
+            let hi = b.eeprom_read(image_addr(slot, at));
+            let lo = b.eeprom_read(image_addr(slot, at + 1));
+            u16::from_be_bytes([hi, lo]) > image::SET_POINT_MAX
+        })
+    {
         return None;
     }
     let seq = u16::from_le_bytes([b.eeprom_read(slot), b.eeprom_read(slot.wrapping_add(1))]);
@@ -176,7 +187,7 @@ pub fn load_into<B: Board>(b: &mut B, prog: &mut Program) -> Result<(), LoadErro
         *p = word(COUNTER_PRESETS_OFFSET + 2 * k);
     }
     for (k, p) in prog.set_points.iter_mut().enumerate() {
-        *p = word(SET_POINTS_OFFSET + 2 * k).min(image::SET_POINT_MAX);
+        *p = word(SET_POINTS_OFFSET + 2 * k);
     }
     b.feed_watchdog();
     Ok(())

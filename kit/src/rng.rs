@@ -64,6 +64,15 @@ impl Rng {
         p.presets.iter_mut().for_each(|b| *b = self.byte());
         p
     }
+
+    /// [`Rng::program`] with random counter presets (0..65535) and set-points (0..1023)
+    /// too: every field of image format 2.
+    pub fn program_v2(&mut self) -> Program {
+        let mut p = self.program();
+        p.counter_presets.iter_mut().for_each(|w| *w = self.next_u32() as u16);
+        p.set_points.iter_mut().for_each(|w| *w = (self.next_u32() % 1024) as u16);
+        p
+    }
 }
 
 #[cfg(test)]

@@ -2,14 +2,15 @@
 //! (reset button, watchdog) keeps the UF and the timer presets (SPEC §3).
 //!
 //! The program is trusted after a reset only if a magic word and a checksum of the UF and of
-//! the presets, resealed by the main loop after every received byte, still match. A power-on or
-//! brown-out reset always starts cold: all lines blank, presets 0.
+//! the presets and set-points, resealed by the main loop after every received byte, still
+//! match. A power-on or brown-out reset always starts cold: all lines blank, presets,
+//! set-points and counts 0. A warm reset keeps the counts (SPEC §14) with the program.
 
 use core::mem::MaybeUninit;
 use core::ptr::{addr_of, addr_of_mut};
 
 use utile_core::board::Board;
-use utile_core::engine::{Engine, Program, LINES, UNITS};
+use utile_core::engine::{Engine, Program, COUNTERS, LINES, SET_POINTS, UNITS};
 use utile_core::opcodes::BLANK;
 
 /// Marks a sealed program ("uTiL").
@@ -42,18 +43,20 @@ pub fn take_engine<B: Board>(cold: bool, board: &mut B) -> &'static mut Engine {
     // engine is an integer or a byte array, valid whatever RAM holds.
     unsafe {
         let uf = addr_of_mut!((*kept).engine.prog.uf);
-        let presets = addr_of_mut!((*kept).engine.prog.presets);
         let valid = !cold
             && addr_of!((*kept).magic).read() == MAGIC
-            && addr_of!((*kept).sum_uf).read() == seal(&*uf)
-            && addr_of!((*kept).sum_presets).read() == seal(&*presets);
+            && addr_of!((*kept).sum_uf).read() == seal(SEAL_START, &*uf)
+            && addr_of!((*kept).sum_presets).read() == seal_settings(&(*kept).engine.prog);
         if !valid {
-            // Cold start: every line blank, presets 0.
+            // Cold start: every line blank, presets, set-points and counts 0.
             uf.cast::<u8>().write_bytes(BLANK, LINES);
-            presets.cast::<u8>().write_bytes(0, UNITS);
+            addr_of_mut!((*kept).engine.prog.presets).cast::<u8>().write_bytes(0, UNITS);
+            addr_of_mut!((*kept).engine.prog.counter_presets).write([0; COUNTERS]);
+            addr_of_mut!((*kept).engine.prog.set_points).write([0; SET_POINTS]);
+            addr_of_mut!((*kept).engine.count).write([0; COUNTERS]);
         }
         let engine = &mut *addr_of_mut!((*kept).engine);
-        engine.clear_runtime(board);
+        engine.clear_runtime_keeping_counts(board);
         reseal(&engine.prog);
         engine
     }
@@ -75,8 +78,8 @@ pub(super) fn engine_ptr() -> *const Engine {
 /// catches any single damaged byte and reordered bytes.
 // Out of line: inlined four times (boot check, reseal) it cost 150 bytes more.
 #[inline(never)]
-fn seal(bytes: &[u8]) -> u32 {
-    let (mut a, mut b) = (0x5555u16, 0u16);
+fn seal(start: u32, bytes: &[u8]) -> u32 {
+    let (mut a, mut b) = (start as u16, (start >> 16) as u16);
     for &x in bytes {
         a = a.wrapping_add(u16::from(x));
         b = b.wrapping_add(a);
@@ -84,11 +87,23 @@ fn seal(bytes: &[u8]) -> u32 {
     (u32::from(b) << 16) | u32::from(a)
 }
 
+/// The seal's starting sums.
+const SEAL_START: u32 = 0x5555;
+
+/// The seal of the timer presets, counter presets and set-points, in that order.
+fn seal_settings(prog: &Program) -> u32 {
+    let mut s = seal(SEAL_START, &prog.presets);
+    for w in prog.counter_presets.iter().chain(prog.set_points.iter()) {
+        s = seal(s, &w.to_le_bytes());
+    }
+    s
+}
+
 /// Record the present program as the one to keep over a warm reset.
 // Out of line: inlined at its call sites in the main loop it cost 132 bytes more.
 #[inline(never)]
 pub fn reseal(prog: &Program) {
-    let (sum_uf, sum_presets) = (seal(&prog.uf), seal(&prog.presets));
+    let (sum_uf, sum_presets) = (seal(SEAL_START, &prog.uf), seal_settings(prog));
     let kept = addr_of_mut!(KEPT).cast::<Kept>();
     // SAFETY: writes only the seal fields, disjoint from the engine the caller borrows;
     // no interrupt handler touches KEPT.

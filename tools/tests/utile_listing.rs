@@ -235,12 +235,12 @@ fn asm_then_dis_gives_the_canonical_listing() {
         // It says the same program as the source.
         let text = std::fs::read_to_string(&src).unwrap();
         assert_eq!(listing::parse(&stem, &dis), listing::parse(&stem, &text));
-        // Every line is `NNN NAME` or `Tm = v`.
+        // Every line is `NNN NAME`, `Tm = v`, `Cm = v` or `Sn = v`.
         for l in dis.lines() {
             let ok = (l.len() > 4
                 && l.as_bytes()[..3].iter().all(u8::is_ascii_digit)
                 && &l[3..4] == " ")
-                || (l.starts_with('T') && l.contains(" = "));
+                || (l.starts_with(['T', 'C', 'S']) && l.contains(" = "));
             assert!(ok, "{stem}: {l}");
         }
     }

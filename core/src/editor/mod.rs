@@ -211,14 +211,15 @@ impl Editor {
     }
 
     /// Autostart (D8 grounded at reset): load the newest stored program and run it at once,
-    /// drawing later. [`Mode::Edit`] (nothing changed) when no valid image is stored.
+    /// drawing later; the counts are those the reset kept (0 after a power-up). [`Mode::Edit`]
+    /// (nothing changed) when no valid image is stored.
     pub fn autostart<B: Board>(&mut self, eng: &mut Engine, b: &mut B) -> Mode {
         // Through `Tracked`, so LOAD's instance of the storage code serves here too.
         let b = &mut Tracked::new(b, false);
         if store::load_into(b, &mut eng.prog).is_err() {
             return Mode::Edit;
         }
-        eng.clear_runtime(b);
+        eng.clear_runtime_keeping_counts(b);
         self.begin_run(b);
         self.render = 0;
         Mode::Run

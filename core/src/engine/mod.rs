@@ -169,10 +169,17 @@ impl Engine {
         }
     }
 
-    /// Clear the runtime state (EX0, RUN): bit stack, ports, flip-flops, timers, counters,
-    /// edges, toggles, pending displays. The program and presets stay, and the board's
-    /// analog thresholds take the program's set-points. Outputs are driven off.
+    /// Clear the runtime state (EX0, RUN): bit stack, ports, flip-flops, timers, counts and
+    /// counter latches, edges, toggles, pending displays. The program and presets stay, and
+    /// the board's analog thresholds take the program's set-points. Outputs are driven off.
     pub fn clear_runtime<B: Board>(&mut self, b: &mut B) {
+        self.count = [0; COUNTERS];
+        self.clear_runtime_keeping_counts(b);
+    }
+
+    /// [`Engine::clear_runtime`] except the counts, which a warm reset keeps (SPEC §14): the
+    /// counter outputs are recomputed from them, and the first END counts nothing.
+    pub fn clear_runtime_keeping_counts<B: Board>(&mut self, b: &mut B) {
         // Field by field: rebuilding the whole Engine would put two copies of the 272-byte
         // Program on the AVR stack.
         self.bs = 0;
@@ -186,7 +193,10 @@ impl Engine {
         self.deadline = [0; UNITS];
         self.swept_ms = 0;
         self.views = 0;
-        self.clear_counters();
+        self.cu = 0;
+        self.cu_prev = 0xFF;
+        self.cr = 0;
+        self.refresh_counter_outputs();
         self.scan_end = END;
         b.set_points(self.prog.set_points);
         b.resync_inputs();
@@ -208,15 +218,6 @@ impl Engine {
                 self.tq &= !bit16(m);
             }
         }
-    }
-
-    /// Counts 0, latches 0, outputs 0, and no count on the next END (RUN, EX0, power-up).
-    pub fn clear_counters(&mut self) {
-        self.cu = 0;
-        self.cu_prev = 0xFF;
-        self.cr = 0;
-        self.cq = 0;
-        self.count = [0; COUNTERS];
     }
 
     /// Counter m's output for its count and preset: count ≥ preset, preset 0 giving 0.

@@ -31,7 +31,10 @@ pub(super) fn reference_hex(text: &[u8]) -> Option<(Vec<u8>, usize)> {
             0 if addr == image.len() && addr + usize::from(rec[0]) <= IMAGE_LEN => {
                 image.extend_from_slice(&rec[4..rec.len() - 1]);
             }
-            1 if rec[0] == 0 && image.len() == IMAGE_LEN => return Some((image, i)),
+            // A whole image of version 2 or of version 1.
+            1 if rec[0] == 0 && matches!(image.len(), IMAGE_LEN | image::IMAGE_LEN_V1) => {
+                return Some((image, i))
+            }
             _ => return None,
         }
         // Between records: control characters and blanks, then ':'.
@@ -76,7 +79,8 @@ pub fn ihex(data: &[u8]) -> Verdict {
                 return Err("the reader's file differs from the reference parser's".into());
             }
             if let Ok(p) = image::decode(img) {
-                if image::encode(&p).as_slice() != img.as_slice() {
+                // A version-1 image comes back as version 2; a version-2 one bit-exactly.
+                if img.len() == IMAGE_LEN && image::encode(&p).as_slice() != img.as_slice() {
                     return Err("decode then encode changed the image".into());
                 }
             }
@@ -117,17 +121,47 @@ pub fn hex_roundtrip(data: &[u8]) -> Verdict {
     Ok(())
 }
 
-/// The stored-image decoder: accepts exactly a 278-byte image with the magic, version 1
-/// and a good CRC, and then re-encodes to the same bytes.
+/// Whether `data` is a valid image by the rules of `docs/FORMAT.md`, checked here
+/// independently of the decoder: 298 bytes of version 2 or 278 of version 1, the magic, a
+/// good CRC, and (version 2) set-points of at most 1023.
+pub(super) fn reference_image_valid(data: &[u8]) -> bool {
+    let len = match data.get(image::VERSION_OFFSET) {
+        Some(2) => 298,
+        Some(1) => 278,
+        _ => return false,
+    };
+    if data.len() != len {
+        return false;
+    }
+    let set_points_ok = len == 278
+        || [292, 294].iter().all(|&at| u16::from_be_bytes([data[at], data[at + 1]]) <= 1023);
+    data[..2] == *b"uT"
+        && image::crc16(&data[..len - 2]).to_be_bytes() == data[len - 2..]
+        && set_points_ok
+}
+
+/// The stored-image decoder: accepts exactly the valid images of either version
+/// ([`reference_image_valid`]); a version-2 image re-encodes to the same bytes, a
+/// version-1 image to a version-2 image of the same program with counter presets and
+/// set-points 0.
 pub fn image_decode(data: &[u8]) -> Verdict {
     let res = image::decode(data);
-    let valid = data.len() == IMAGE_LEN
-        && data[..2] == image::MAGIC
-        && data[image::VERSION_OFFSET] == image::VERSION
-        && image::crc16(&data[..image::CRC_OFFSET]).to_be_bytes() == data[image::CRC_OFFSET..];
+    let valid = reference_image_valid(data);
     match res {
         Ok(p) if valid => {
-            if image::encode(&p).as_slice() == data {
+            let again = image::encode(&p);
+            let same = if data.len() == IMAGE_LEN {
+                again.as_slice() == data
+            } else {
+                again[..image::COUNTER_PRESETS_OFFSET] == data[..image::COUNTER_PRESETS_OFFSET]
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &b)| if i == image::VERSION_OFFSET { image::VERSION } else { b })
+                    .collect::<Vec<u8>>()[..]
+                    && p.counter_presets == [0; 8]
+                    && p.set_points == [0; 2]
+            };
+            if same {
                 Ok(())
             } else {
                 Err("a decoded image re-encodes differently".into())
@@ -139,7 +173,7 @@ pub fn image_decode(data: &[u8]) -> Verdict {
     }
 }
 
-/// EEPROM `load` on random contents: input bytes 0..280 are slot 0, 280..560 slot 1 (the
+/// EEPROM `load` on random contents: input bytes 0..300 are slot 0, 300..600 slot 1 (the
 /// rest erased). LOAD returns only a program whose slot holds a valid image (the newest
 /// valid one); STORE then works from any contents; and a STORE cut by a power failure after
 /// any number of writes leaves LOAD with the old or the new program, never anything else.
@@ -151,9 +185,14 @@ pub fn eeprom(data: &[u8]) -> Verdict {
         board.eeprom[at..at + chunk.len()].copy_from_slice(chunk);
     }
     let old = store::load(&mut board);
+    // The slot's image, by the length its version byte names.
     let slot_image = |b: &SimBoard, k: usize| {
         let at = usize::from(SLOT_ADDR[k]) + 2;
-        image::decode(&b.eeprom[at..at + IMAGE_LEN]).ok()
+        let len = match b.eeprom[at + image::VERSION_OFFSET] {
+            1 => image::IMAGE_LEN_V1,
+            _ => IMAGE_LEN,
+        };
+        image::decode(&b.eeprom[at..at + len]).ok()
     };
     let valid: Vec<Option<Program>> = (0..2).map(|k| slot_image(&board, k)).collect();
     match &old {
