@@ -112,6 +112,43 @@ pub fn image_byte(prog: &Program, crc: u16, i: usize) -> u8 {
     }
 }
 
+/// Put image byte `i` (a line, a preset, a byte of a counter preset or set-point) into
+/// `prog`: the inverse of [`image_byte`] for `UF_OFFSET..CRC_OFFSET`; other offsets change
+/// nothing. LOAD and READ fill a program with it one byte at a time.
+pub fn set_image_byte(prog: &mut Program, i: usize, byte: u8) {
+    if i < UF_OFFSET {
+    } else if i < PRESETS_OFFSET {
+        if let Some(l) = prog.uf.get_mut(i - UF_OFFSET) {
+            *l = byte;
+        }
+    } else if i < COUNTER_PRESETS_OFFSET {
+        if let Some(p) = prog.presets.get_mut(i - PRESETS_OFFSET) {
+            *p = byte;
+        }
+    } else if i < SET_POINTS_OFFSET {
+        set_word_byte(&mut prog.counter_presets, i - COUNTER_PRESETS_OFFSET, byte);
+    } else if i < CRC_OFFSET {
+        set_word_byte(&mut prog.set_points, i - SET_POINTS_OFFSET, byte);
+    }
+}
+
+/// Set byte `j` of `words` stored high byte first.
+fn set_word_byte(words: &mut [u16], j: usize, byte: u8) {
+    if let Some(w) = words.get_mut(j / 2) {
+        *w = if j & 1 == 0 {
+            (*w & 0x00FF) | (u16::from(byte) << 8)
+        } else {
+            (*w & 0xFF00) | u16::from(byte)
+        };
+    }
+}
+
+/// Whether a version-2 image whose set-point high bytes are `s6_high` and `s7_high` holds
+/// set-points of at most 1023 (a high byte of at most 3).
+pub fn set_points_ok(s6_high: u8, s7_high: u8) -> bool {
+    s6_high <= 3 && s7_high <= 3
+}
+
 /// Byte `j` of `words` stored high byte first.
 fn word_byte(words: &[u16], j: usize) -> u8 {
     let w = words.get(j / 2).copied().unwrap_or(0);
@@ -183,22 +220,14 @@ pub fn decode_into(img: &[u8], prog: &mut Program) -> Result<(), ImageError> {
     if crc16(body) != word_at(img, crc_at) {
         return Err(ImageError::Crc);
     }
-    let v2 = len == IMAGE_LEN;
-    let set_point = |k: usize| if v2 { word_at(img, SET_POINTS_OFFSET + 2 * k) } else { 0 };
-    if (0..SET_POINTS).any(|k| set_point(k) > SET_POINT_MAX) {
+    let high = |k: usize| img.get(SET_POINTS_OFFSET + 2 * k).copied().unwrap_or(0);
+    if len == IMAGE_LEN && !set_points_ok(high(0), high(1)) {
         return Err(ImageError::Value);
     }
-    for (i, line) in prog.uf.iter_mut().enumerate() {
-        *line = img.get(UF_OFFSET + i).copied().unwrap_or(0);
-    }
-    for (i, p) in prog.presets.iter_mut().enumerate() {
-        *p = img.get(PRESETS_OFFSET + i).copied().unwrap_or(0);
-    }
-    for (k, p) in prog.counter_presets.iter_mut().enumerate() {
-        *p = if v2 { word_at(img, COUNTER_PRESETS_OFFSET + 2 * k) } else { 0 };
-    }
-    for (k, p) in prog.set_points.iter_mut().enumerate() {
-        *p = set_point(k);
+    // A version-1 image ends at the counter presets: they and the set-points are 0.
+    for i in UF_OFFSET..CRC_OFFSET {
+        let byte = if i < crc_at { img.get(i).copied().unwrap_or(0) } else { 0 };
+        set_image_byte(prog, i, byte);
     }
     Ok(())
 }

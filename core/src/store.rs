@@ -17,10 +17,7 @@
 
 use super::board::Board;
 use super::engine::Program;
-use super::image::{
-    self, crc16_update, COUNTER_PRESETS_OFFSET, IMAGE_LEN, PRESETS_OFFSET, SET_POINTS_OFFSET,
-    UF_OFFSET,
-};
+use super::image::{self, crc16_update, IMAGE_LEN, SET_POINTS_OFFSET, UF_OFFSET};
 
 /// EEPROM address of each slot.
 pub const SLOT_ADDR: [u16; 2] = [0x000, 0x200];
@@ -84,12 +81,10 @@ fn slot_check<B: Board>(b: &mut B, slot: u16) -> Option<(u16, usize)> {
     }
     // As READ would: a set-point above 1023 makes the image invalid.
     if len == IMAGE_LEN
-        && (0..2).any(|k| {
-            let at = SET_POINTS_OFFSET + 2 * k;
-            let hi = b.eeprom_read(image_addr(slot, at));
-            let lo = b.eeprom_read(image_addr(slot, at + 1));
-            u16::from_be_bytes([hi, lo]) > image::SET_POINT_MAX
-        })
+        && !image::set_points_ok(
+            b.eeprom_read(image_addr(slot, SET_POINTS_OFFSET)),
+            b.eeprom_read(image_addr(slot, SET_POINTS_OFFSET + 2)),
+        )
     {
         return None;
     }
@@ -169,25 +164,10 @@ pub fn load<B: Board>(b: &mut B) -> Result<Program, LoadError> {
 /// 0.
 pub fn load_into<B: Board>(b: &mut B, prog: &mut Program) -> Result<(), LoadError> {
     let (slot, _, len) = newest(b).ok_or(LoadError::NoValidImage)?;
-    let v2 = len == IMAGE_LEN;
-    for (i, line) in prog.uf.iter_mut().enumerate() {
-        *line = b.eeprom_read(image_addr(slot, UF_OFFSET + i));
-    }
-    for (i, preset) in prog.presets.iter_mut().enumerate() {
-        *preset = b.eeprom_read(image_addr(slot, PRESETS_OFFSET + i));
-    }
-    let mut word = |at: usize| {
-        if v2 {
-            u16::from_be_bytes([b.eeprom_read(image_addr(slot, at)), b.eeprom_read(image_addr(slot, at + 1))])
-        } else {
-            0
-        }
-    };
-    for (k, p) in prog.counter_presets.iter_mut().enumerate() {
-        *p = word(COUNTER_PRESETS_OFFSET + 2 * k);
-    }
-    for (k, p) in prog.set_points.iter_mut().enumerate() {
-        *p = word(SET_POINTS_OFFSET + 2 * k);
+    // A version-1 image ends at the counter presets: they and the set-points are 0.
+    for i in UF_OFFSET..image::CRC_OFFSET {
+        let byte = if i < len - 2 { b.eeprom_read(image_addr(slot, i)) } else { 0 };
+        image::set_image_byte(prog, i, byte);
     }
     b.feed_watchdog();
     Ok(())

@@ -11,6 +11,7 @@ use core::ptr::{addr_of, addr_of_mut};
 
 use utile_core::board::Board;
 use utile_core::engine::{Engine, Program, COUNTERS, LINES, SET_POINTS, UNITS};
+use utile_core::image;
 use utile_core::opcodes::BLANK;
 
 /// Marks a sealed program ("uTiL").
@@ -90,13 +91,13 @@ fn seal(start: u32, bytes: &[u8]) -> u32 {
 /// The seal's starting sums.
 const SEAL_START: u32 = 0x5555;
 
-/// The seal of the timer presets, counter presets and set-points, in that order.
+/// The seal of the timer presets, counter presets and set-points, as their image bytes.
 fn seal_settings(prog: &Program) -> u32 {
-    let mut s = seal(SEAL_START, &prog.presets);
-    for w in prog.counter_presets.iter().chain(prog.set_points.iter()) {
-        s = seal(s, &w.to_le_bytes());
+    let mut bytes = [0u8; image::CRC_OFFSET - image::PRESETS_OFFSET];
+    for (i, b) in bytes.iter_mut().enumerate() {
+        *b = image::image_byte(prog, 0, image::PRESETS_OFFSET + i);
     }
-    s
+    seal(SEAL_START, &bytes)
 }
 
 /// Record the present program as the one to keep over a warm reset.
