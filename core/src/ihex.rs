@@ -48,7 +48,7 @@ pub enum HexEvent {
 
 /// Send `image` as Intel HEX: data records of 16 bytes from address 0, upper-case, CR LF
 /// line ends, then the end-of-file record `:00000001FF` CR LF. The last data record is
-/// shorter when the length is not a multiple of 16 (278 = 17 × 16 + 6).
+/// shorter when the length is not a multiple of 16 (298 = 18 × 16 + 10).
 pub fn write_hex(image: &[u8], out: &mut impl FnMut(u8)) {
     write_hex_with(image.len(), |i| image.get(i).copied().unwrap_or(0), out);
 }
