@@ -76,6 +76,29 @@ pub fn nops_program() -> Program {
     p
 }
 
+/// Every counter counting (C0..C5 on A0..A5, C6 on CLKA, C7 on CLKB), each with a reset
+/// (A5 inverted) and its output on Yn, and both analog thresholds to U0/U1.
+pub fn all_counters_program() -> Program {
+    let mut words: Vec<String> = Vec::new();
+    for m in 0..8 {
+        let input = match m {
+            0..=5 => format!("A{m}."),
+            6 => "CLKA.".into(),
+            _ => "CLKB.".into(),
+        };
+        words.extend([input, format!(".CU{m}"), "A5.".into(), "!".into(), format!(".CR{m}")]);
+    }
+    for m in 0..8 {
+        words.extend([format!("CQ{m}."), format!(".Y{m}")]);
+    }
+    words.extend(["H6.".into(), ".U0".into(), "H7.".into(), ".U1".into(), "END".into()]);
+    let refs: Vec<&str> = words.iter().map(String::as_str).collect();
+    let mut prog = program(&refs);
+    prog.counter_presets = [3, 5, 10, 100, 1000, 10_000, 2, 4];
+    prog.set_points = [512, 256];
+    prog
+}
+
 /// Every valid opcode once (END last), presets 10 so the timers run.
 pub fn every_opcode_program() -> Program {
     let mut p = Program::blank();
