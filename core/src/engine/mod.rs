@@ -261,6 +261,21 @@ impl Engine {
         }
     }
 
+    /// Milliseconds until timer m falls, 0 when it is not running or its time has passed
+    /// (a TQ bit the next scan retires reads as 0 here already).
+    pub fn time_left_ms(&self, m: u8, now_ms: u32) -> u32 {
+        if self.tq & bit16(m) == 0 {
+            return 0;
+        }
+        let due = self.deadline.get(usize::from(m)).copied().unwrap_or(now_ms);
+        let left = due.wrapping_sub(now_ms) as i32;
+        if left > 0 {
+            left as u32
+        } else {
+            0
+        }
+    }
+
     /// The pending PPA/PPY/PPU/PPV value, if a display is still owed.
     pub fn port_view(&self) -> Option<u8> {
         (self.views & VIEW_PORT != 0).then_some(self.port_view)

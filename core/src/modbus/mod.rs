@@ -8,7 +8,10 @@
 //! - [`map`]: the four tables a slave serves, as a trait;
 //! - [`request`]: a request checked against the map (exceptions 01, 02, 03) and its writes;
 //! - [`reply`]: the reply produced byte by byte straight from the map, CRC included, so no
-//!   reply buffer exists.
+//!   reply buffer exists;
+//! - [`slave`]: one slave on the line: frames in, requests carried out, replies out, drops
+//!   counted, whether a master is active;
+//! - [`plc`]: §13's map on top of the engine.
 //!
 //! Words are the Modbus specification's: coil, discrete input, holding register, input
 //! register, function code, exception.
@@ -16,8 +19,10 @@
 pub mod crc;
 pub mod frame;
 pub mod map;
+pub mod plc;
 pub mod reply;
 pub mod request;
+pub mod slave;
 
 /// Function code 01: read coils.
 pub const READ_COILS: u8 = 0x01;

@@ -1,0 +1,218 @@
+//! The map of SPEC §13 on top of the engine's own state (no second copy of the I/O image):
+//! coils Y/U/V, discrete inputs A/Q/TQ/CQ/H, holding registers for the presets and
+//! set-points, input registers for status, STAT's figures, counts, readings, time left.
+
+use crate::analog;
+use crate::board::Board;
+use crate::engine::{Engine, COUNTERS, SET_POINTS, UNITS};
+use crate::stats::{self, ScanStats};
+
+use super::map::{Map, Table};
+
+/// Input register 0, bit 0: the program runs.
+pub const STATUS_RUNNING: u16 = 1 << 0;
+/// Input register 0, bit 1: the last reset was the watchdog's.
+pub const STATUS_WATCHDOG: u16 = 1 << 1;
+/// Input register 0, bit 2: EEPROM holds a valid stored program.
+pub const STATUS_STORED: u16 = 1 << 2;
+/// Input register 0, bit 3: received bytes were lost since RUN.
+pub const STATUS_OVERRUN: u16 = 1 << 3;
+
+/// First holding register of the counter presets.
+pub const HR_COUNTER_PRESETS: u16 = UNITS as u16;
+/// First holding register of the set-points.
+pub const HR_SET_POINTS: u16 = HR_COUNTER_PRESETS + COUNTERS as u16;
+/// First input register of the counts.
+pub const IR_COUNTS: u16 = 8;
+/// First input register of the analog readings.
+pub const IR_READINGS: u16 = IR_COUNTS + COUNTERS as u16;
+/// First input register of the timers' time left.
+pub const IR_TIME_LEFT: u16 = 32;
+
+/// What the input registers report besides the engine, kept up to date by the firmware.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Status {
+    /// `STATUS_*` bits.
+    pub flags: u16,
+    /// STAT's figures since RUN (min/max in timer ticks, scans, run time).
+    pub stats: ScanStats,
+    /// Received bytes lost since reset.
+    pub overruns: u16,
+    /// Modbus frames dropped since RUN.
+    pub dropped: u16,
+}
+
+/// The text of report server ID after the run indicator.
+const ID: &[u8] = concat!("uTile ", env!("CARGO_PKG_VERSION")).as_bytes();
+
+/// The engine, its board and the status as the slave's four tables.
+pub struct PlcMap<'a, B: Board> {
+    /// The engine: its ports, flip-flops, timers, counters and program.
+    pub eng: &'a mut Engine,
+    /// The board: inputs, analog readings, the clock.
+    pub b: &'a mut B,
+    /// Status and figures.
+    pub status: &'a Status,
+}
+
+/// Bit `n` (0..7) of `byte`.
+fn bit(byte: u8, n: u16) -> u16 {
+    u16::from((byte >> (n & 7)) & 1)
+}
+
+/// Bit `n` (0..15) of `word`.
+fn bit16(word: u16, n: u16) -> u16 {
+    (word >> (n & 15)) & 1
+}
+
+impl<B: Board> PlcMap<'_, B> {
+    /// The port byte that coil `addr` (0..23) lives in.
+    fn port(&mut self, addr: u16) -> &mut u8 {
+        match addr / 8 {
+            0 => &mut self.eng.py,
+            1 => &mut self.eng.pu,
+            _ => &mut self.eng.pv,
+        }
+    }
+
+    fn input_register(&mut self, addr: u16) -> u16 {
+        let st = self.status.stats;
+        let us = |ticks: u16| {
+            let t = if st.count == 0 { 0 } else { ticks };
+            ScanStats::ticks_to_us(u32::from(t)).min(0xFFFF) as u16
+        };
+        match addr {
+            0 => self.status.flags,
+            1 => us(st.min),
+            2 => stats::per_1000(st.run_ms, st.count).min(0xFFFF) as u16,
+            3 => us(st.max),
+            4 => (st.count >> 16) as u16,
+            5 => st.count as u16,
+            6 => self.status.overruns,
+            7 => self.status.dropped,
+            IR_COUNTS..IR_READINGS => {
+                let m = usize::from(addr - IR_COUNTS);
+                self.eng.count.get(m).copied().unwrap_or(0)
+            }
+            IR_READINGS.. if addr < IR_READINGS + SET_POINTS as u16 => {
+                let readings = self.b.analog_readings();
+                readings.get(usize::from(addr - IR_READINGS)).copied().unwrap_or(0)
+            }
+            _ => {
+                let now = self.b.now_ms();
+                let left = self.eng.time_left_ms((addr - IR_TIME_LEFT) as u8, now);
+                // 0.1 s steps, rounded up; at most 65535 (6,553.5 s).
+                if left > 6_553_400 {
+                    0xFFFF
+                } else {
+                    stats::div(left + 99, 100) as u16
+                }
+            }
+        }
+    }
+}
+
+impl<B: Board> Map for PlcMap<'_, B> {
+    fn contains(&self, table: Table, addr: u16) -> bool {
+        match table {
+            Table::Coils => addr < 24,
+            Table::DiscreteInputs => addr < 6 || (8..50).contains(&addr),
+            Table::HoldingRegisters => addr < HR_SET_POINTS + SET_POINTS as u16,
+            Table::InputRegisters => {
+                addr < IR_READINGS + SET_POINTS as u16
+                    || (IR_TIME_LEFT..IR_TIME_LEFT + UNITS as u16).contains(&addr)
+            }
+        }
+    }
+
+    fn read(&mut self, table: Table, addr: u16) -> u16 {
+        match table {
+            Table::Coils => {
+                let byte = *self.port(addr);
+                bit(byte, addr)
+            }
+            Table::DiscreteInputs => match addr {
+                0..=5 => bit(self.b.inputs(), addr),
+                8..=23 => bit16(self.eng.q, addr - 8),
+                24..=39 => {
+                    let now = self.b.now_ms();
+                    u16::from(self.eng.time_left_ms((addr - 24) as u8, now) != 0)
+                }
+                40..=47 => bit(self.eng.cq, addr - 40),
+                _ => bit(self.b.analog_bits(), addr - 48 + u16::from(analog::FIRST_CHANNEL)),
+            },
+            Table::HoldingRegisters => match addr {
+                0..HR_COUNTER_PRESETS => {
+                    u16::from(self.eng.prog.presets.get(usize::from(addr)).copied().unwrap_or(0))
+                }
+                HR_COUNTER_PRESETS..HR_SET_POINTS => {
+                    let m = usize::from(addr - HR_COUNTER_PRESETS);
+                    self.eng.prog.counter_presets.get(m).copied().unwrap_or(0)
+                }
+                _ => {
+                    let k = usize::from(addr - HR_SET_POINTS);
+                    self.eng.prog.set_points.get(k).copied().unwrap_or(0)
+                }
+            },
+            Table::InputRegisters => self.input_register(addr),
+        }
+    }
+
+    fn accepts(&self, addr: u16, value: u16) -> bool {
+        if addr < HR_COUNTER_PRESETS {
+            value <= 255
+        } else if addr < HR_SET_POINTS {
+            true
+        } else {
+            value <= analog::MAX
+        }
+    }
+
+    fn write(&mut self, table: Table, addr: u16, value: u16) {
+        match table {
+            Table::Coils => {
+                let mask = 1u8 << (addr & 7);
+                let byte = self.port(addr);
+                if value != 0 {
+                    *byte |= mask;
+                } else {
+                    *byte &= !mask;
+                }
+            }
+            Table::HoldingRegisters => {
+                if addr < HR_COUNTER_PRESETS {
+                    if let Some(p) = self.eng.prog.presets.get_mut(usize::from(addr)) {
+                        *p = value as u8;
+                    }
+                } else if addr < HR_SET_POINTS {
+                    let m = usize::from(addr - HR_COUNTER_PRESETS);
+                    if let Some(p) = self.eng.prog.counter_presets.get_mut(m) {
+                        *p = value;
+                    }
+                    self.eng.refresh_counter_outputs();
+                } else {
+                    let k = usize::from(addr - HR_SET_POINTS);
+                    if let Some(p) = self.eng.prog.set_points.get_mut(k) {
+                        *p = value;
+                    }
+                    let sp = self.eng.prog.set_points;
+                    self.b.set_points(sp);
+                }
+            }
+            // Read-only tables: the codec never writes them.
+            Table::DiscreteInputs | Table::InputRegisters => {}
+        }
+    }
+
+    fn running(&self) -> bool {
+        self.status.flags & STATUS_RUNNING != 0
+    }
+
+    fn id_len(&self) -> u8 {
+        ID.len() as u8
+    }
+
+    fn id_byte(&self, i: u8) -> u8 {
+        ID.get(usize::from(i)).copied().unwrap_or(0)
+    }
+}
