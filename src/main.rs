@@ -9,6 +9,8 @@
 
 #[cfg(target_arch = "avr")]
 mod hal;
+#[cfg(target_arch = "avr")]
+mod modbus;
 
 /// On the host the firmware is an empty program, so `cargo test --workspace` builds.
 #[cfg(not(target_arch = "avr"))]
@@ -28,6 +30,7 @@ mod firmware {
     use utile_core::stats::ScanStats;
     use crate::hal;
     use crate::hal::scan::{self, Exit, RunState};
+    use crate::modbus;
 
     /// Byte that makes a `hang-test` build stop feeding the watchdog (FS, Ctrl-\).
     #[cfg(feature = "hang-test")]
@@ -70,7 +73,7 @@ mod firmware {
 
         loop {
             if mode == Mode::Run {
-                run(eng, editor, &mut board);
+                run(eng, editor, &mut board, boot.mcusr);
                 mode = Mode::Edit;
             }
             board.feed_watchdog();
@@ -97,15 +100,18 @@ mod firmware {
     }
 
     /// RUN mode until KEY breaks out. The threaded scan (`hal::scan`) runs scan after scan
-    /// and comes back only for KEY's received bytes, pending displays (every 16th scan) and
-    /// each 65,536th scan; STAT's figures come from its bookkeeping.
+    /// and comes back only for KEY's break key, pending displays and Modbus work (every 16th
+    /// scan) and each 65,536th scan; STAT's figures come from its bookkeeping. The line is a
+    /// Modbus slave's meanwhile (`modbus.rs`); while a master is active the terminal is quiet.
     #[inline(always)]
-    fn run(eng: &mut Engine, editor: &mut Editor, board: &mut hal::Nano) {
+    fn run(eng: &mut Engine, editor: &mut Editor, board: &mut hal::Nano, mcusr: u8) {
         let mut st = RunState::new(board.stats_ticks());
         let mut wraps: u16 = 0;
+        let mut server = modbus::Server::begin(board, mcusr);
         loop {
             board.feed_watchdog();
-            let want = editor.has_output(eng);
+            let quiet = server.master_active(board);
+            let want = !quiet && editor.has_output(eng);
             match scan::run(eng, &mut st, want) {
                 Exit::Key => {
                     // KEY takes one received byte; only `/` stops the program.
@@ -114,7 +120,14 @@ mod firmware {
                     }
                 }
                 Exit::Scans => {
-                    if editor.has_output(eng) {
+                    if server.visit(eng, board, &st, wraps) == modbus::After::Written {
+                        hal::kept::reseal(&eng.prog);
+                    }
+                    if server.master_active(board) {
+                        // The terminal waits: displays requested meanwhile are dropped.
+                        eng.take_port_view();
+                        eng.take_bs_view();
+                    } else if editor.has_output(eng) {
                         editor.after_scan(eng, board);
                     }
                 }
@@ -122,6 +135,7 @@ mod firmware {
                 Exit::Refused => break,
             }
         }
+        server.end();
         editor.stats = ScanStats {
             min: st.min,
             max: st.max,
@@ -131,7 +145,7 @@ mod firmware {
         editor.on_break(eng, board);
     }
 
-    // SAFETY (all four handlers): an AVR interrupt handler runs with interrupts disabled
+    // SAFETY (all six handlers): an AVR interrupt handler runs with interrupts disabled
     // (the I flag is cleared on entry and not set again here), which is what a
     // `CriticalSection` token stands for.
     #[avr_device::interrupt(atmega328p)]
@@ -144,6 +158,18 @@ mod firmware {
     fn ADC() {
         // SAFETY: see above.
         hal::adc::on_conversion(unsafe { CriticalSection::new() });
+    }
+
+    #[avr_device::interrupt(atmega328p)]
+    fn TIMER1_COMPB() {
+        // SAFETY: see above.
+        hal::serial::on_silence(unsafe { CriticalSection::new() });
+    }
+
+    #[avr_device::interrupt(atmega328p)]
+    fn USART_TX() {
+        // SAFETY: see above.
+        hal::serial::on_tx_complete(unsafe { CriticalSection::new() });
     }
 
     #[avr_device::interrupt(atmega328p)]

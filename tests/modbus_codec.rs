@@ -354,7 +354,7 @@ fn the_largest_reads_fit_a_frame_and_the_limits_hold() {
     // The top of the address space: 0xFFFF plus one register is past it.
     assert!(matches!(
         handle(&[3, 0xFF, 0xFF, 0, 1], &mut w),
-        Answer::Registers { .. }
+        Answer::Read { .. }
     ));
     assert!(matches!(
         handle(&[3, 0xFF, 0xFF, 0, 2], &mut w),

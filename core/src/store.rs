@@ -26,6 +26,34 @@ pub const SEQ_LEN: u16 = 2;
 /// Bytes a slot occupies: sequence number + image.
 pub const SLOT_LEN: u16 = SEQ_LEN + IMAGE_LEN as u16;
 
+/// EEPROM address of the Modbus slave address (SPEC §13, `ADDR`), apart from the program
+/// slots; the next cell holds its complement, so an erased or damaged cell reads as unset.
+pub const ADDR_CELL: u16 = 0x3FE;
+/// The slave address until `ADDR` sets another.
+pub const DEFAULT_ADDRESS: u8 = 1;
+
+/// The Modbus slave address kept in EEPROM (1..247), or [`DEFAULT_ADDRESS`].
+pub fn slave_address<B: Board>(b: &mut B) -> u8 {
+    let a = b.eeprom_read(ADDR_CELL);
+    let check = b.eeprom_read(ADDR_CELL + 1);
+    if (1..=crate::modbus::MAX_ADDRESS).contains(&a) && check == !a {
+        a
+    } else {
+        DEFAULT_ADDRESS
+    }
+}
+
+/// Keep `address` (1..247) as the Modbus slave address; false (nothing written) for any
+/// other value.
+pub fn set_slave_address<B: Board>(b: &mut B, address: u8) -> bool {
+    if !(1..=crate::modbus::MAX_ADDRESS).contains(&address) {
+        return false;
+    }
+    b.eeprom_update(ADDR_CELL, address);
+    b.eeprom_update(ADDR_CELL + 1, !address);
+    slave_address(b) == address
+}
+
 /// STORE failed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum StoreError {

@@ -2,7 +2,8 @@
 //! D8/D9 jumpers with their pull-ups.
 //!
 //! Y0..Y5 = PD2..PD7, Y6 = PB4, Y7 = PB5; A0..A5 = PC0..PC5; D8 = PB0 (autostart), D9 = PB1
-//! (out_sense), both active low.
+//! (out_sense), both active low; D10 = PB2, the RS-485 driver enable (SPEC §13): an output,
+//! low from reset, high only while a Modbus reply goes out.
 
 use core::sync::atomic::{AtomicU8, Ordering};
 
@@ -12,8 +13,10 @@ use utile_core::ticker::INPUT_MASK;
 use super::isr_cell::IsrCell;
 use super::regs::{regs, wr};
 
-/// PORTB bits that are pull-ups, never outputs: D8 (PB0), D9 (PB1), unused D10/D11 (PB2/PB3).
-const PORTB_PULLUPS: u8 = 0x0F;
+/// PORTB bits that are pull-ups, never outputs: D8 (PB0), D9 (PB1), unused D11 (PB3).
+const PORTB_PULLUPS: u8 = 0x0B;
+/// PORTB bit of the driver enable D10 (PB2), kept as it is by every other PORTB write.
+pub(crate) const DE_BIT: u8 = 0x04;
 /// PORTB bits of Y6 (PB4) and Y7 (PB5).
 const PORTB_Y: u8 = 0x30;
 /// PORTD bits of Y0..Y5 (PD2..PD7).
@@ -60,10 +63,19 @@ pub(super) fn init() {
     wr!(dp.PORTB.portb(), PORTB_PULLUPS | ((pins >> 2) & PORTB_Y));
     // PD2..PD7 outputs.
     wr!(dp.PORTD.ddrd(), PORTD_Y);
-    // PB4/PB5 outputs.
-    wr!(dp.PORTB.ddrb(), PORTB_Y);
+    // PB4/PB5 (Y6/Y7) and PB2 (D10, driver enable, low) outputs.
+    wr!(dp.PORTB.ddrb(), PORTB_Y | DE_BIT);
     // SAFETY: the closure does not re-enter OUTPUTS.
     interrupt::free(|cs| unsafe { OUTPUTS.with(cs, |o| o.invert = invert) });
+}
+
+/// Drive D10, the RS-485 transceiver's driver enable.
+#[inline(always)]
+pub(crate) fn driver_enable(_cs: CriticalSection, on: bool) {
+    let dp = regs();
+    let b = dp.PORTB.portb().read().bits();
+    // PORTB with only D10 changed.
+    wr!(dp.PORTB.portb(), if on { b | DE_BIT } else { b & !DE_BIT });
 }
 
 /// The raw levels of A0..A5 (pressed = 0).
@@ -95,9 +107,10 @@ pub(crate) fn drive_pins(_cs: CriticalSection, pins: u8) {
     let d = (dp.PORTD.portd().read().bits() & !PORTD_Y) | (pins << 2);
     // Y0..Y5 on PD2..PD7; PD0/PD1 (USART) keep their bits.
     wr!(dp.PORTD.portd(), d);
-    let b = PORTB_PULLUPS | ((pins >> 2) & PORTB_Y);
-    // Y6/Y7 on PB4/PB5, pull-ups on PB0..PB3, PB6/PB7 (crystal) 0.
-    if dp.PORTB.portb().read().bits() != b {
+    let now = dp.PORTB.portb().read().bits();
+    let b = PORTB_PULLUPS | ((pins >> 2) & PORTB_Y) | (now & DE_BIT);
+    // Y6/Y7 on PB4/PB5, pull-ups on PB0, PB1, PB3, D10 as it was, PB6/PB7 (crystal) 0.
+    if now != b {
         wr!(dp.PORTB.portb(), b);
     }
 }

@@ -274,35 +274,6 @@ utile_scan_exit:
     ret
     .size utile_run, . - utile_run
 
-; END, PY changed: copy it to the pins (out_sense applied), as `drive_pins` does.
-utile_scan_outputs:
-    cli
-    sts U_OUT_PY, r19
-    sts U_LAST_PY, r19
-    lds r22, U_OUT_INVERT
-    eor r22, r19
-    ; Y0..Y5 on PD2..PD7; PD0/PD1 (USART) keep their bits.
-    in r23, PORTD_IO
-    andi r23, 0x03
-    mov r24, r22
-    lsl r24
-    lsl r24
-    or r23, r24
-    out PORTD_IO, r23
-    ; Y6/Y7 on PB4/PB5, pull-ups on PB0..PB3; written only when it changes (simavr forgets
-    ; a driven level on a pulled-up pin at every PORT write).
-    mov r24, r22
-    lsr r24
-    lsr r24
-    andi r24, 0x30
-    ori r24, 0x0F
-    in r23, PORTB_IO
-    cp r23, r24
-    breq 1f
-    out PORTB_IO, r24
-1:  sei
-    rjmp utile_scan_stats
-
 ; Every 16th END (the scan count's high byte not yet carried into): leave for the editor
 ; if it asked, and when the scan count wrapped.
 utile_scan_every16:
@@ -428,6 +399,12 @@ utile_scan_tk_400000:
     sts U_DEADLINE + 63, r22
     sei
     NEXT
+
+; ALn. / ATn. with the edge seen (TAKE_EDGE): rare, so in front of the table.
+utile_scan_leading:
+    EDGE_TAIL U_LEADING
+utile_scan_trailing:
+    EDGE_TAIL U_TRAILING
 
 ; End of the cold code: `cargo fw` reports the gap from here to the table.
 utile_scan_cold_end:
@@ -735,6 +712,39 @@ utile_scan_clkb:
 utile_scan_clkc:
     PUSH_RAM U_CLOCKS, 2
 
+; END, PY changed: copy it to the pins (out_sense applied), as `drive_pins` does.
+utile_scan_outputs:
+    cli
+    sts U_OUT_PY, r19
+    sts U_LAST_PY, r19
+    lds r22, U_OUT_INVERT
+    eor r22, r19
+    ; Y0..Y5 on PD2..PD7; PD0/PD1 (USART) keep their bits.
+    in r23, PORTD_IO
+    andi r23, 0x03
+    mov r24, r22
+    lsl r24
+    lsl r24
+    or r23, r24
+    out PORTD_IO, r23
+    ; Y6/Y7 on PB4/PB5, pull-ups on PB0, PB1, PB3, the driver enable D10 (PB2) as it is;
+    ; written only when it changes (simavr forgets a driven level on a pulled-up pin at
+    ; every PORT write).
+    mov r24, r22
+    lsr r24
+    lsr r24
+    andi r24, 0x30
+    ori r24, 0x0B
+    in r23, PORTB_IO
+    mov r25, r23
+    andi r25, 0x04
+    or r24, r25
+    cp r23, r24
+    breq 1f
+    out PORTB_IO, r24
+1:  sei
+    rjmp utile_scan_stats
+
 ; END with a count input changed: each 0 -> 1 change since the last END counts (saturating
 ; at 65535) unless the reset latch is 1, and sets CQ when the count reaches a preset other
 ; than 0, as `Engine::count_edges` does. Counts are 16 bits at U_COUNT, presets CP_OFF
@@ -788,12 +798,6 @@ utile_scan_cr_tail:
     sts U_CQ, r22
     ldi r31, pm_hi8(utile_scan_table)
     NEXT
-
-; ALn. / ATn. with the edge seen (TAKE_EDGE).
-utile_scan_leading:
-    EDGE_TAIL U_LEADING
-utile_scan_trailing:
-    EDGE_TAIL U_TRAILING
 
     .irp n,0,1,2,3,4,5
 utile_scan_a\n:

@@ -51,8 +51,16 @@ impl RunState {
     }
 }
 
-/// Nonzero while the editor wants the CPU every 16th scan (the RUN screen is being drawn).
+/// Nonzero while the editor wants the CPU every 16th scan (the RUN screen is being drawn),
+/// or the Modbus side does (a frame is coming in, ended, or a reply goes out).
 static WANT: AtomicU8 = AtomicU8::new(0);
+
+/// An interrupt wants the main loop soon (a Modbus byte or frame end): the scan comes back
+/// at its next 16th END.
+#[inline(always)]
+pub(crate) fn want_cpu() {
+    WANT.store(1, Ordering::Relaxed);
+}
 
 const EXIT_KEY: u8 = 1;
 const EXIT_SCANS: u8 = 2;
@@ -67,7 +75,10 @@ pub fn run(eng: &mut Engine, st: &mut RunState, want: bool) -> Exit {
     if !core::ptr::eq(eng, kept::engine_ptr()) {
         return Exit::Refused;
     }
-    WANT.store(u8::from(want), Ordering::Relaxed);
+    // With interrupts off: a Modbus interrupt's wish set just before would be lost.
+    avr_device::interrupt::free(|cs| {
+        WANT.store(u8::from(want || serial::modbus_busy(cs)), Ordering::Relaxed);
+    });
     match enter(eng, st) {
         EXIT_KEY => Exit::Key,
         EXIT_WRAP => Exit::Wrap,

@@ -2,10 +2,18 @@
 //!
 //! Receiving never loses a byte silently: when the receive ring is full (or the USART itself
 //! overran), the loss is counted for STAT. Sending waits only when the transmit ring is full.
+//!
+//! In RUN mode the line is also a Modbus RTU slave's (SPEC §13): received bytes go to the
+//! core's [`Slave`] instead of the ring, stamped with Timer1 to find gaps inside a frame;
+//! Timer1's compare B marks the 3.5-character silence that ends a frame; a reply raises the
+//! driver enable D10 and the transmit-complete interrupt lowers it after the last stop bit.
+
+use core::sync::atomic::{AtomicU8, Ordering};
 
 use avr_device::interrupt::{self, CriticalSection};
+use utile_core::modbus::slave::Slave;
 
-use super::{regs, wr, IsrCell};
+use super::{pins, regs, wr, IsrCell};
 
 /// A byte ring of `N` entries (`N` a power of two dividing 256), indexed by wrapping `u8`s.
 pub(crate) struct Ring<const N: usize> {
@@ -95,6 +103,41 @@ static TX: IsrCell<Ring<TX_SIZE>> = IsrCell::new(Ring::new());
 const UCSR0B_ON: u8 = 0x98;
 /// UCSR0B bit UDRIE0 (data register empty interrupt).
 const UDRIE0: u8 = 0x20;
+/// UCSR0B bit TXCIE0 (transmit complete interrupt): on while a reply goes out.
+const TXCIE0: u8 = 0x40;
+
+/// Timer1 counts (0.5 µs) of more than 1.5 characters at 19200 8N1 (a character is 10 bits,
+/// 520.8 µs): a silence this long inside a frame breaks it.
+const GAP_TICKS: u16 = 1563;
+/// Timer1 counts of 3.5 characters (1.823 ms): the silence that ends a frame.
+const SILENCE_TICKS: u16 = 3646;
+
+/// The Modbus side of the line.
+pub(crate) struct Line {
+    /// The slave: the frame being received, the reply being sent, the drop count.
+    pub(crate) slave: Slave,
+    /// Timer1 count at the last received byte.
+    last: u16,
+    /// TXCIE0 while a reply goes out, else 0: every UCSR0B write keeps it.
+    txcie: u8,
+    /// The whole reply is in the transmit ring: transmit complete ends it.
+    queued: bool,
+}
+
+/// The Modbus slave and its timing, shared with the receive and timer interrupts.
+pub(crate) static LINE: IsrCell<Line> = IsrCell::new(Line {
+    slave: Slave::new(),
+    last: 0,
+    txcie: 0,
+    queued: false,
+});
+/// Nonzero while the line serves Modbus (RUN mode); in EDIT mode bytes go to the ring.
+static MODBUS: AtomicU8 = AtomicU8::new(0);
+/// Nonzero when a frame's closing silence has passed and the main loop has not judged it.
+static FRAME_END: AtomicU8 = AtomicU8::new(0);
+/// Nonzero while the transmitter is known idle without TXC0: nothing sent since reset, or
+/// the last reply's transmit-complete interrupt (which clears TXC0) was the last event.
+static TX_IDLE: AtomicU8 = AtomicU8::new(1);
 
 /// Set up USART0: 19200 baud (UBRR0 = 51 at 16 MHz: 19231 baud, +0.2 %), 8N1.
 pub(crate) fn init() {
@@ -109,13 +152,36 @@ pub(crate) fn init() {
     wr!(dp.USART0.ucsr0b(), UCSR0B_ON);
 }
 
-/// USART receive-complete interrupt: move the byte into the ring or count it lost.
+/// USART receive-complete interrupt: move the byte into the ring or count it lost; in RUN
+/// mode hand it to the Modbus slave and time the silence after it.
 #[inline(always)]
 pub fn on_rx(cs: CriticalSection) {
     let dp = regs();
     // DOR0 (bit 3): the USART already lost a byte before this one.
     let hw_overrun = dp.USART0.ucsr0a().read().bits() & 0x08 != 0;
     let byte = dp.USART0.udr0().read().bits();
+    if MODBUS.load(Ordering::Relaxed) != 0 {
+        let now = dp.TC1.tcnt1().read().bits();
+        // SAFETY: the closure does not re-enter LINE.
+        unsafe {
+            LINE.with(cs, |l| {
+                l.slave.push(byte, now.wrapping_sub(l.last) > GAP_TICKS);
+                l.last = now;
+            })
+        };
+        // OCR1B: compare B fires when the silence after this byte is long enough.
+        wr!(dp.TC1.ocr1b(), now.wrapping_add(SILENCE_TICKS));
+        // TIFR1: clear OCF1B (a one clears it), so only the new compare counts.
+        wr!(dp.TC1.tifr1(), 0x04);
+        // TIMSK1: OCIE1B.
+        wr!(dp.TC1.timsk1(), 0x04);
+        if hw_overrun {
+            // SAFETY: the closure does not re-enter RX.
+            unsafe { RX.with(cs, |rx| rx.overruns = rx.overruns.saturating_add(1)) };
+        }
+        super::scan::want_cpu();
+        return;
+    }
     // SAFETY: the closure does not re-enter RX.
     unsafe {
         RX.with(cs, |rx| {
@@ -132,9 +198,126 @@ pub fn on_udre(cs: CriticalSection) {
     // SAFETY: the closure does not re-enter TX.
     match unsafe { TX.with(cs, |tx| tx.pop()) } {
         Some(byte) => wr!(dp.USART0.udr0(), byte),
-        // UCSR0B without UDRIE0: nothing more to send.
-        None => wr!(dp.USART0.ucsr0b(), UCSR0B_ON),
+        // UCSR0B without UDRIE0: nothing more to send (TXCIE0 kept while a reply goes out).
+        None => wr!(dp.USART0.ucsr0b(), UCSR0B_ON | txcie(cs)),
     }
+}
+
+/// TXCIE0 if a reply is going out (every UCSR0B write keeps it).
+#[inline(always)]
+fn txcie(cs: CriticalSection) -> u8 {
+    // SAFETY: the closure does not re-enter LINE.
+    unsafe { LINE.with(cs, |l| l.txcie) }
+}
+
+/// Timer1 compare B: 3.5 characters of silence after the last byte, the frame is complete.
+#[inline(always)]
+pub fn on_silence(_cs: CriticalSection) {
+    // TIMSK1: compare B off until the next byte.
+    wr!(regs().TC1.timsk1(), 0);
+    FRAME_END.store(1, Ordering::Relaxed);
+    super::scan::want_cpu();
+}
+
+/// USART transmit complete: the line went idle. After the last byte of a reply, the driver
+/// enable falls (its last stop bit has left).
+#[inline(always)]
+pub fn on_tx_complete(cs: CriticalSection) {
+    // UCSR0A: UDRE0 (bit 5). A real chip sets TXC0 only with UDR0 empty; a simulator that
+    // raises it after every byte is held to that here.
+    let udr_empty = regs().USART0.ucsr0a().read().bits() & 0x20 != 0;
+    // SAFETY: the closure does not re-enter TX.
+    let empty = udr_empty && unsafe { TX.with(cs, |tx| tx.len() == 0) };
+    // SAFETY: the closure does not re-enter LINE.
+    let done = unsafe {
+        LINE.with(cs, |l| {
+            let done = empty && l.queued;
+            if done {
+                l.txcie = 0;
+                l.queued = false;
+            }
+            done
+        })
+    };
+    if done {
+        TX_IDLE.store(1, Ordering::Relaxed);
+        pins::driver_enable(cs, false);
+        // UCSR0B: TXCIE0 off (the ring is empty: no UDRIE0 either).
+        wr!(regs().USART0.ucsr0b(), UCSR0B_ON);
+    }
+}
+
+/// Switch the line between the terminal's ring (EDIT mode) and the Modbus slave (RUN mode).
+/// Either way the slave starts from a clean line.
+pub(crate) fn serve_modbus(on: bool) {
+    interrupt::free(|cs| {
+        MODBUS.store(u8::from(on), Ordering::Relaxed);
+        FRAME_END.store(0, Ordering::Relaxed);
+        // TIMSK1: no pending silence.
+        wr!(regs().TC1.timsk1(), 0);
+        // SAFETY: the closure does not re-enter LINE.
+        unsafe { LINE.with(cs, |l| l.slave = Slave::new()) };
+    });
+}
+
+/// Whether a frame's closing silence has passed (taken: it is reported once).
+pub(crate) fn take_frame_end() -> bool {
+    interrupt::free(|_| {
+        let end = FRAME_END.load(Ordering::Relaxed) != 0;
+        FRAME_END.store(0, Ordering::Relaxed);
+        end
+    })
+}
+
+/// Whether the Modbus side needs the CPU soon: a frame is coming in or ended, or a reply is
+/// going out. Call with interrupts off, so that no interrupt's wish is lost.
+pub(crate) fn modbus_busy(cs: CriticalSection) -> bool {
+    // SAFETY: the closure does not re-enter LINE.
+    FRAME_END.load(Ordering::Relaxed) != 0
+        || unsafe { LINE.with(cs, |l| l.slave.receiving() || l.slave.replying()) }
+}
+
+/// Start a reply: only when the transmitter is idle (a RUN display still going out would
+/// otherwise go onto the bus), raise the driver enable. Returns whether it started.
+pub(crate) fn reply_start() -> bool {
+    interrupt::free(|cs| {
+        let dp = regs();
+        // SAFETY: the closure does not re-enter TX.
+        let empty = unsafe { TX.with(cs, |tx| tx.len() == 0) };
+        // UCSR0A: TXC0 (bit 6) says UDR0 and the shift register are both empty.
+        let a = dp.USART0.ucsr0a().read().bits();
+        let idle = empty && (a & 0x40 != 0 || TX_IDLE.load(Ordering::Relaxed) != 0);
+        if idle {
+            // UCSR0A: TXC0 cleared (a one clears it), normal speed.
+            wr!(dp.USART0.ucsr0a(), 0x40);
+            pins::driver_enable(cs, true);
+            // SAFETY: the closure does not re-enter LINE.
+            unsafe {
+                LINE.with(cs, |l| {
+                    l.txcie = TXCIE0;
+                    l.queued = false;
+                })
+            };
+        }
+        idle
+    })
+}
+
+/// The whole reply is in the transmit ring: the driver enable falls when it has left.
+pub(crate) fn reply_queued() {
+    interrupt::free(|cs| {
+        // SAFETY: the closure does not re-enter LINE.
+        unsafe { LINE.with(cs, |l| l.queued = true) };
+        // UCSR0B: TXCIE0 on, UDRIE0 on (the ring has the reply's last bytes).
+        wr!(regs().USART0.ucsr0b(), UCSR0B_ON | UDRIE0 | TXCIE0);
+    });
+}
+
+/// Put a byte into the receive ring as if it had been received (the Modbus side found a
+/// lone `/`: KEY takes it as the break key).
+pub(crate) fn inject(byte: u8) {
+    // SAFETY: the closure does not re-enter RX.
+    interrupt::free(|cs| unsafe { RX.with(cs, |rx| rx.ring.push(byte)) });
 }
 
 /// Next received byte.
@@ -159,13 +342,14 @@ pub(crate) fn overruns() -> u16 {
 
 /// Queue `byte` for sending, waiting (and feeding the watchdog) while the ring is full.
 pub(crate) fn tx(byte: u8) {
+    TX_IDLE.store(0, Ordering::Relaxed);
     loop {
         let queued = interrupt::free(|cs| {
             // SAFETY: the closure does not re-enter TX.
             let queued = unsafe { TX.with(cs, |tx| tx.push(byte)) };
             if queued {
-                // UCSR0B with UDRIE0: the interrupt drains the ring.
-                wr!(regs().USART0.ucsr0b(), UCSR0B_ON | UDRIE0);
+                // UCSR0B with UDRIE0: the interrupt drains the ring (TXCIE0 kept).
+                wr!(regs().USART0.ucsr0b(), UCSR0B_ON | UDRIE0 | txcie(cs));
             }
             queued
         });

@@ -122,6 +122,8 @@ pub struct Editor {
     home: u8,
     /// The Data display.
     data: u16,
+    /// The line before was a number: `ADDR` takes it.
+    number_fresh: bool,
     /// Bit stack value on the screen.
     shown_bs: u8,
     /// Port Byte value on the screen, once a PPx has shown one.
@@ -166,6 +168,7 @@ impl Editor {
             cursor: 0,
             home: 0,
             data: 0,
+            number_fresh: false,
             shown_bs: 0,
             shown_port: None,
             msg: None,

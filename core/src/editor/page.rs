@@ -8,7 +8,7 @@ use super::*;
 progmem! {
     /// The interpreter's words (manual ch. 9), each after its length, in the order of the
     /// arms of `submit_page`: one compare loop instead of inline code for every word.
-    static progmem WORDS: [u8; 65] = *b"\x01?\x01/\x03INS\x03DEL\x03RUN\x03EX0\x04FILL\x03VER\x03LDT\x04LIST\x04STAT\x05STORE\x04LOAD\x05WRITE\x04READ";
+    static progmem WORDS: [u8; 70] = *b"\x01?\x01/\x03INS\x03DEL\x03RUN\x03EX0\x04FILL\x03VER\x03LDT\x04LIST\x04STAT\x05STORE\x04LOAD\x05WRITE\x04READ\x04ADDR";
 }
 
 // Indices into [`WORDS`].
@@ -27,6 +27,7 @@ const W_STORE: u8 = 11;
 const W_LOAD: u8 = 12;
 const W_WRITE: u8 = 13;
 const W_READ: u8 = 14;
+const W_ADDR: u8 = 15;
 
 /// The index of `word` in [`WORDS`].
 fn interpreter_word(word: &[u8]) -> Option<u8> {
@@ -95,6 +96,8 @@ impl Editor {
         let Some(n) = self.take_line(b) else {
             return Mode::Edit;
         };
+        let number_before = self.number_fresh;
+        self.number_fresh = false;
         match self.parse(n) {
             Parsed::Empty => {}
             Parsed::Number(v) => {
@@ -103,6 +106,7 @@ impl Editor {
                 } else {
                     self.data = v as u16;
                     self.home = v.min(255) as u8;
+                    self.number_fresh = true;
                     self.draw_data(b);
                 }
             }
@@ -128,7 +132,22 @@ impl Editor {
                         self.cursor = 0;
                         self.draw_page(eng, b, true);
                     }
-                    Some(W_VER) => self.message(b, text::VERSION),
+                    Some(W_VER) => {
+                        self.message(b, text::VERSION);
+                        self.show_address(b);
+                    }
+                    Some(W_ADDR) => {
+                        // A number just entered becomes the address; `ADDR` alone shows it.
+                        if number_before {
+                            let v = self.data;
+                            if v == 0 || v > u16::from(crate::modbus::MAX_ADDRESS) {
+                                self.message(b, text::ADDR_RANGE);
+                            } else if !store::set_slave_address(b, v as u8) {
+                                self.message(b, text::STORE_FAILED);
+                            }
+                        }
+                        self.show_address(b);
+                    }
                     Some(W_LDT) => self.ldt_enter(eng, b),
                     Some(W_LIST) => {
                         self.screen = Screen::List { sent: false };
@@ -175,6 +194,15 @@ impl Editor {
             }
         }
         Mode::Edit
+    }
+
+    /// The Modbus slave address, on the info row (as STAT's report).
+    fn show_address<B: Board>(&mut self, b: &mut B) {
+        text::ADDRESS.send_at(b, ROW_INFO, 1);
+        let a = store::slave_address(b);
+        num(b, u32::from(a));
+        ceol(b);
+        self.info = true;
     }
 
     /// An executable command: run it now, store it at the cursor line, advance.

@@ -214,6 +214,10 @@ texts! {
     TOO_LONG = "*** Line too long (8 max) ***";
     /// A number past 65535.
     TOO_BIG = "*** Number too big (65535 max) ***";
+    /// VER and ADDR: the Modbus slave address follows.
+    ADDRESS = "Modbus slave address ";
+    /// ADDR refused.
+    ADDR_RANGE = "*** Address must be 1..247 ***";
     /// VER.
     VERSION = concat!("*** Version ", env!("CARGO_PKG_VERSION"), " - ", build_date!(), " ***");
     /// STORE in progress.

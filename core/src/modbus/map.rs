@@ -3,6 +3,7 @@
 
 /// One of the four Modbus tables.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
 pub enum Table {
     /// Coils: single bits, read and written.
     Coils,

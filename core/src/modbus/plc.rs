@@ -42,8 +42,27 @@ pub struct Status {
     pub dropped: u16,
 }
 
-/// The text of report server ID after the run indicator.
-const ID: &[u8] = concat!("uTile ", env!("CARGO_PKG_VERSION")).as_bytes();
+/// Report server ID's text after the run indicator.
+const ID_TEXT: &str = concat!("uTile ", env!("CARGO_PKG_VERSION"));
+/// Its length.
+const ID_LEN: usize = ID_TEXT.len();
+
+/// [`ID_TEXT`] as an array, for flash.
+const fn id_bytes() -> [u8; ID_LEN] {
+    let mut out = [0u8; ID_LEN];
+    let s = ID_TEXT.as_bytes();
+    let mut i = 0;
+    while i < ID_LEN {
+        out[i] = s[i];
+        i += 1;
+    }
+    out
+}
+
+// In flash: as a constant it would be copied to RAM at start-up.
+avr_progmem::progmem! {
+    static progmem ID: [u8; ID_LEN] = id_bytes();
+}
 
 /// The engine, its board and the status as the slave's four tables.
 pub struct PlcMap<'a, B: Board> {
@@ -209,10 +228,15 @@ impl<B: Board> Map for PlcMap<'_, B> {
     }
 
     fn id_len(&self) -> u8 {
-        ID.len() as u8
+        ID_LEN as u8
     }
 
     fn id_byte(&self, i: u8) -> u8 {
-        ID.get(usize::from(i)).copied().unwrap_or(0)
+        let i = usize::from(i);
+        if i < ID_LEN {
+            ID.load_at(i)
+        } else {
+            0
+        }
     }
 }

@@ -20,12 +20,34 @@ pub struct Reply {
 }
 
 impl Reply {
+    /// No reply (all zeros: see [`Answer`]).
+    pub const fn none() -> Self {
+        Self {
+            answer: Answer::Read {
+                function: 0,
+                table: super::map::Table::Coils,
+                start: 0,
+                qty: 0,
+            },
+            address: 0,
+            at: 0,
+            body: 0,
+            crc: Crc16::new(),
+            low: 0,
+        }
+    }
+
     /// The reply of slave `address` to a request answered by `answer`.
     pub fn new<M: Map + ?Sized>(address: u8, answer: Answer, map: &M) -> Self {
         let body = match answer {
             // Address, function, byte count, data.
-            Answer::Bits { qty, .. } => 3 + qty.div_ceil(8),
-            Answer::Registers { qty, .. } => 3 + 2 * qty,
+            Answer::Read { function, qty, .. } => {
+                if function <= super::READ_DISCRETE_INPUTS {
+                    3 + qty.div_ceil(8)
+                } else {
+                    3 + 2 * qty
+                }
+            }
             Answer::Echo { len } => 1 + u16::from(len),
             // Address, function, byte count, server ID, run indicator, text.
             Answer::ServerId => 5 + u16::from(map.id_len()),
@@ -78,7 +100,7 @@ impl Reply {
                 _ => code as u8,
             },
             Answer::Echo { .. } => pdu.get(usize::from(i - 1)).copied().unwrap_or(0),
-            Answer::Bits {
+            Answer::Read {
                 function,
                 table,
                 start,
@@ -86,26 +108,19 @@ impl Reply {
             } => match i {
                 1 => function,
                 2 => (self.body - 3) as u8,
-                _ => {
+                _ if function <= super::READ_DISCRETE_INPUTS => {
+                    // Eight bits a byte, the first in bit 0.
                     let first = (i - 3) * 8;
                     let mut byte = 0u8;
                     for k in 0..8u16 {
                         let n = first + k;
+                        byte >>= 1;
                         if n < qty && map.read(table, start.wrapping_add(n)) != 0 {
-                            byte |= 1 << k;
+                            byte |= 0x80;
                         }
                     }
                     byte
                 }
-            },
-            Answer::Registers {
-                function,
-                table,
-                start,
-                ..
-            } => match i {
-                1 => function,
-                2 => (self.body - 3) as u8,
                 _ => {
                     let d = i - 3;
                     if d & 1 == 0 {

@@ -14,29 +14,20 @@ pub const MAX_WRITE_COILS: u16 = 1968;
 pub const MAX_WRITE_REGISTERS: u16 = 123;
 
 /// What the reply to a request is. `Copy` and small: the reply is produced from it, the map
-/// and the request's bytes, one byte at a time.
+/// and the request's bytes, one byte at a time. `repr(u8)` with `Read` first, so that a
+/// slave at rest is all zeros (it then lives in `.bss`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
 pub enum Answer {
-    /// Functions 01/02: `qty` bits from `start`.
-    Bits {
+    /// Functions 01..04: `qty` bits (01, 02) or registers (03, 04) from `start`.
+    Read {
         /// Function code.
         function: u8,
         /// The table read.
         table: Table,
         /// First address.
         start: u16,
-        /// Number of bits.
-        qty: u16,
-    },
-    /// Functions 03/04: `qty` registers from `start`.
-    Registers {
-        /// Function code.
-        function: u8,
-        /// The table read.
-        table: Table,
-        /// First address.
-        start: u16,
-        /// Number of registers.
+        /// Number of bits or registers.
         qty: u16,
     },
     /// Functions 05, 06, 08, 15, 16: the first `len` bytes of the request's PDU again.
@@ -81,38 +72,25 @@ fn check<M: Map + ?Sized>(function: u8, pdu: &[u8], map: &mut M) -> Result<Answe
     let a = word(pdu, 1);
     let b = word(pdu, 3);
     match function {
-        READ_COILS | READ_DISCRETE_INPUTS => {
-            let table = if function == READ_COILS {
-                Table::Coils
-            } else {
-                Table::DiscreteInputs
+        READ_COILS..=READ_INPUT_REGISTERS => {
+            let table = match function {
+                READ_COILS => Table::Coils,
+                READ_DISCRETE_INPUTS => Table::DiscreteInputs,
+                READ_HOLDING_REGISTERS => Table::HoldingRegisters,
+                _ => Table::InputRegisters,
             };
-            if len != 5 || b == 0 || b > MAX_READ_BITS {
+            let max = if function <= READ_DISCRETE_INPUTS {
+                MAX_READ_BITS
+            } else {
+                MAX_READ_REGISTERS
+            };
+            if len != 5 || b == 0 || b > max {
                 return Err(Exception::IllegalDataValue);
             }
             if !fits(a, b) || !covers(map, table, a, b) {
                 return Err(Exception::IllegalDataAddress);
             }
-            Ok(Answer::Bits {
-                function,
-                table,
-                start: a,
-                qty: b,
-            })
-        }
-        READ_HOLDING_REGISTERS | READ_INPUT_REGISTERS => {
-            let table = if function == READ_HOLDING_REGISTERS {
-                Table::HoldingRegisters
-            } else {
-                Table::InputRegisters
-            };
-            if len != 5 || b == 0 || b > MAX_READ_REGISTERS {
-                return Err(Exception::IllegalDataValue);
-            }
-            if !fits(a, b) || !covers(map, table, a, b) {
-                return Err(Exception::IllegalDataAddress);
-            }
-            Ok(Answer::Registers {
+            Ok(Answer::Read {
                 function,
                 table,
                 start: a,

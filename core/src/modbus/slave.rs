@@ -35,7 +35,9 @@ pub enum Event {
 #[derive(Clone, Debug)]
 pub struct Slave {
     rx: Receiver,
-    reply: Option<Reply>,
+    /// The reply being sent, while `replying`.
+    reply: Reply,
+    replying: bool,
     /// Frames dropped (CRC, length, gap, another address), saturating.
     dropped: u16,
     /// The ms clock at the last valid frame for this slave.
@@ -55,7 +57,8 @@ impl Slave {
     pub const fn new() -> Self {
         Self {
             rx: Receiver::new(),
-            reply: None,
+            reply: Reply::none(),
+            replying: false,
             dropped: 0,
             last_ms: 0,
             heard: false,
@@ -65,7 +68,7 @@ impl Slave {
     /// A received byte; `after_gap`: more than 1.5 character times of silence came first.
     /// While a reply goes out the line is ours (RS-485 is half duplex): bytes are ignored.
     pub fn push(&mut self, byte: u8, after_gap: bool) {
-        if self.reply.is_none() {
+        if !self.replying {
             self.rx.push(byte, after_gap);
         }
     }
@@ -107,7 +110,8 @@ impl Slave {
         self.last_ms = now_ms;
         self.heard = true;
         let answer: Answer = handle(pdu, map);
-        self.reply = Some(Reply::new(address, answer, map));
+        self.reply = Reply::new(address, answer, map);
+        self.replying = true;
         Event::Reply
     }
 
@@ -116,19 +120,34 @@ impl Slave {
         Event::Dropped
     }
 
+    /// Whether the request being answered wrote (functions 05, 06, 15, 16).
+    pub fn request_writes(&self) -> bool {
+        let function = self.rx.frame().get(1).copied().unwrap_or(0);
+        self.replying
+            && matches!(
+                function,
+                WRITE_SINGLE_COIL
+                    | WRITE_SINGLE_REGISTER
+                    | WRITE_MULTIPLE_COILS
+                    | WRITE_MULTIPLE_REGISTERS
+            )
+    }
+
     /// Whether a reply is being sent.
     pub fn replying(&self) -> bool {
-        self.reply.is_some()
+        self.replying
     }
 
     /// The next byte of the reply (read from `map` now), or `None` when it is complete.
     pub fn next_byte<M: Map + ?Sized>(&mut self, map: &mut M) -> Option<u8> {
-        let reply = self.reply.as_mut()?;
+        if !self.replying {
+            return None;
+        }
         let frame = self.rx.frame();
         let pdu = frame.get(1..frame.len().saturating_sub(2)).unwrap_or(&[]);
-        let byte = reply.next_byte(map, pdu);
+        let byte = self.reply.next_byte(map, pdu);
         if byte.is_none() {
-            self.reply = None;
+            self.replying = false;
         }
         byte
     }

@@ -45,7 +45,7 @@ mod term;
 
 pub use editor::{editor, editor_loop, keys, lines, sample_program};
 pub use main_loop::MainLoop;
-pub use modbus::modbus;
+pub use modbus::{modbus, modbus_plc};
 pub use storage::{eeprom, hex_roundtrip, ihex, image_decode};
 pub use term::Term;
 
@@ -53,7 +53,7 @@ pub use term::Term;
 pub type Harness = fn(&[u8]) -> Verdict;
 
 /// Every harness by the name its fuzz target and corpus directory use.
-pub const TARGETS: [(&str, Harness); 8] = [
+pub const TARGETS: [(&str, Harness); 9] = [
     ("editor", editor),
     ("lines", lines),
     ("keys", keys),
@@ -62,4 +62,5 @@ pub const TARGETS: [(&str, Harness); 8] = [
     ("image", image_decode),
     ("eeprom", eeprom),
     ("modbus", modbus),
+    ("modbus_plc", modbus_plc),
 ];

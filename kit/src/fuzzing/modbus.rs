@@ -117,7 +117,7 @@ fn check_reply(reply: &[u8], pdu: &[u8], answer: Answer) -> Verdict {
             }
             3 + usize::from(len)
         }
-        Answer::Bits { .. } | Answer::Registers { .. } | Answer::ServerId => {
+        Answer::Read { .. } | Answer::ServerId => {
             if f != function {
                 return Err(format!("reply {reply:02X?} to function {function:02X}"));
             }
@@ -189,6 +189,113 @@ pub fn modbus(data: &[u8]) -> Verdict {
             }
             if let Some(why) = map.outside.take() {
                 return Err(why);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The harness of the slave on the real map (`plc`): frames built from the bytes go through
+/// [`Slave`] to §13's map over an engine running a program. Pairs of bytes (control,
+/// value): control `& 3` as in [`modbus`] (0/1 a byte, 2 a frame end, 3 a frame of the
+/// next `value` bytes with a good CRC, addressed to this slave, another or all); the engine
+/// scans between frames.
+///
+/// Invariants: no panic; a request changes only what the map names (PY, PU, PV, the
+/// presets and set-points, and the counter outputs a preset moves), an exception or a
+/// dropped frame nothing; set-points stay ≤ 1023; every reply is a valid frame.
+pub fn modbus_plc(data: &[u8]) -> Verdict {
+    use utile_core::engine::Engine;
+    use utile_core::modbus::plc::{PlcMap, Status, STATUS_RUNNING};
+    use utile_core::modbus::slave::{Event, Slave};
+
+    let mut eng = Engine::new(super::sample_program());
+    let mut b = crate::sim::SimBoard::new();
+    eng.clear_runtime(&mut b);
+    let mut slave = Slave::new();
+    let status = Status {
+        flags: STATUS_RUNNING,
+        ..Status::default()
+    };
+    let mut pairs = data.chunks_exact(2);
+    while let Some(pair) = pairs.next() {
+        let (control, value) = (pair[0], pair[1]);
+        match control & 3 {
+            0 => slave.push(value, false),
+            1 => slave.push(value, true),
+            3 => {
+                let body: Vec<u8> = pairs
+                    .by_ref()
+                    .take(usize::from(value % 40))
+                    .map(|p| p[1])
+                    .collect();
+                let to = match control >> 6 {
+                    0 => 0,
+                    1 => 2,
+                    _ => ADDRESS,
+                };
+                let mut frame = std::vec![to];
+                frame.extend_from_slice(&body);
+                frame.extend_from_slice(&crc16(&frame).to_le_bytes());
+                for x in frame {
+                    slave.push(x, false);
+                }
+            }
+            _ => {}
+        }
+        if control & 3 < 2 {
+            continue;
+        }
+        b.run_for(&mut eng, 1, 1);
+        let before = eng.clone();
+        let now = b.ticker.now_ms();
+        let mut map = PlcMap {
+            eng: &mut eng,
+            b: &mut b,
+            status: &status,
+        };
+        let event = slave.end(ADDRESS, &mut map, now);
+        let mut reply = Vec::new();
+        while let Some(x) = slave.next_byte(&mut map) {
+            reply.push(x);
+            if reply.len() > 256 {
+                return Err("a reply of more than 256 bytes".into());
+            }
+        }
+        // What a request may change: outputs and virtual ports, presets, set-points, and
+        // the counter outputs that follow a counter preset.
+        let mut allowed = eng.clone();
+        allowed.py = before.py;
+        allowed.pu = before.pu;
+        allowed.pv = before.pv;
+        allowed.cq = before.cq;
+        allowed.prog.presets = before.prog.presets;
+        allowed.prog.counter_presets = before.prog.counter_presets;
+        allowed.prog.set_points = before.prog.set_points;
+        if allowed != before {
+            return Err(format!("a request changed more than the map: {event:?}"));
+        }
+        if eng.prog.set_points.iter().any(|&s| s > 1023) {
+            return Err(format!("a set-point above 1023: {:?}", eng.prog.set_points));
+        }
+        match event {
+            Event::Reply => {
+                if reply.len() < 5 || crc16(&reply) != 0 || reply[0] != ADDRESS {
+                    return Err(format!("reply {reply:02X?} is not a valid frame"));
+                }
+                if reply[1] & 0x80 != 0 && eng != before {
+                    return Err(format!("exception {reply:02X?} changed the engine"));
+                }
+            }
+            Event::Dropped | Event::Slash | Event::None => {
+                if !reply.is_empty() || eng != before {
+                    return Err(format!("{event:?} answered or changed something"));
+                }
+            }
+            Event::Broadcast => {
+                if !reply.is_empty() {
+                    return Err("a broadcast was answered".into());
+                }
             }
         }
     }

@@ -2,7 +2,8 @@
 //! simavr and prints a Markdown table beside the original assembly firmware's figures.
 //!
 //! Usage: `bench [--quick | --long] [--scans N] [SECTION...]` with sections `scan`,
-//! `opcodes` (cycles per command line), `latency`, `timers`, `autostart`, `size`, `stack`, `uart`, `store` (default: all).
+//! `opcodes` (cycles per command line), `latency`, `timers`, `autostart`, `size`, `stack`, `uart`, `store`,
+//! `modbus` (default: all).
 //! Timer runs up to 60 s of simulated time run in simavr, longer ones on the host core;
 //! `--quick` lowers that to 10 s and uses 1000 scans, `--long` raises it to 600 s.
 //! Not a test: nothing is asserted; an unmeasurable row says why.
@@ -434,6 +435,9 @@ fn main() {
             ),
         }
     }
+    if want("modbus") {
+        modbus_rows(&mut rows, &elf);
+    }
     if want("stack") {
         match bench::measure_stack(&elf) {
             Ok((used, free, log)) => {
@@ -467,4 +471,51 @@ fn main() {
         println!("| {} | {} | {} | {} |", r.what, r.ours, r.original, r.goal);
     }
     eprintln!("done in {:.0} s", t0.elapsed().as_secs_f64());
+}
+
+/// Issue 16's budgets: polls per second at line rate, reply start, scan gap and press → Y0
+/// latency while served.
+fn modbus_rows(rows: &mut Vec<Row>, elf: &Path) {
+    match bench::modbus::measure_modbus(elf, 200) {
+        Ok(m) => {
+            row(
+                rows,
+                format!(
+                    "Modbus FC03 × 16 registers polled at line rate ({} polls)",
+                    m.requests
+                ),
+                format!("{:.1} polls/s", m.polls_per_s),
+                "n/a",
+                "≥ 35 (line limit 36.9)",
+            );
+            row(
+                rows,
+                "Modbus reply start after the request's last stop bit (min / median / max)",
+                format!(
+                    "{:.2} / {:.2} / {:.2} ms",
+                    m.reply_start.min, m.reply_start.median, m.reply_start.max
+                ),
+                "n/a",
+                "≤ 2.5 ms (SPEC: 5 ms)",
+            );
+            row(
+                rows,
+                "longest time between two scans while served at full rate (`Y0. ! .Y0 END`)",
+                format!("{:.2} ms", m.scan_gap_ms),
+                "n/a",
+                "≤ 0.5 ms",
+            );
+        }
+        Err(e) => row(rows, "Modbus", format!("not measurable: {e}"), "n/a", "—"),
+    }
+    match bench::modbus::measure_latency_served(elf, 30) {
+        Ok(s) => row(
+            rows,
+            "press → Y0 latency while a master polls at line rate (30 presses)",
+            format!("{:.2} / {:.2} / {:.2} ms", s.min, s.median, s.max),
+            "8.3–12.5 ms",
+            "≤ 5.1 ms",
+        ),
+        Err(e) => row(rows, "press → Y0 latency while served", format!("not measurable: {e}"), "—", "—"),
+    }
 }

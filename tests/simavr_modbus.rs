@@ -1,0 +1,232 @@
+//! The Modbus RTU slave of SPEC §13 on the REAL firmware image in simavr, with the line
+//! timed as a wire at 19200 8N1 in both directions (`RxPacing::Line`): a master in this test
+//! sends requests with the silences it chooses and reads the replies with the cycle of each
+//! stop bit; D10, the RS-485 driver enable, is sampled all along.
+//!
+//! Needs `out/m328-nano-utile.elf` (`cargo fw`).
+
+mod common;
+
+use common::{Board, Rig, CYCLES_PER_MS};
+use utile_core::engine::Program;
+use utile_core::modbus::crc::crc16;
+use utile_core::store;
+use utile_kit::listing;
+use utile_kit::sim::SimBoard;
+use utile_kit::simavr::{frame_cycles, RxPacing};
+
+/// One character at 19200 8N1, in CPU cycles.
+fn char_cycles() -> u64 {
+    frame_cycles(19_200)
+}
+
+/// The slave's address when EEPROM holds none.
+const ADDRESS: u8 = 1;
+
+/// A chip running `prog` (autostarted from EEPROM), its line timed as a wire.
+struct Line {
+    nano: Board,
+    /// (cycle, D10 level) at every change seen.
+    de: Vec<(u64, bool)>,
+}
+
+impl Line {
+    fn new(prog: &Program) -> Self {
+        let mut b = SimBoard::new();
+        store::store(prog, &mut b).expect("STORE");
+        let eeprom: &'static [u8] = Box::leak(b.eeprom.into_boxed_slice());
+        let mut nano = Board::boot_with(Rig {
+            d8: true,
+            d9: false,
+            eeprom: Some(eeprom),
+        });
+        nano.chip.set_rx_pacing(RxPacing::Line { baud: 19_200 });
+        // The RUN screen is drawn first (about 0.4 s of line time): a master talks after it.
+        nano.run_ms(1_000);
+        nano.take_output();
+        Line { nano, de: Vec::new() }
+    }
+
+    fn de_level(&self) -> bool {
+        self.nano.chip.drives_high('B', 2)
+    }
+
+    /// Run `cycles`, sampling D10 every 1/32 ms.
+    fn run(&mut self, cycles: u64) {
+        let step = CYCLES_PER_MS / 32;
+        let end = self.nano.chip.cycle() + cycles;
+        while self.nano.chip.cycle() < end {
+            // The chip itself: the board helper would take the UART's output.
+            self.nano.chip.run_for(step);
+            let level = self.de_level();
+            if self.de.last().map(|&(_, l)| l) != Some(level) {
+                self.de.push((self.nano.chip.cycle(), level));
+            }
+        }
+    }
+
+    /// Send `frame` after `idle` cycles of silence; returns the cycle its last stop bit ends.
+    fn send(&mut self, idle: u64, frame: &[u8]) -> u64 {
+        self.nano.chip.send_after(idle, frame);
+        let now = self.nano.chip.cycle();
+        now + idle + frame.len() as u64 * char_cycles()
+    }
+
+    /// A request (CRC appended) and the reply, with the cycle of each reply byte's stop bit.
+    fn transact(&mut self, pdu: &[u8]) -> (u64, Vec<(u8, u64)>) {
+        let mut frame = vec![ADDRESS];
+        frame.extend_from_slice(pdu);
+        frame.extend_from_slice(&crc16(&frame).to_le_bytes());
+        self.nano.chip.take_output_timed();
+        let end = self.send(4 * char_cycles(), &frame);
+        (end, self.collect())
+    }
+
+    /// Everything the slave sends until the line has been quiet for 10 ms.
+    fn collect(&mut self) -> Vec<(u8, u64)> {
+        let mut got = Vec::new();
+        let mut quiet = 0;
+        while quiet < 10 {
+            self.run(CYCLES_PER_MS);
+            let more = self.nano.chip.take_output_timed();
+            if more.is_empty() {
+                quiet += 1;
+            } else {
+                quiet = 0;
+                got.extend(more);
+            }
+        }
+        got
+    }
+}
+
+fn bytes(reply: &[(u8, u64)]) -> Vec<u8> {
+    reply.iter().map(|&(b, _)| b).collect()
+}
+
+/// The reply's PDU after checking address and CRC.
+fn pdu(reply: &[(u8, u64)]) -> Vec<u8> {
+    let r = bytes(reply);
+    assert!(r.len() >= 4, "a reply: {r:02X?}");
+    assert_eq!(r[0], ADDRESS);
+    let n = r.len();
+    assert_eq!(crc16(&r[..n - 2]).to_le_bytes(), [r[n - 2], r[n - 1]], "reply CRC");
+    r[1..n - 2].to_vec()
+}
+
+fn remote_start() -> Program {
+    listing::commands(&["U0.", ".Y0", "KEY", "END"])
+}
+
+#[test]
+fn a_master_reads_and_writes_and_the_program_follows() {
+    let mut line = Line::new(&remote_start());
+    assert_eq!(line.nano.outputs() & 1, 0);
+    let (_, reply) = line.transact(&[0x05, 0, 8, 0xFF, 0]);
+    assert_eq!(pdu(&reply), vec![0x05, 0, 8, 0xFF, 0], "write single coil U0 echoed");
+    line.run(2 * CYCLES_PER_MS);
+    assert_eq!(line.nano.outputs() & 1, 1, "the program saw U0 and set Y0");
+    let (_, reply) = line.transact(&[0x01, 0, 0, 0, 16]);
+    assert_eq!(pdu(&reply), vec![0x01, 2, 0x01, 0x01], "coils: Y0 and U0");
+    let (_, reply) = line.transact(&[0x04, 0, 0, 0, 8]);
+    let r = pdu(&reply);
+    assert_eq!(&r[..2], &[0x04, 16]);
+    let status = u16::from_be_bytes([r[2], r[3]]);
+    assert_eq!(status & 0b101, 0b101, "running, a stored image");
+    let scans = u32::from_be_bytes([r[10], r[11], r[12], r[13]]);
+    assert!(scans > 1000, "scans since RUN: {scans}");
+    let (_, reply) = line.transact(&[0x03, 0, 26, 0, 1]);
+    assert_eq!(pdu(&reply), vec![0x83, 2], "exception 02 past the map");
+}
+
+#[test]
+fn replies_start_soon_and_d10_frames_each_reply_exactly() {
+    let mut line = Line::new(&remote_start());
+    for _ in 0..5 {
+        let (end, reply) = line.transact(&[0x03, 0, 0, 0, 16]);
+        assert_eq!(reply.len(), 5 + 32);
+        let c = char_cycles();
+        let first_start = reply[0].1 - c;
+        let last_stop = reply.last().unwrap().1;
+        let latency_ms = (first_start - end) as f64 / CYCLES_PER_MS as f64;
+        assert!(latency_ms >= 1.75, "the slave waits out 3.5 characters: {latency_ms:.2} ms");
+        assert!(latency_ms <= 5.0, "SPEC §13: a reply within 5 ms ({latency_ms:.2} ms)");
+        // Back to back: no gap of 1.5 characters inside the reply.
+        for w in reply.windows(2) {
+            assert!(w[1].1 - w[0].1 < c * 3 / 2, "a gap inside the reply");
+        }
+        // D10 rose before the first start bit and fell after the last stop bit, within a
+        // character, and was low before and after.
+        let rises: Vec<u64> = line.de.iter().filter(|d| d.1).map(|d| d.0).collect();
+        let falls: Vec<u64> = line.de.iter().filter(|d| !d.1).map(|d| d.0).collect();
+        // D10 is sampled every `step` cycles: a change is seen up to a step late.
+        let step = CYCLES_PER_MS / 32;
+        let rise = *rises.iter().rev().find(|&&t| t <= first_start + step).expect("D10 rose");
+        let fall = *falls.iter().find(|&&t| t >= rise).expect("D10 fell");
+        assert!(first_start.saturating_sub(rise) < 2 * CYCLES_PER_MS, "D10 up just before");
+        assert!(fall + step >= last_stop, "D10 held until the last stop bit has left");
+        assert!(fall.saturating_sub(last_stop) < c, "and dropped right after it");
+        line.de.clear();
+        line.de.push((line.nano.chip.cycle(), line.de_level()));
+        assert!(!line.de_level());
+    }
+}
+
+#[test]
+fn broken_frames_get_no_answer_and_are_counted() {
+    let mut line = Line::new(&remote_start());
+    // Bad CRC.
+    let mut bad = vec![ADDRESS, 0x03, 0, 0, 0, 1];
+    bad.extend_from_slice(&(crc16(&bad) ^ 0x0101).to_le_bytes());
+    line.send(4 * char_cycles(), &bad);
+    assert!(line.collect().is_empty(), "no answer to a bad CRC");
+    // Another address.
+    let mut other = vec![9, 0x03, 0, 0, 0, 1];
+    other.extend_from_slice(&crc16(&other).to_le_bytes());
+    line.send(4 * char_cycles(), &other);
+    assert!(line.collect().is_empty(), "no answer for another slave");
+    // A gap of 2.5 characters inside a frame.
+    let mut good = vec![ADDRESS, 0x03, 0, 0, 0, 1];
+    good.extend_from_slice(&crc16(&good).to_le_bytes());
+    line.send(4 * char_cycles(), &good[..3]);
+    line.send(5 * char_cycles() / 2, &good[3..]);
+    assert!(line.collect().is_empty(), "no answer to a frame with a gap");
+    let (_, reply) = line.transact(&[0x04, 0, 7, 0, 1]);
+    assert_eq!(pdu(&reply), vec![0x04, 2, 0, 3], "three frames dropped");
+}
+
+#[test]
+fn a_lone_slash_breaks_key_and_a_frame_with_0x2f_does_not() {
+    let mut line = Line::new(&remote_start());
+    // Write single register 0x2F (exception 02) and a coil write carrying 0x2F bytes.
+    let (_, reply) = line.transact(&[0x06, 0, 0x2F, 0, 0x2F]);
+    assert_eq!(pdu(&reply), vec![0x86, 2]);
+    line.run(50 * CYCLES_PER_MS);
+    let text = String::from_utf8_lossy(&line.nano.chip.take_output()).into_owned();
+    assert!(!text.contains("Strike any key"), "still running");
+    line.send(4 * char_cycles(), b"/");
+    line.run(100 * CYCLES_PER_MS);
+    assert!(
+        String::from_utf8_lossy(&line.nano.chip.take_output()).contains("Strike any key"),
+        "the break key stopped the program"
+    );
+}
+
+#[test]
+fn the_terminal_is_quiet_while_a_master_is_active_and_resumes_after_three_seconds() {
+    // PPA every scan: RUN mode shows the port byte every 100 ms.
+    let mut line = Line::new(&listing::commands(&["PPA", "KEY", "END"]));
+    line.run(300 * CYCLES_PER_MS);
+    assert!(!line.nano.chip.take_output().is_empty(), "the RUN screen shows PPA");
+    line.transact(&[0x08, 0, 0, 0x12, 0x34]);
+    // Within the next 2.5 s: nothing but replies.
+    for _ in 0..5 {
+        let (_, reply) = line.transact(&[0x08, 0, 0, 0xAB, 0xCD]);
+        assert_eq!(pdu(&reply), vec![0x08, 0, 0, 0xAB, 0xCD], "only the reply is sent");
+        line.run(400 * CYCLES_PER_MS);
+        assert!(line.nano.chip.take_output_timed().is_empty(), "the terminal is quiet");
+    }
+    line.run(3_100 * CYCLES_PER_MS);
+    assert!(!line.nano.chip.take_output().is_empty(), "the displays resumed after 3 s");
+}
+
