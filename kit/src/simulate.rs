@@ -617,6 +617,19 @@ pub fn simulate_timeline(
     scans_per_ms: u32,
     signals: &[Signal],
 ) -> SimResult {
+    simulate_timeline_after_boot(prog, timeline, until_ms, scans_per_ms, signals, 0)
+}
+
+/// [`simulate_timeline`] for a program started `boot_ms` ms after reset, as
+/// [`simulate_after_boot`]: the clocks and the ADC's round over A6/A7 have that phase.
+pub fn simulate_timeline_after_boot(
+    prog: &Program,
+    timeline: &Timeline,
+    until_ms: u32,
+    scans_per_ms: u32,
+    signals: &[Signal],
+    boot_ms: u32,
+) -> SimResult {
     run(
         prog,
         &timeline.events,
@@ -624,7 +637,7 @@ pub fn simulate_timeline(
         until_ms,
         scans_per_ms,
         signals,
-        0,
+        boot_ms,
     )
 }
 
@@ -666,8 +679,9 @@ fn run(
     }
     engine.clear_runtime(&mut board);
     // The chip's ADC runs from power-up: levels given for 0 s are already read, and their
-    // threshold bits set, when the program starts (no 8 ms of H6 = 0 at the start).
-    for _ in 0..2 * u32::from(SAMPLES) {
+    // threshold bits set, when the program starts (no 8 ms of H6 = 0 at the start). Two
+    // whole rounds over both pins keep the round's phase that `boot_ms` gave it.
+    for _ in 0..2 * CHANNELS as u32 * u32::from(SAMPLES) {
         let c = usize::from(board.analog.channel() - FIRST_CHANNEL) & 1;
         board.analog.sample(board.analog_levels[c]);
     }

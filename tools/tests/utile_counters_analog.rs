@@ -11,13 +11,10 @@ const REACT_MS: u32 = 10;
 /// Latest an H bit may follow a level change: two 4-sample rounds at one sample per ms.
 const ANALOG_MS: u32 = 2 * 4 + 2;
 
-/// Parts counter: count the rising edges of A0 with `.CU0`, reset with A1 through `.CR0`,
-/// CQ0 (count ≥ 3) drives Y0.
-const PARTS: &str = "A0.\n.CU0\nA1.\n.CR0\nCQ0.\n.Y0\nEND\nC0 = 3\n";
-
-/// Tank: pump Y0 on while the level on A6 is below S6 (`H6.` is 0), off from the set-point
-/// up (I/O Plus's tank example); A7 with H7 drives an overflow alarm Y1.
-const TANK: &str = "H6.\n!\n.Y0\nH7.\n.Y1\nEND\nS6 = 512\nS7 = 900\n";
+/// A program or timeline of `tools/tests/data/` (shared with crosscheck_examples.rs).
+fn data(file: &str) -> String {
+    format!("{}/tests/data/{file}", env!("CARGO_MANIFEST_DIR"))
+}
 
 /// VCD changes of each named variable: (ms, value).
 fn vcd_changes(vcd: &str, name: &str) -> Vec<(u32, u32)> {
@@ -68,15 +65,8 @@ fn counters_and_set_points_survive_asm_dis_fmt() {
 
 #[test]
 fn parts_counter() {
-    let prog = write_scratch("parts.utl", PARTS);
     // A0 pulses high at 1, 2, 3, 4 s; A1 resets 5 .. 5.5 s; one more part at 6 s.
-    let tl = write_scratch(
-        "parts.timeline",
-        "0s set A0 low\n0s set A1 low\n\
-         1s set A0 high\n1.2s set A0 low\n2s set A0 high\n2.2s set A0 low\n\
-         3s set A0 high\n3.2s set A0 low\n4s set A0 high\n4.2s set A0 low\n\
-         5s set A1 high\n5.5s set A1 low\n6s set A0 high\nuntil 7s\n",
-    );
+    let (prog, tl) = (data("parts-counter.utl"), data("parts-counter.timeline"));
     let (svg, vcd) = (scratch("parts.svg"), scratch("parts.vcd"));
     let rows = parse_table(&utile_ok(&[
         "sim",
@@ -127,14 +117,8 @@ fn parts_counter() {
 
 #[test]
 fn tank_fills_to_the_set_point_with_hysteresis() {
-    let prog = write_scratch("tank.utl", TANK);
-    // 1 V = 204, 2.5 V = 511 (below 512), 2.6 V = 531, 2.48 V = 507 (within the 8 counts of
-    // hysteresis), 2.45 V = 501 (below 504); A7 in raw counts: 892 keeps H7, 891 clears it.
-    let tl = write_scratch(
-        "tank.timeline",
-        "0s set A6 1V\n1s set A6 2.5V\n2s set A6 2.6v\n3s set A6 2.48V\n4s set A6 2450mV\n\
-         4.5s set A7 900\n5s set a7 892\n5.5s set A7 891\nuntil 6s\n",
-    );
+    // The levels and their counts are in the timeline's comments.
+    let (prog, tl) = (data("tank.utl"), data("tank.timeline"));
     let (svg, vcd) = (scratch("tank.svg"), scratch("tank.vcd"));
     let rows = parse_table(&utile_ok(&[
         "sim",
@@ -198,7 +182,7 @@ fn tank_fills_to_the_set_point_with_hysteresis() {
 
 #[test]
 fn signals_of_counters_and_analog_channels_by_name() {
-    let prog = write_scratch("sig.utl", TANK);
+    let prog = data("tank.utl");
     let tl = write_scratch("sig.timeline", "0s set A7 5V\nuntil 100ms\n");
     let vcd = scratch("sig.vcd");
     utile_ok(&[
@@ -228,7 +212,7 @@ fn signals_of_counters_and_analog_channels_by_name() {
 /// `timeline:line: problem` for every kind of bad analog line.
 #[test]
 fn analog_timeline_errors() {
-    let prog = write_scratch("err.utl", TANK);
+    let prog = data("tank.utl");
     let cases: &[(&str, &str)] = &[
         (
             "1s press A6",
