@@ -1,4 +1,6 @@
-//! SVG timing diagrams of simulated traces: one row per signal, a time axis below.
+//! SVG timing diagrams of simulated traces: one row per signal, a time axis below. A bit
+//! is a logic trace; a count (C0..C7) or an analog level (A6, A7) is a taller row with a
+//! step trace scaled to the row and its value written at each change where there is room.
 
 use std::fmt::Write as _;
 use std::string::String;
@@ -13,6 +15,12 @@ const PLOT_W: f64 = 900.0;
 const ROW_H: f64 = 30.0;
 /// Height of a high level above the row's low line.
 const HIGH_H: f64 = 18.0;
+/// Height of a value row (counts, analog levels).
+const VALUE_ROW_H: f64 = 50.0;
+/// Height of the full scale of a value row's step trace.
+const VALUE_H: f64 = 30.0;
+/// Width of one character of a value label (font-size 10, monospace).
+const VALUE_CHAR_W: f64 = 6.0;
 /// Room above the first row (title).
 const TOP: f64 = 34.0;
 /// Room below the last row (axis and its labels).
@@ -54,14 +62,28 @@ fn xml(text: &str) -> String {
         .replace('"', "&quot;")
 }
 
-/// The path and the high-level fill of one trace in row `row`.
-fn trace_shapes(tr: &Trace, row: usize, until_ms: u32) -> (String, String) {
-    let base = TOP + ROW_H * (row as f64 + 1.0) - 6.0;
-    let x_of = |ms: u32| LABEL_W + PLOT_W * f64::from(ms) / f64::from(until_ms.max(1));
-    let y_of = |high: bool| if high { base - HIGH_H } else { base };
+/// The height of a trace's row.
+fn row_height(tr: &Trace) -> f64 {
+    if tr.signal.is_bit() {
+        ROW_H
+    } else {
+        VALUE_ROW_H
+    }
+}
+
+/// The x of time `ms`.
+fn x_of(ms: u32, until_ms: u32) -> f64 {
+    LABEL_W + PLOT_W * f64::from(ms) / f64::from(until_ms.max(1))
+}
+
+/// The path and the high-level fill of one bit trace in the row starting at `top`.
+fn trace_shapes(tr: &Trace, top: f64, until_ms: u32) -> (String, String) {
+    let base = top + ROW_H - 6.0;
+    let x_of = |ms: u32| x_of(ms, until_ms);
+    let y_of = |v: u16| if v != 0 { base - HIGH_H } else { base };
     let mut path = format!("M{:.1},{:.1}", x_of(0), y_of(tr.initial));
     let mut fill = String::new();
-    let mut level = tr.initial;
+    let mut level = tr.initial != 0;
     let mut since = 0u32;
     for &(ms, v) in &tr.changes {
         if level {
@@ -74,7 +96,7 @@ fn trace_shapes(tr: &Trace, row: usize, until_ms: u32) -> (String, String) {
             );
         }
         let _ = write!(path, " H{:.1} V{:.1}", x_of(ms), y_of(v));
-        level = v;
+        level = v != 0;
         since = ms;
     }
     if level {
@@ -90,12 +112,58 @@ fn trace_shapes(tr: &Trace, row: usize, until_ms: u32) -> (String, String) {
     (path, fill)
 }
 
+/// The full scale of a value trace: 1023 for an analog level, else the largest count (at
+/// least 1).
+fn full_scale(tr: &Trace) -> u16 {
+    if tr.signal.width() == 10 {
+        utile_core::analog::MAX
+    } else {
+        tr.max().max(1)
+    }
+}
+
+/// The step path and the value labels of one value trace in the row starting at `top`.
+fn value_shapes(tr: &Trace, top: f64, until_ms: u32) -> (String, String) {
+    let base = top + VALUE_ROW_H - 6.0;
+    let scale = f64::from(full_scale(tr));
+    let x_of = |ms: u32| x_of(ms, until_ms);
+    let y_of = |v: u16| base - VALUE_H * f64::from(v) / scale;
+    let mut path = format!("M{:.1},{:.1}", x_of(0), y_of(tr.initial));
+    let mut labels = String::new();
+    let steps: Vec<(u32, u16)> = core::iter::once((0, tr.initial))
+        .chain(tr.changes.iter().copied())
+        .collect();
+    // A label is written only where it does not run into the previous one or the next
+    // change: a fast-changing value (a quick count) shows its settled values, the trace the
+    // rest.
+    let mut free_x = f64::MIN;
+    for (k, &(ms, v)) in steps.iter().enumerate() {
+        if k > 0 {
+            let _ = write!(path, " H{:.1} V{:.1}", x_of(ms), y_of(v));
+        }
+        let x = x_of(ms) + 2.0;
+        let text = v.to_string();
+        let next = steps.get(k + 1).map_or(until_ms, |c| c.0);
+        let w = VALUE_CHAR_W * text.len() as f64;
+        if x >= free_x && (x_of(next) - x >= w || next == until_ms) {
+            let _ = write!(
+                labels,
+                r#"<text x="{x:.1}" y="{:.1}">{text}</text>"#,
+                top + 12.0
+            );
+            free_x = x + w + 4.0;
+        }
+    }
+    let _ = write!(path, " H{:.1}", x_of(until_ms));
+    (path, labels)
+}
+
 /// The SVG document for a simulation; `title` is shown at the top.
 pub fn svg(result: &SimResult, title: &str) -> String {
     let until = result.until_ms.max(1);
-    let rows = result.traces.len();
+    let rows_h: f64 = result.traces.iter().map(row_height).sum();
     let width = LABEL_W + PLOT_W + RIGHT;
-    let height = TOP + ROW_H * rows as f64 + BOTTOM;
+    let height = TOP + rows_h + BOTTOM;
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -112,7 +180,7 @@ pub fn svg(result: &SimResult, title: &str) -> String {
     );
 
     // Time grid and axis.
-    let axis_y = TOP + ROW_H * rows as f64 + 4.0;
+    let axis_y = TOP + rows_h + 4.0;
     let step = tick_step(until);
     let _ = writeln!(out, r##"<g class="axis" stroke="#ccc" fill="#444">"##);
     let mut t = 0u32;
@@ -136,14 +204,27 @@ pub fn svg(result: &SimResult, title: &str) -> String {
         LABEL_W + PLOT_W
     );
 
-    for (row, tr) in result.traces.iter().enumerate() {
+    let mut top = TOP;
+    for tr in &result.traces {
         let name = tr.signal.name();
-        let (path, fill) = trace_shapes(tr, row, until);
-        let label_y = TOP + ROW_H * (row as f64 + 1.0) - 10.0;
-        let _ = writeln!(
-            out,
-            r##"<g class="trace" data-signal="{name}"><text x="6" y="{label_y:.1}">{name}</text><g fill="#4a90d9" fill-opacity="0.25">{fill}</g><path d="{path}" fill="none" stroke="#1f4e8c" stroke-width="1.5"/></g>"##
-        );
+        if tr.signal.is_bit() {
+            let (path, fill) = trace_shapes(tr, top, until);
+            let label_y = top + ROW_H - 10.0;
+            let _ = writeln!(
+                out,
+                r##"<g class="trace" data-signal="{name}"><text x="6" y="{label_y:.1}">{name}</text><g fill="#4a90d9" fill-opacity="0.25">{fill}</g><path d="{path}" fill="none" stroke="#1f4e8c" stroke-width="1.5"/></g>"##
+            );
+        } else {
+            let (path, labels) = value_shapes(tr, top, until);
+            let _ = writeln!(
+                out,
+                r##"<g class="trace" data-signal="{name}"><text x="6" y="{:.1}">{name}</text><text x="6" y="{:.1}" font-size="9" fill="#666">0..{}</text><g font-size="10" fill="#1f4e8c">{labels}</g><path d="{path}" fill="none" stroke="#1f4e8c" stroke-width="1.5"/></g>"##,
+                top + 24.0,
+                top + 36.0,
+                full_scale(tr)
+            );
+        }
+        top += row_height(tr);
     }
     out.push_str("</svg>\n");
     out

@@ -7,13 +7,14 @@
 //! 0s    set A3 low       # level at the start (inputs start high: open, pull-ups)
 //! 0.5s  press A0         # pull A0 low (a normally-open push-button to ground)
 //! 2s    release A0       # A0 back high
+//! 3s    set A6 2.5V      # analog level on A6 or A7: volts (0..5V) or ADC counts (0..1023)
 //! until 12s              # how long to simulate (the command line may override it)
 //! signals A0,Y0,TQ0,Q0   # what to draw (the command line may override it)
 //! ```
 //!
 //! Times are `ms`, `s` or `min`, with decimals down to 1 ms (`1500ms`, `1.5s`).
 //!
-//! Long (about 530 lines) on purpose: the timeline parser, the signal list, the simulation
+//! Long (about 800 lines) on purpose: the timeline parser, the signal list, the simulation
 //! loop and the VCD/table output are one job (`utile sim`) whose parts share the event, signal
 //! and trace types; its tests are tools/tests/utile_sim.rs.
 
@@ -21,11 +22,12 @@ use std::fmt::Write as _;
 use std::string::String;
 use std::vec::Vec;
 
-use utile_core::board::Board;
-use utile_core::engine::{Engine, Program, UNITS};
-use utile_core::opcodes::{END, POP_Y, PUSH_TQ, STORE_PY};
-use utile_core::ticker::INPUTS;
 use crate::sim::SimBoard;
+use utile_core::analog::{CHANNELS, FIRST_CHANNEL, MAX as ANALOG_MAX, SAMPLES};
+use utile_core::board::Board;
+use utile_core::engine::{Engine, Program, COUNTERS, UNITS};
+use utile_core::opcodes::{END, POP_CR, POP_CU, POP_Y, PUSH_CQ, PUSH_H, PUSH_TQ, STORE_PY};
+use utile_core::ticker::INPUTS;
 
 use crate::listing::{strip_comment, FileErrors, Problem};
 
@@ -40,11 +42,32 @@ pub struct Event {
     pub high: bool,
 }
 
+/// A change of the level on an analog-only pin (A6 or A7) at a simulated time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct AnalogEvent {
+    /// Simulated time in ms.
+    pub ms: u32,
+    /// The pin: 6 (A6) or 7 (A7).
+    pub channel: u8,
+    /// New level in ADC counts, 0..1023 (AVcc = 5 V is 1023).
+    pub counts: u16,
+}
+
+/// AVcc, the ADC's reference, in millivolts: 1023 counts.
+pub const AVCC_MV: u32 = 5000;
+
+/// ADC counts for a level in millivolts (0..[`AVCC_MV`]), truncated as simavr's ADC does.
+pub fn mv_to_counts(mv: u32) -> u16 {
+    (mv.min(AVCC_MV) * u32::from(ANALOG_MAX) / AVCC_MV) as u16
+}
+
 /// A parsed timeline: events plus the optional `until` and `signals` lines.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Timeline {
     /// Input events in time order.
     pub events: Vec<Event>,
+    /// Analog level events (A6, A7) in time order.
+    pub analog: Vec<AnalogEvent>,
     /// Simulated length asked for by the file.
     pub until_ms: Option<u32>,
     /// Signals asked for by the file.
@@ -123,6 +146,10 @@ pub fn parse_timeline(file: &str, text: &str) -> Result<Timeline, FileErrors> {
                 last_ms = e.ms;
                 tl.events.push(e);
             }
+            Ok(Line::Analog(e)) => {
+                last_ms = e.ms;
+                tl.analog.push(e);
+            }
             Ok(Line::Until(ms)) => tl.until_ms = Some(ms),
             Ok(Line::Signals(s)) => tl.signals = Some(s),
             Err(message) => problems.push(Problem { line: at, message }),
@@ -142,6 +169,7 @@ pub fn parse_timeline(file: &str, text: &str) -> Result<Timeline, FileErrors> {
 enum Line {
     Nothing,
     Event(Event),
+    Analog(AnalogEvent),
     Until(u32),
     Signals(Vec<Signal>),
 }
@@ -170,15 +198,34 @@ fn parse_timeline_line(words: &[&str], last_ms: u32) -> Result<Line, String> {
     let (action, args) = rest
         .split_first()
         .ok_or_else(|| format!("nothing happens at {first} (expected press, release or set)"))?;
-    let input_of = |args: &[&str]| match args.first() {
-        Some(w) => parse_input(w),
-        None => Err(format!("'{action}' needs an input, e.g. A0")),
+    let Some(name) = args.first() else {
+        return Err(format!("'{action}' needs an input, e.g. A0"));
     };
-    let (input, high, used) = match action.to_ascii_lowercase().as_str() {
-        "press" => (input_of(args)?, false, 1),
-        "release" => (input_of(args)?, true, 1),
-        "set" => {
-            let input = input_of(args)?;
+    let analog = parse_analog_pin(name);
+    let (line, used) = match (action.to_ascii_lowercase().as_str(), analog) {
+        ("press" | "release", Some(n)) => {
+            return Err(format!(
+                "A{n} is an analog-only pin: give it a level, e.g. 'set A{n} 2.5V' or 'set A{n} 512'"
+            ));
+        }
+        ("press", None) => (digital(ms, parse_input(name)?, false), 1),
+        ("release", None) => (digital(ms, parse_input(name)?, true), 1),
+        ("set", Some(channel)) => {
+            let Some(level) = args.get(1) else {
+                return Err(format!(
+                    "'set A{channel}' needs a level: volts (0..5V) or counts (0..1023)"
+                ));
+            };
+            let counts = parse_analog_level(level).map_err(|e| format!("'set A{channel}': {e}"))?;
+            let e = AnalogEvent {
+                ms,
+                channel,
+                counts,
+            };
+            (Line::Analog(e), 2)
+        }
+        ("set", None) => {
+            let input = parse_input(name)?;
             let high = match args.get(1).map(|w| w.to_ascii_lowercase()) {
                 Some(l) if l == "high" || l == "1" => true,
                 Some(l) if l == "low" || l == "0" => false,
@@ -186,7 +233,7 @@ fn parse_timeline_line(words: &[&str], last_ms: u32) -> Result<Line, String> {
                     return Err(format!("'set A{input}' needs a level: high or low"));
                 }
             };
-            (input, high, 2)
+            (digital(ms, input, high), 2)
         }
         _ => {
             return Err(format!(
@@ -197,7 +244,71 @@ fn parse_timeline_line(words: &[&str], last_ms: u32) -> Result<Line, String> {
     if let Some(extra) = args.get(used) {
         return Err(format!("extra text '{extra}' after the event"));
     }
-    Ok(Line::Event(Event { ms, input, high }))
+    Ok(line)
+}
+
+/// A digital input event as a timeline line.
+fn digital(ms: u32, input: u8, high: bool) -> Line {
+    Line::Event(Event { ms, input, high })
+}
+
+/// `A6` or `A7` (any case): the analog-only pin's number.
+fn parse_analog_pin(word: &str) -> Option<u8> {
+    match word.to_ascii_uppercase().as_str() {
+        "A6" => Some(6),
+        "A7" => Some(7),
+        _ => None,
+    }
+}
+
+/// An analog level: volts with a `V` (`2.5V`, 0..5 V, down to 1 mV), millivolts with `mV`,
+/// or ADC counts as a plain number (0..1023).
+fn parse_analog_level(word: &str) -> Result<u16, String> {
+    let lower = word.to_ascii_lowercase();
+    let bad = || format!("bad level '{word}' (expected volts such as 2.5V, or counts 0..1023)");
+    let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+    let (number, scale) = if let Some(n) = lower.strip_suffix("mv") {
+        (n, 1u64)
+    } else if let Some(n) = lower.strip_suffix('v') {
+        (n, 1000)
+    } else {
+        if !digits(&lower) {
+            return Err(bad());
+        }
+        return match lower.parse::<u32>() {
+            Ok(c) if c <= u32::from(ANALOG_MAX) => Ok(c as u16),
+            _ => Err(format!("level {word} is past {ANALOG_MAX} counts")),
+        };
+    };
+    let (whole, frac) = number.split_once('.').unwrap_or((number, ""));
+    let digits_or_empty = |s: &str| s.bytes().all(|b| b.is_ascii_digit());
+    if number.is_empty()
+        || !digits_or_empty(whole)
+        || !digits_or_empty(frac)
+        || number.ends_with('.')
+    {
+        return Err(bad());
+    }
+    // Millivolts, exact: at most 3 decimals of volts (none of millivolts).
+    let places = if scale == 1000 { 3 } else { 0 };
+    if frac.len() > places {
+        return Err(format!("level '{word}' is finer than 1 mV"));
+    }
+    let whole: u64 = if whole.is_empty() {
+        0
+    } else {
+        whole.parse().map_err(|_| bad())?
+    };
+    let frac_mv: u64 = if frac.is_empty() {
+        0
+    } else {
+        frac.parse::<u64>().map_err(|_| bad())? * 10u64.pow((places - frac.len()) as u32)
+    };
+    let mv = whole.saturating_mul(scale).saturating_add(frac_mv);
+    if mv > u64::from(AVCC_MV) {
+        return Err(format!("level {word} is past 5V (AVcc)"));
+    }
+    Ok(mv_to_counts(mv as u32))
 }
 
 /// A signal that can be traced.
@@ -205,6 +316,10 @@ fn parse_timeline_line(words: &[&str], last_ms: u32) -> Result<Line, String> {
 pub enum Signal {
     /// Raw pin level of input An (1 = high/open).
     A(u8),
+    /// Level on the analog-only pin A6 or A7 (6, 7) in ADC counts, 0..1023.
+    Level(u8),
+    /// Analog threshold bit H6 or H7 (6, 7).
+    H(u8),
     /// Output pin Yn as written at END (before out_sense).
     Y(u8),
     /// Virtual bit Un.
@@ -215,26 +330,51 @@ pub enum Signal {
     Q(u8),
     /// Timer output TQm.
     Tq(u8),
+    /// Count of counter Cm, 0..65535.
+    C(u8),
+    /// Counter output CQm.
+    Cq(u8),
     /// Clock CLKA, CLKB or CLKC (0, 1, 2).
     Clk(u8),
 }
+
+/// The signal names, for error messages.
+const SIGNAL_NAMES: &str =
+    "A0..A7, H6, H7, Y0..Y7, U0..U7, V0..V7, Q0..QF, TQ0..TQF, C0..C7, CQ0..CQ7, CLKA..CLKC";
 
 impl Signal {
     /// The signal's name as written in listings and on the command line.
     pub fn name(self) -> String {
         match self {
-            Signal::A(n) => format!("A{n}"),
+            Signal::A(n) | Signal::Level(n) => format!("A{n}"),
+            Signal::H(n) => format!("H{n}"),
             Signal::Y(n) => format!("Y{n}"),
             Signal::U(n) => format!("U{n}"),
             Signal::V(n) => format!("V{n}"),
             Signal::Q(m) => format!("Q{m:X}"),
             Signal::Tq(m) => format!("TQ{m:X}"),
+            Signal::C(m) => format!("C{m}"),
+            Signal::Cq(m) => format!("CQ{m}"),
             Signal::Clk(k) => format!("CLK{}", char::from(b'A' + k)),
         }
     }
 
-    /// Parse a signal name (any case): A0..A5, Y0..Y7, U0..U7, V0..V7, Q0..QF, TQ0..TQF,
-    /// CLKA..CLKC.
+    /// Bits in the signal's value: 1 for a bit, 10 for an analog level, 16 for a count.
+    pub fn width(self) -> u8 {
+        match self {
+            Signal::Level(_) => 10,
+            Signal::C(_) => 16,
+            _ => 1,
+        }
+    }
+
+    /// True for a one-bit signal (drawn as a logic trace).
+    pub fn is_bit(self) -> bool {
+        self.width() == 1
+    }
+
+    /// Parse a signal name (any case): A0..A5, A6/A7 (analog levels), H6, H7, Y0..Y7,
+    /// U0..U7, V0..V7, Q0..QF, TQ0..TQF, C0..C7, CQ0..CQ7, CLKA..CLKC.
     pub fn parse(word: &str) -> Result<Signal, String> {
         let up = word.to_ascii_uppercase();
         let num = |s: &str, radix: u32, count: u8| {
@@ -252,8 +392,18 @@ impl Signal {
             }
         } else if let Some(r) = up.strip_prefix("TQ") {
             num(r, 16, 16).map(Signal::Tq)
+        } else if let Some(r) = up.strip_prefix("CQ") {
+            num(r, 10, COUNTERS as u8).map(Signal::Cq)
+        } else if let Some(r) = up.strip_prefix('C') {
+            num(r, 10, COUNTERS as u8).map(Signal::C)
+        } else if let Some(n) = parse_analog_pin(&up) {
+            Some(Signal::Level(n))
         } else if let Some(r) = up.strip_prefix('A') {
             num(r, 10, INPUTS as u8).map(Signal::A)
+        } else if let Some(r) = up.strip_prefix('H') {
+            num(r, 10, FIRST_CHANNEL + CHANNELS as u8)
+                .filter(|&n| n >= FIRST_CHANNEL)
+                .map(Signal::H)
         } else if let Some(r) = up.strip_prefix('Y') {
             num(r, 10, 8).map(Signal::Y)
         } else if let Some(r) = up.strip_prefix('U') {
@@ -265,9 +415,7 @@ impl Signal {
         } else {
             None
         };
-        sig.ok_or_else(|| {
-            format!("unknown signal '{word}' (A0..A5, Y0..Y7, U0..U7, V0..V7, Q0..QF, TQ0..TQF, CLKA..CLKC)")
-        })
+        sig.ok_or_else(|| format!("unknown signal '{word}' ({SIGNAL_NAMES})"))
     }
 }
 
@@ -287,6 +435,19 @@ pub fn parse_signals(list: &str) -> Result<Vec<Signal>, String> {
 /// The default signals: inputs the timeline touches, then outputs the program writes
 /// (`.Yn`, or all of them for `.PY`) before its first END.
 pub fn default_signals(prog: &Program, events: &[Event]) -> Vec<Signal> {
+    default_signals_with_analog(prog, events, &[])
+}
+
+/// The default signals of a timeline with analog levels: the inputs the timeline touches;
+/// the analog levels it sets or the program reads (`Hn.`) and the threshold bits the program
+/// reads; the outputs the program writes (`.Yn`, or all of them for `.PY`); then, for each
+/// counter the program uses (`.CUm`, `.CRm`, `CQm.`), its count Cm and, when the program
+/// reads it, CQm. Only the commands before the first END count.
+pub fn default_signals_with_analog(
+    prog: &Program,
+    events: &[Event],
+    analog: &[AnalogEvent],
+) -> Vec<Signal> {
     let mut sigs: Vec<Signal> = Vec::new();
     for e in events {
         if !sigs.contains(&Signal::A(e.input)) {
@@ -294,37 +455,67 @@ pub fn default_signals(prog: &Program, events: &[Event]) -> Vec<Signal> {
         }
     }
     sigs.sort();
-    let mut outputs = 0u8;
+    let (mut outputs, mut levels, mut thresholds, mut counters, mut cq) = (0u8, 0u8, 0u8, 0u8, 0u8);
+    for e in analog {
+        levels |= 1 << e.channel;
+    }
     for &op in prog.uf.iter().take_while(|&&op| op != END) {
         if (POP_Y..POP_Y + 8).contains(&op) {
             outputs |= 1 << (op - POP_Y);
         } else if op == STORE_PY {
             outputs = 0xFF;
+        } else if (PUSH_H..PUSH_H + CHANNELS as u8).contains(&op) {
+            let n = op - PUSH_H + FIRST_CHANNEL;
+            levels |= 1 << n;
+            thresholds |= 1 << n;
+        } else if (POP_CU..POP_CR + COUNTERS as u8).contains(&op) {
+            counters |= 1 << ((op - POP_CU) % COUNTERS as u8);
+        } else if (PUSH_CQ..PUSH_CQ + COUNTERS as u8).contains(&op) {
+            counters |= 1 << (op - PUSH_CQ);
+            cq |= 1 << (op - PUSH_CQ);
         }
     }
+    let analog_pins = FIRST_CHANNEL..FIRST_CHANNEL + CHANNELS as u8;
+    let pins_in = |mask: u8| analog_pins.clone().filter(move |n| mask & (1 << n) != 0);
+    sigs.extend(pins_in(levels).map(Signal::Level));
+    sigs.extend(pins_in(thresholds).map(Signal::H));
     sigs.extend((0..8).filter(|n| outputs & (1 << n) != 0).map(Signal::Y));
+    for m in (0..COUNTERS as u8).filter(|m| counters & (1 << m) != 0) {
+        sigs.push(Signal::C(m));
+        if cq & (1 << m) != 0 {
+            sigs.push(Signal::Cq(m));
+        }
+    }
     sigs
 }
 
-/// One signal's history: its level at time 0 and every later change.
+/// One signal's history: its value at time 0 and every later change.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Trace {
     /// Which signal.
     pub signal: Signal,
-    /// Level in ms 0.
-    pub initial: bool,
-    /// (ms, new level) for every change, in time order.
-    pub changes: Vec<(u32, bool)>,
+    /// Value in ms 0 (0 or 1 for a bit, see [`Signal::width`]).
+    pub initial: u16,
+    /// (ms, new value) for every change, in time order.
+    pub changes: Vec<(u32, u16)>,
 }
 
 impl Trace {
-    /// The level during millisecond `ms`.
-    pub fn at(&self, ms: u32) -> bool {
+    /// The value during millisecond `ms`.
+    pub fn at(&self, ms: u32) -> u16 {
         self.changes
             .iter()
             .take_while(|c| c.0 <= ms)
             .last()
             .map_or(self.initial, |c| c.1)
+    }
+
+    /// The largest value the trace takes.
+    pub fn max(&self) -> u16 {
+        self.changes
+            .iter()
+            .map(|c| c.1)
+            .fold(self.initial, u16::max)
     }
 }
 
@@ -417,6 +608,39 @@ pub fn simulate(
     simulate_after_boot(prog, events, until_ms, scans_per_ms, signals, 0)
 }
 
+/// As [`simulate`], with the timeline's analog levels too (A6, A7: the board converts one
+/// ADC sample per ms, as the chip does, so `H6.`/`H7.` follow a change within 8 ms).
+pub fn simulate_timeline(
+    prog: &Program,
+    timeline: &Timeline,
+    until_ms: u32,
+    scans_per_ms: u32,
+    signals: &[Signal],
+) -> SimResult {
+    simulate_timeline_after_boot(prog, timeline, until_ms, scans_per_ms, signals, 0)
+}
+
+/// [`simulate_timeline`] for a program started `boot_ms` ms after reset, as
+/// [`simulate_after_boot`]: the clocks and the ADC's round over A6/A7 have that phase.
+pub fn simulate_timeline_after_boot(
+    prog: &Program,
+    timeline: &Timeline,
+    until_ms: u32,
+    scans_per_ms: u32,
+    signals: &[Signal],
+    boot_ms: u32,
+) -> SimResult {
+    run(
+        prog,
+        &timeline.events,
+        &timeline.analog,
+        until_ms,
+        scans_per_ms,
+        signals,
+        boot_ms,
+    )
+}
+
 /// As [`simulate`], but the program starts `boot_ms` ms after reset, as when EX0 is typed
 /// some time after power-up: the clocks CLKA/B/C run from reset, so their phase at the
 /// program start is that of a chip up for `boot_ms` ms. Times in the result still count
@@ -429,7 +653,24 @@ pub fn simulate_after_boot(
     signals: &[Signal],
     boot_ms: u32,
 ) -> SimResult {
+    run(prog, events, &[], until_ms, scans_per_ms, signals, boot_ms)
+}
+
+/// The simulation behind [`simulate`], [`simulate_timeline`] and [`simulate_after_boot`].
+fn run(
+    prog: &Program,
+    events: &[Event],
+    analog: &[AnalogEvent],
+    until_ms: u32,
+    scans_per_ms: u32,
+    signals: &[Signal],
+    boot_ms: u32,
+) -> SimResult {
     let mut board = SimBoard::new();
+    let mut pending_analog = analog.iter().peekable();
+    while let Some(e) = pending_analog.next_if(|e| e.ms == 0) {
+        board.set_analog(e.channel, e.counts);
+    }
     board.advance_ms(boot_ms);
     let mut engine = Engine::new(prog.clone());
     let mut pending = events.iter().peekable();
@@ -437,12 +678,19 @@ pub fn simulate_after_boot(
         board.set_input(e.input, e.high);
     }
     engine.clear_runtime(&mut board);
+    // The chip's ADC runs from power-up: levels given for 0 s are already read, and their
+    // threshold bits set, when the program starts (no 8 ms of H6 = 0 at the start). Two
+    // whole rounds over both pins keep the round's phase that `boot_ms` gave it.
+    for _ in 0..2 * CHANNELS as u32 * u32::from(SAMPLES) {
+        let c = usize::from(board.analog.channel() - FIRST_CHANNEL) & 1;
+        board.analog.sample(board.analog_levels[c]);
+    }
 
     let mut traces: Vec<Trace> = signals
         .iter()
         .map(|&signal| Trace {
             signal,
-            initial: false,
+            initial: 0,
             changes: Vec::new(),
         })
         .collect();
@@ -450,6 +698,9 @@ pub fn simulate_after_boot(
     for t in 0..until_ms {
         while let Some(e) = pending.next_if(|e| e.ms <= t) {
             board.set_input(e.input, e.high);
+        }
+        while let Some(e) = pending_analog.next_if(|e| e.ms <= t) {
+            board.set_analog(e.channel, e.counts);
         }
         // The clocks the scans of this millisecond see (the tick at its end moves them on).
         let clocks = board.ticker.clocks();
@@ -459,20 +710,28 @@ pub fn simulate_after_boot(
         } else {
             0
         };
+        let bit = |v: u32, n: u8| u16::from(v & (1 << n) != 0);
+        let analog_bits = board.analog.bits();
         for tr in traces.iter_mut() {
-            let level = match tr.signal {
-                Signal::A(n) => board.raw_inputs & (1 << n) != 0,
-                Signal::Y(n) => board.outputs & (1 << n) != 0,
-                Signal::U(n) => engine.pu & (1 << n) != 0,
-                Signal::V(n) => engine.pv & (1 << n) != 0,
-                Signal::Q(m) => engine.q & (1 << m) != 0,
-                Signal::Tq(m) => tq & (1 << m) != 0,
-                Signal::Clk(k) => clocks & (1 << k) != 0,
+            let value = match tr.signal {
+                Signal::A(n) => bit(board.raw_inputs.into(), n),
+                Signal::Level(n) => {
+                    board.analog_levels[usize::from(n.wrapping_sub(FIRST_CHANNEL)) & 1]
+                }
+                Signal::H(n) => bit(analog_bits.into(), n),
+                Signal::Y(n) => bit(board.outputs.into(), n),
+                Signal::U(n) => bit(engine.pu.into(), n),
+                Signal::V(n) => bit(engine.pv.into(), n),
+                Signal::Q(m) => bit(engine.q.into(), m),
+                Signal::Tq(m) => bit(tq.into(), m),
+                Signal::C(m) => engine.count[usize::from(m) % COUNTERS],
+                Signal::Cq(m) => bit(engine.cq.into(), m),
+                Signal::Clk(k) => bit(clocks.into(), k),
             };
             if t == 0 {
-                tr.initial = level;
-            } else if level != tr.at(t - 1) {
-                tr.changes.push((t, level));
+                tr.initial = value;
+            } else if value != tr.changes.last().map_or(tr.initial, |c| c.1) {
+                tr.changes.push((t, value));
             }
         }
     }
@@ -518,14 +777,28 @@ pub fn vcd(result: &SimResult, program_name: &str) -> String {
     let _ = writeln!(out, "$comment utile sim {program_name} $end");
     out.push_str("$version utile-tools $end\n$timescale 1ms $end\n$scope module utile $end\n");
     for (i, tr) in result.traces.iter().enumerate() {
-        let _ = writeln!(out, "$var wire 1 {} {} $end", id(i), tr.signal.name());
+        let _ = writeln!(
+            out,
+            "$var wire {} {} {} $end",
+            tr.signal.width(),
+            id(i),
+            tr.signal.name()
+        );
     }
+    // A bit is `0!`; a vector (counts, analog levels) is `b1010 !`.
+    let value = |signal: Signal, v: u16, i: usize| {
+        if signal.is_bit() {
+            format!("{v}{}", id(i))
+        } else {
+            format!("b{v:b} {}", id(i))
+        }
+    };
     out.push_str("$upscope $end\n$enddefinitions $end\n#0\n$dumpvars\n");
     for (i, tr) in result.traces.iter().enumerate() {
-        let _ = writeln!(out, "{}{}", u8::from(tr.initial), id(i));
+        let _ = writeln!(out, "{}", value(tr.signal, tr.initial, i));
     }
     out.push_str("$end\n");
-    let mut changes: Vec<(u32, usize, bool)> = result
+    let mut changes: Vec<(u32, usize, u16)> = result
         .traces
         .iter()
         .enumerate()
@@ -538,7 +811,7 @@ pub fn vcd(result: &SimResult, program_name: &str) -> String {
             let _ = writeln!(out, "#{ms}");
             last = Some(ms);
         }
-        let _ = writeln!(out, "{}{}", u8::from(v), id(i));
+        let _ = writeln!(out, "{}", value(result.traces[i].signal, v, i));
     }
     let _ = writeln!(out, "#{}", result.until_ms);
     out

@@ -1,10 +1,13 @@
 //! Cross-check (docs/UTILE-TOOL.md, "Cross-check against the real image"): every example in
-//! `examples/` run two ways must give the same output changes:
+//! `examples/`, and the counter and analog programs of `tools/tests/data/`, run two ways must
+//! give the same output changes:
 //!
-//! 1. `utile sim`'s engine on the host ([`simulate::simulate_after_boot`], simulated time);
+//! 1. `utile sim`'s engine on the host ([`simulate::simulate_timeline_after_boot`],
+//!    simulated time);
 //! 2. the real firmware image in simavr, the program loaded THROUGH READ over the UART (the
 //!    hex file `utile asm` writes), started with EX0, the timeline played on the pins A0..A5
-//!    (pressed = pin pulled low), and the pins Y0..Y7 (PD2..PD7, PB4, PB5) recorded.
+//!    (pressed = pin pulled low) and on the ADC inputs A6/A7 (in millivolts), and the pins
+//!    Y0..Y7 (PD2..PD7, PB4, PB5) recorded.
 //!
 //! Time origin. Both runs count from the program start (EX0). On the chip the 1 ms tick has
 //! been running since Timer0 was started at boot, so (a) the clocks CLKA/B/C have a phase at
@@ -14,7 +17,8 @@
 //! in tick interval `k`; the host simulation is then started `k` ms after its own reset (so
 //! its clocks have the chip's phase) and host millisecond `t` is mapped to the chip interval
 //! between ticks `k + t` and `k + t + 1`. Timeline events are put on the pins a quarter of a
-//! millisecond into that interval, so both sides sample them at the same tick.
+//! millisecond into that interval, so both sides sample them at the same tick. The ADC's
+//! round over A6/A7 (one conversion per tick on both sides) then has the same phase too.
 //!
 //! Tolerance: ±2 ms per change. With this alignment the two runs differ only by where a
 //! change falls against the tick: a scan that straddles a tick (< 0.3 ms here, one scan) and
@@ -22,16 +26,17 @@
 //! its whole millisecond. One scan + one sample period rounds up to 2 ms. The measured
 //! worst case is printed (`cargo test --test crosscheck_examples -- --nocapture`).
 //!
-//! Runtime: every timeline runs in full (186 s of simulated time in all, plus about 2 s of
-//! boot and READ per example); simavr runs the image at 1.5-2x real time in a debug test
-//! build, so the file takes about 70 s on two cores.
+//! Runtime: every timeline runs in full (186 s of simulated time for the examples and 13 s
+//! for the counter and tank programs, plus about 2 s of boot and READ each); simavr runs the
+//! image at 1.5-2x real time in a debug test build, so the file takes about 80 s on two
+//! cores.
 
 mod utile_support;
 mod vnano_util;
 
 use utile_kit::listing;
 use utile_kit::simavr::{self as simavr, CpuState, RigPin};
-use utile_kit::simulate::{self, Event};
+use utile_kit::simulate::{self, AnalogEvent, Event};
 use utile_support::{example_stems, examples_dir};
 
 /// CPU cycles per millisecond.
@@ -140,14 +145,29 @@ fn bit_changes(log: &[(u32, u8)]) -> [Vec<(u32, bool)>; 8] {
     out
 }
 
-/// Run `prog` on the chip with `events` for `until_ms` after EX0. Returns the output log
-/// (ms after the program start, Y image) and `k`, the tick interval EX0 took effect in.
-fn run_on_chip(hex: &[u8], events: &[Event], until_ms: u32) -> (Vec<(u32, u8)>, u32) {
+/// The millivolts that simavr's ADC (`mV × 1023 / 5000`, rounded down) turns into `counts`.
+fn counts_to_mv(counts: u16) -> u32 {
+    (u32::from(counts) * simavr::VCC_MV).div_ceil(1023)
+}
+
+/// Run `prog` on the chip with `events` and `analog` levels for `until_ms` after EX0.
+/// Returns the output log (ms after the program start, Y image) and `k`, the tick interval
+/// EX0 took effect in.
+fn run_on_chip(
+    hex: &[u8],
+    events: &[Event],
+    analog: &[AnalogEvent],
+    until_ms: u32,
+) -> (Vec<(u32, u8)>, u32) {
     let mut chip = Chip::boot();
     chip.read_program(hex);
     let mut pending = events.iter().peekable();
     while let Some(e) = pending.next_if(|e| e.ms == 0) {
         chip.pin(e.input, e.high);
+    }
+    let mut pending_analog = analog.iter().peekable();
+    while let Some(e) = pending_analog.next_if(|e| e.ms == 0) {
+        chip.nano.set_analog_mv(e.channel, counts_to_mv(e.counts));
     }
     chip.run(10 * MS);
     assert_eq!(chip.nano.outputs(), 0, "outputs off in the editor");
@@ -176,6 +196,10 @@ fn run_on_chip(hex: &[u8], events: &[Event], until_ms: u32) -> (Vec<(u32, u8)>, 
         {
             chip.pin(e.input, e.high);
         }
+        let due = |ms: u32| origin + u64::from(ms) * MS + EVENT_PHASE <= now;
+        while let Some(e) = pending_analog.next_if(|e| due(e.ms)) {
+            chip.nano.set_analog_mv(e.channel, counts_to_mv(e.counts));
+        }
         chip.run(STEP);
         chip.seen.clear();
         let y = chip.nano.outputs();
@@ -189,19 +213,39 @@ fn run_on_chip(hex: &[u8], events: &[Event], until_ms: u32) -> (Vec<(u32, u8)>, 
 
 fn crosscheck(name: &str) {
     let dir = examples_dir();
-    let utl = dir.join(format!("{name}.utl"));
-    let tl_file = dir.join(format!("{name}.timeline"));
-    let text = std::fs::read_to_string(&utl).unwrap();
+    crosscheck_files(
+        name,
+        &dir.join(format!("{name}.utl")),
+        &dir.join(format!("{name}.timeline")),
+    );
+}
+
+/// Cross-check a program of `tools/tests/data/` with its timeline.
+fn crosscheck_data(name: &str) {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    crosscheck_files(
+        name,
+        &dir.join(format!("{name}.utl")),
+        &dir.join(format!("{name}.timeline")),
+    );
+}
+
+fn crosscheck_files(name: &str, utl: &std::path::Path, tl_file: &std::path::Path) {
+    let text = std::fs::read_to_string(utl).unwrap();
     let prog = listing::parse(name, &text).unwrap_or_else(|e| panic!("{e}"));
-    let tl = simulate::parse_timeline(name, &std::fs::read_to_string(&tl_file).unwrap())
+    let mut tl = simulate::parse_timeline(name, &std::fs::read_to_string(tl_file).unwrap())
         .unwrap_or_else(|e| panic!("{e}"));
-    let until = tl.until_ms.expect("every example timeline has 'until'");
-    let events: Vec<Event> = tl.events.iter().copied().filter(|e| e.ms < until).collect();
+    let until = tl
+        .until_ms
+        .expect("every cross-checked timeline has 'until'");
+    tl.events.retain(|e| e.ms < until);
+    tl.analog.retain(|e| e.ms < until);
+    let events = &tl.events;
 
     let wall = std::time::Instant::now();
-    let (chip_log, k) = run_on_chip(&listing::to_hex(&prog), &events, until);
+    let (chip_log, k) = run_on_chip(&listing::to_hex(&prog), events, &tl.analog, until);
     let chip_secs = wall.elapsed().as_secs_f64();
-    let host = simulate::simulate_after_boot(&prog, &events, until, HOST_SCANS_PER_MS, &[], k);
+    let host = simulate::simulate_timeline_after_boot(&prog, &tl, until, HOST_SCANS_PER_MS, &[], k);
 
     let chip = bit_changes(&chip_log);
     let sim = bit_changes(&host.output_log);
@@ -267,6 +311,16 @@ fn motor_starter_matches_the_real_image() {
 #[test]
 fn sump_pump_matches_the_real_image() {
     crosscheck(EXAMPLES[6]);
+}
+
+#[test]
+fn parts_counter_matches_the_real_image() {
+    crosscheck_data("parts-counter");
+}
+
+#[test]
+fn tank_matches_the_real_image() {
+    crosscheck_data("tank");
 }
 
 /// Every example file is covered above.

@@ -5,7 +5,7 @@
 //! utile dis prog.hex [-o prog.utl]      hex image -> canonical listing
 //! utile fmt prog.utl                    canonical listing of a listing
 //! utile sim prog.utl --inputs t.timeline [--until 120s] [--scans 4]
-//!           [--signals A0,Y0,TQ0] [--svg out.svg] [--vcd out.vcd]
+//!           [--signals A0,Y0,TQ0,C0,A6,H6] [--svg out.svg] [--vcd out.vcd]
 //! ```
 
 use std::path::{Path, PathBuf};
@@ -18,7 +18,7 @@ const USAGE: &str = "usage:
   utile dis PROG.hex [-o PROG.utl]     Intel HEX image -> canonical listing
   utile fmt PROG.utl                   print the canonical listing of a listing
   utile sim PROG.utl --inputs TIMELINE [--until 120s] [--scans 4]
-            [--signals A0,Y0,TQ0,...] [--svg OUT.svg] [--vcd OUT.vcd]
+            [--signals A0,Y0,TQ0,C0,A6,H6,...] [--svg OUT.svg] [--vcd OUT.vcd]
                                        simulate and print the output changes";
 
 /// A failure: the message printed before exiting with status 1.
@@ -138,11 +138,9 @@ fn sim(words: &[String]) -> Result<(), Failure> {
     let until_ms = match args.flag("--until") {
         Some(t) => simulate::parse_time(t).map_err(|e| format!("--until: {e}"))?,
         None => timeline.until_ms.unwrap_or_else(|| {
-            timeline
-                .events
-                .last()
-                .map_or(0, |e| e.ms)
-                .saturating_add(5_000)
+            let last_digital = timeline.events.last().map_or(0, |e| e.ms);
+            let last_analog = timeline.analog.last().map_or(0, |e| e.ms);
+            last_digital.max(last_analog).saturating_add(5_000)
         }),
     };
     if until_ms == 0 {
@@ -158,12 +156,11 @@ fn sim(words: &[String]) -> Result<(), Failure> {
     };
     let signals = match args.flag("--signals") {
         Some(list) => simulate::parse_signals(list).map_err(|e| format!("--signals: {e}"))?,
-        None => timeline
-            .signals
-            .clone()
-            .unwrap_or_else(|| simulate::default_signals(&prog, &timeline.events)),
+        None => timeline.signals.clone().unwrap_or_else(|| {
+            simulate::default_signals_with_analog(&prog, &timeline.events, &timeline.analog)
+        }),
     };
-    let result = simulate::simulate(&prog, &timeline.events, until_ms, scans, &signals);
+    let result = simulate::simulate_timeline(&prog, &timeline, until_ms, scans, &signals);
     print!("{}", simulate::output_table(&result.output_log));
     let name = input
         .file_name()

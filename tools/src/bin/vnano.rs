@@ -2,7 +2,7 @@
 //! wall clock, with its UART on this terminal (or a pty with `--pty`) and a virtual test
 //! rig on the keyboard. See `cargo nano --help`.
 //!
-//! Long (about 480 lines) on purpose: the one loop that ties the terminal or pty, the rig keys,
+//! Long (about 500 lines) on purpose: the one loop that ties the terminal or pty, the rig keys,
 //! the loader and the wall-clock pacing together; each of those parts has its own file in
 //! tools/src/vnano/, and the simulator is the kit's (`utile_kit::simavr`).
 
@@ -99,6 +99,8 @@ struct Session {
     notice: Option<(String, Instant)>,
     quit: bool,
     reset: bool,
+    /// Levels on A6 and A7 in millivolts, as put on the chip's ADC inputs.
+    analog_mv: [u32; 2],
 }
 
 fn run(o: &Options) -> Result<(), String> {
@@ -124,6 +126,9 @@ fn run(o: &Options) -> Result<(), String> {
     }
     nano.hold_low(RigPin::D8, o.d8_low);
     nano.hold_low(RigPin::D9, o.d9_low);
+    for (pin, &mv) in (6u8..).zip(&o.analog_mv) {
+        nano.set_analog_mv(pin, mv);
+    }
 
     term::catch_quit_signals();
     term::ignore_background_stops();
@@ -169,6 +174,7 @@ fn run(o: &Options) -> Result<(), String> {
         notice: None,
         quit: false,
         reset: false,
+        analog_mv: o.analog_mv,
     };
     if matches!(s.uart, Uart::Terminal) && stdout_tty {
         // A clean screen below uTile's: its screen is drawn with absolute positions.
@@ -362,6 +368,15 @@ fn key(s: &mut Session, nano: &mut Chip, b: u8) {
             let now = nano.is_held_low(pin);
             nano.hold_low(pin, !now);
         }
+        Some(RigAction::Analog(pin, up)) => {
+            let level = &mut s.analog_mv[usize::from(pin - 6) & 1];
+            *level = if up {
+                (*level + rig::ANALOG_STEP_MV).min(nano::VCC_MV)
+            } else {
+                level.saturating_sub(rig::ANALOG_STEP_MV)
+            };
+            nano.set_analog_mv(pin, *level);
+        }
         Some(RigAction::Reset) => {
             s.reset = true;
             s.notice = Some((
@@ -419,6 +434,7 @@ fn update_status(s: &mut Session, nano: &Chip) {
         d8_low: nano.is_held_low(RigPin::D8),
         d9_low: nano.is_held_low(RigPin::D9),
         outputs: nano.outputs(),
+        analog_mv: s.analog_mv,
     };
     let text = match &s.notice {
         Some((msg, _)) => msg.clone(),

@@ -12,8 +12,10 @@ wall clock, its UART (19200 8N1) on this terminal, with a virtual test rig.
 Rig keys: press Ctrl-] then
   0..5  press/release switch A0..A5      8  fit/remove the D8 jumper (autostart, read at reset)
   r     reset the chip (warm reset)      9  fit/remove the D9 jumper (out_sense)
+  6  7  raise A6 / A7 by 0.1 V           ^  &  lower A6 / A7 by 0.1 V (Shift-6, Shift-7)
   q     quit                             ?  help        ]  send a Ctrl-] to the firmware
-The line below the uTile screen shows the switches, jumpers and the LEDs Y0..Y7.
+The line below the uTile screen shows the switches, jumpers and the LEDs Y0..Y7, and the
+levels on A6 and A7 once either is above 0 V.
 
 options:
   --elf PATH          firmware ELF (default: $UTILE_ELF, else out/m328-nano-utile.elf)
@@ -25,6 +27,8 @@ options:
   --press LIST        switches held pressed from the start, e.g. --press 0,3
   --d8-low            start with the D8 jumper fitted (autostart)
   --d9-low            start with the D9 jumper fitted (inverted outputs)
+  --a6 VOLTS          level on the analog pin A6 at start, 0..5 (e.g. 2.5 or 2.5V)
+  --a7 VOLTS          level on the analog pin A7 at start, 0..5
   --eeprom FILE       load the EEPROM from a binary file (up to 1024 bytes) at power-up
   --save-eeprom FILE  write the EEPROM to a binary file on exit
   --persist           same as --eeprom out/vnano.eeprom (if it exists)
@@ -54,6 +58,8 @@ pub struct Options {
     pub d8_low: bool,
     /// D9 jumper fitted at start.
     pub d9_low: bool,
+    /// Levels on A6 and A7 at start, in millivolts (`--a6`, `--a7`).
+    pub analog_mv: [u32; 2],
     /// EEPROM image to load (must exist).
     pub eeprom: Option<PathBuf>,
     /// EEPROM image to load if it exists (`--persist`).
@@ -112,6 +118,8 @@ pub fn parse<I: IntoIterator<Item = String>>(
             }
             "--d8-low" => o.d8_low = true,
             "--d9-low" => o.d9_low = true,
+            "--a6" => o.analog_mv[0] = parse_volts("--a6", &value("--a6")?)?,
+            "--a7" => o.analog_mv[1] = parse_volts("--a7", &value("--a7")?)?,
             "--eeprom" => o.eeprom = Some(PathBuf::from(value("--eeprom")?)),
             "--save-eeprom" => o.save_eeprom = Some(PathBuf::from(value("--save-eeprom")?)),
             "--persist" => {
@@ -123,6 +131,15 @@ pub fn parse<I: IntoIterator<Item = String>>(
         }
     }
     Ok(o)
+}
+
+/// A level in volts, 0..5 (a trailing `V` is allowed), as whole millivolts.
+fn parse_volts(option: &str, text: &str) -> Result<u32, String> {
+    let number = text.trim_end_matches(['V', 'v']);
+    match number.parse::<f64>() {
+        Ok(v) if (0.0..=5.0).contains(&v) => Ok((v * 1000.0).round() as u32),
+        _ => Err(format!("{option}: a level is 0..5 volts, not {text}")),
+    }
 }
 
 #[cfg(test)]
@@ -165,8 +182,13 @@ mod tests {
             "/tmp/t",
             "--load",
             "prog.utl",
+            "--a6",
+            "2.5",
+            "--a7",
+            "0.333V",
         ])
         .unwrap();
+        assert_eq!(o.analog_mv, [2500, 333]);
         assert_eq!(o.elf, Some(PathBuf::from("x.elf")));
         assert!(o.fast && o.pty && o.d8_low && o.d9_low);
         assert_eq!(o.run_for, Some(2.5));
@@ -193,5 +215,13 @@ mod tests {
         assert!(p(&["--elf"]).unwrap_err().contains("needs a value"));
         assert!(p(&["--load"]).unwrap_err().contains("needs a value"));
         assert!(p(&["--bogus"]).unwrap_err().contains("unknown option"));
+        assert!(p(&["--a6", "5.1"])
+            .unwrap_err()
+            .contains("--a6: a level is 0..5 volts"));
+        assert!(p(&["--a7", "-1"])
+            .unwrap_err()
+            .contains("--a7: a level is 0..5 volts"));
+        assert!(p(&["--a7", "x"]).unwrap_err().contains("not x"));
+        assert!(p(&["--a6"]).unwrap_err().contains("needs a value"));
     }
 }

@@ -13,6 +13,8 @@ pub const PREFIX: u8 = 0x1D;
 pub enum RigAction {
     /// Toggle a switch (pressed/released) or a jumper (fitted/open).
     Toggle(RigPin),
+    /// Step the level on A6 or A7 (the pin number) by [`ANALOG_STEP_MV`]: up if true.
+    Analog(u8, bool),
     /// Warm reset of the chip (the reset button).
     Reset,
     /// Leave the virtual Nano.
@@ -21,10 +23,18 @@ pub enum RigAction {
     Help,
 }
 
+/// One press of an analog rig key moves A6 or A7 by this many millivolts.
+pub const ANALOG_STEP_MV: u32 = 100;
+
 /// Maps a rig key (after the prefix in terminal mode, bare in pty mode) to its action.
+/// `6`/`7` raise A6/A7; `^`/`&` (the same keys with Shift on a US keyboard) lower them.
 pub fn rig_key(byte: u8) -> Option<RigAction> {
     match byte {
         b'0'..=b'5' => Some(RigAction::Toggle(RigPin::Switch(byte - b'0'))),
+        b'6' => Some(RigAction::Analog(6, true)),
+        b'7' => Some(RigAction::Analog(7, true)),
+        b'^' => Some(RigAction::Analog(6, false)),
+        b'&' => Some(RigAction::Analog(7, false)),
         b'8' => Some(RigAction::Toggle(RigPin::D8)),
         b'9' => Some(RigAction::Toggle(RigPin::D9)),
         b'r' | b'R' => Some(RigAction::Reset),
@@ -79,10 +89,11 @@ impl KeyParser {
 
 /// One line of help for terminal mode.
 pub const HELP_TERMINAL: &str =
-    "Ctrl-] then: 0-5 switch A0-A5, 8/9 jumper D8/D9, r reset, q quit, ] sends ^]";
+    "Ctrl-] then: 0-5 A0-A5, 8/9 D8/D9, 6/7 A6/A7 +0.1V, ^/& -0.1V, r reset, q quit";
 
 /// One line of help for pty mode (keys on the console, no prefix needed).
-pub const HELP_PTY: &str = "keys: 0-5 switch A0-A5, 8/9 jumper D8/D9, r reset, q quit, ? help";
+pub const HELP_PTY: &str =
+    "keys: 0-5 A0-A5, 8/9 D8/D9, 6/7 A6/A7 +0.1V, ^/& -0.1V, r reset, q quit, ? help";
 
 /// What the status line shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -95,11 +106,19 @@ pub struct RigView {
     pub d9_low: bool,
     /// Output pin levels Y0..Y7, bits 0..7 (1 = high, LED lit).
     pub outputs: u8,
+    /// Levels on A6 and A7 in millivolts (0..5000).
+    pub analog_mv: [u32; 2],
+}
+
+/// Millivolts as volts with two decimals (`2.50V`).
+pub fn volts(mv: u32) -> String {
+    format!("{}.{:02}V", mv / 1000, mv % 1000 / 10)
 }
 
 impl RigView {
     /// The status line: a pressed switch shows its number, a lit LED its number,
-    /// `-` otherwise; jumpers show `GND` when fitted. Under 80 columns.
+    /// `-` otherwise; jumpers show `GND` when fitted; the levels on A6 and A7 once either is
+    /// above 0 V. Under 80 columns: the hint is left out when it does not fit.
     pub fn status_line(&self, hint: &str) -> String {
         let mut s = String::with_capacity(80);
         s.push_str("SW A0-A5: ");
@@ -122,7 +141,15 @@ impl RigView {
                 '-'
             });
         }
-        if !hint.is_empty() {
+        // A bare Nano reads 0 V: the levels appear once the rig has set one.
+        if self.analog_mv != [0, 0] {
+            s.push_str(&format!(
+                "  A6 {} A7 {}",
+                volts(self.analog_mv[0]),
+                volts(self.analog_mv[1])
+            ));
+        }
+        if !hint.is_empty() && s.len() + 2 + hint.len() < 80 {
             s.push_str("  ");
             s.push_str(hint);
         }
@@ -248,7 +275,10 @@ mod tests {
             (b'r', Key::Rig(RigAction::Reset)),
             (b'q', Key::Rig(RigAction::Quit)),
             (b'?', Key::Rig(RigAction::Help)),
-            (b'6', Key::None),
+            (b'6', Key::Rig(RigAction::Analog(6, true))),
+            (b'7', Key::Rig(RigAction::Analog(7, true))),
+            (b'^', Key::Rig(RigAction::Analog(6, false))),
+            (b'&', Key::Rig(RigAction::Analog(7, false))),
             (b'x', Key::None),
             (PREFIX, Key::Uart(PREFIX)),
             (b']', Key::Uart(PREFIX)),
@@ -267,6 +297,7 @@ mod tests {
             d8_low: false,
             d9_low: true,
             outputs: 0x81,
+            analog_mv: [0, 0],
         };
         let line = view.status_line("");
         assert_eq!(
@@ -277,6 +308,22 @@ mod tests {
         assert!(idle.starts_with("SW A0-A5: ------  D8:open D9:open  LED Y0-Y7: --------"));
         assert!(RigView::default().status_line("Ctrl-] ? help").len() < 80);
         assert!(HELP_TERMINAL.len() < 80 && HELP_PTY.len() < 80);
+    }
+
+    #[test]
+    fn status_line_shows_the_analog_levels_once_set() {
+        let view = RigView {
+            analog_mv: [2500, 0],
+            ..RigView::default()
+        };
+        let line = view.status_line("Ctrl-] ? help");
+        assert_eq!(
+            line,
+            "SW A0-A5: ------  D8:open D9:open  LED Y0-Y7: --------  A6 2.50V A7 0.00V"
+        );
+        assert!(line.len() < 80);
+        assert_eq!(volts(5000), "5.00V");
+        assert_eq!(volts(1234), "1.23V");
     }
 
     #[test]

@@ -1,4 +1,5 @@
-//! Helpers shared by the `utile` tool tests: run the binary, scratch files, example paths.
+//! Helpers shared by the `utile` tool tests: run the binary, scratch files, example paths,
+//! the output table, SVG and VCD checks.
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
@@ -134,4 +135,80 @@ pub fn sim_example(stem: &str) -> Vec<(u32, u8)> {
     let prog = example(&format!("{stem}.utl"));
     let tl = example(&format!("{stem}.timeline"));
     parse_table(&utile_ok(&["sim", &prog, "--inputs", &tl]))
+}
+
+/// Check an SVG: one `trace` group per signal, in order, and balanced tags.
+pub fn check_svg(svg: &str, signals: &[&str]) {
+    assert!(svg.starts_with("<svg xmlns=\"http://www.w3.org/2000/svg\""));
+    assert!(svg.trim_end().ends_with("</svg>"));
+    let names: Vec<&str> = svg
+        .match_indices("class=\"trace\" data-signal=\"")
+        .map(|(i, m)| {
+            let rest = &svg[i + m.len()..];
+            &rest[..rest.find('"').unwrap()]
+        })
+        .collect();
+    assert_eq!(names, signals);
+    assert_eq!(
+        svg.matches("<path ").count(),
+        signals.len(),
+        "one waveform per signal"
+    );
+    assert_eq!(
+        svg.matches("<g").count(),
+        svg.matches("</g>").count(),
+        "balanced groups"
+    );
+    let opens = svg.matches('<').count();
+    let closes = svg.matches('>').count();
+    assert_eq!(opens, closes);
+}
+
+/// A VCD variable: (id, name).
+pub type VcdVar = (String, String);
+/// A VCD value change: (time, id, value; a bit is 0 or 1).
+pub type VcdChange = (u32, String, u32);
+
+/// Parse a VCD: (variables, every value change), checking the header.
+pub fn parse_vcd(vcd: &str) -> (Vec<VcdVar>, Vec<VcdChange>) {
+    let (header, body) = vcd
+        .split_once("$enddefinitions $end\n")
+        .expect("enddefinitions");
+    assert!(header.contains("$timescale 1ms $end"));
+    assert!(header.contains("$scope module utile $end") && header.contains("$upscope $end"));
+    let vars: Vec<VcdVar> = header
+        .lines()
+        .filter(|l| l.starts_with("$var"))
+        .map(|l| {
+            let w: Vec<&str> = l.split_whitespace().collect();
+            assert_eq!((w[1], w[5]), ("wire", "$end"), "{l}");
+            assert!(["1", "10", "16"].contains(&w[2]), "width in {l}");
+            (w[3].to_owned(), w[4].to_owned())
+        })
+        .collect();
+    let mut values = Vec::new();
+    let mut now = None;
+    for l in body.lines() {
+        if let Some(t) = l.strip_prefix('#') {
+            let t: u32 = t.parse().expect("time");
+            assert!(now.is_none_or(|n| t > n), "times increase");
+            now = Some(t);
+        } else if l == "$dumpvars" || l == "$end" {
+        } else if let Some(vector) = l.strip_prefix('b') {
+            let (v, id) = vector.split_once(' ').expect("b<value> <id>");
+            assert!(vars.iter().any(|(i, _)| i == id), "unknown id in {l}");
+            let v = u32::from_str_radix(v, 2).expect("binary value");
+            values.push((now.expect("time before values"), id.to_owned(), v));
+        } else {
+            let (v, id) = l.split_at(1);
+            assert!(vars.iter().any(|(i, _)| i == id), "unknown id in {l}");
+            assert!(v == "0" || v == "1", "{l}");
+            values.push((
+                now.expect("time before values"),
+                id.to_owned(),
+                u32::from(v == "1"),
+            ));
+        }
+    }
+    (vars, values)
 }
