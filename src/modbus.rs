@@ -44,14 +44,15 @@ pub struct Server {
 }
 
 impl Server {
-    /// RUN starts: the address from EEPROM, the status bits, the line switched to Modbus.
-    pub fn begin(board: &mut Nano, mcusr: u8) -> Self {
+    /// RUN starts: the address from EEPROM, the status bits (`stored`: EEPROM holds a valid
+    /// program, as the editor knows it), the line switched to Modbus.
+    pub fn begin(board: &mut Nano, mcusr: u8, stored: bool) -> Self {
         let mut flags = STATUS_RUNNING;
         // WDRF: the last reset was the watchdog's (0 after a boot loader that clears MCUSR).
         if mcusr & 0x08 != 0 {
             flags |= STATUS_WATCHDOG;
         }
-        if store::newest_slot(board).is_some() {
+        if stored {
             flags |= STATUS_STORED;
         }
         let server = Server {

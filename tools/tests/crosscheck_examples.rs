@@ -61,6 +61,8 @@ const EXAMPLES: &[&str] = &[
     "11.3-push-button-lighting",
     "11.3b-motor-starter",
     "11.4-sump-pump",
+    "parts-counter",
+    "tank-fill",
 ];
 
 /// The simulated chip with the tick grid it keeps.
@@ -321,6 +323,16 @@ fn parts_counter_matches_the_real_image() {
 #[test]
 fn tank_matches_the_real_image() {
     crosscheck_data("tank");
+}
+
+#[test]
+fn the_parts_counter_example_matches_the_real_image() {
+    crosscheck(EXAMPLES[7]);
+}
+
+#[test]
+fn the_tank_fill_example_matches_the_real_image() {
+    crosscheck(EXAMPLES[8]);
 }
 
 /// Every example file is covered above.

@@ -236,8 +236,8 @@ fn example_diagrams_are_up_to_date() {
     let stems = example_stems();
     assert_eq!(
         stems.len(),
-        7,
-        "the seven programs of manual ch. 11: {stems:?}"
+        9,
+        "the seven programs of manual ch. 11 and version 2's two: {stems:?}"
     );
     for stem in stems {
         let svg = scratch(&format!("{stem}.svg"));

@@ -105,6 +105,9 @@ enum Screen {
 pub struct Editor {
     /// Scan-time statistics of the current or last run; the main loop records every scan.
     pub stats: ScanStats,
+    /// EEPROM holds a valid stored program (Modbus status bit 2): set by autostart, STORE
+    /// and LOAD, and by the firmware at boot.
+    pub stored: bool,
     screen: Screen,
     keys: KeyDecoder,
     /// The line being typed.
@@ -158,6 +161,7 @@ impl Editor {
     pub const fn new() -> Self {
         Self {
             stats: ScanStats::new(),
+            stored: false,
             screen: Screen::Page,
             keys: KeyDecoder::new(),
             line: [0; LINE_MAX as usize],
@@ -222,6 +226,7 @@ impl Editor {
         if store::load_into(b, &mut eng.prog).is_err() {
             return Mode::Edit;
         }
+        self.stored = true;
         eng.clear_runtime_keeping_counts(b);
         self.begin_run(b);
         self.render = 0;

@@ -159,13 +159,17 @@ impl Editor {
                     Some(W_STORE) => {
                         self.message(b, text::STORING);
                         let msg = match store::store(&eng.prog, b) {
-                            Ok(()) => text::STORED,
+                            Ok(()) => {
+                                self.stored = true;
+                                text::STORED
+                            }
                             Err(_) => text::STORE_FAILED,
                         };
                         self.message(b, msg);
                     }
                     Some(W_LOAD) => match store::load_into(b, &mut eng.prog) {
                         Ok(()) => {
+                            self.stored = true;
                             self.draw_page(eng, b, true);
                             self.message(b, text::LOADED);
                         }
