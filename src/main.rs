@@ -68,8 +68,6 @@ mod firmware {
 
         let mut mode = autostart(eng, editor, &mut board);
         if mode == Mode::Edit {
-            // Checking both slots takes about 3 ms: never on the autostart's way.
-            editor.stored = utile_core::store::newest_slot(&mut board).is_some();
             editor.boot(eng, &mut board);
         }
 
@@ -125,7 +123,8 @@ mod firmware {
                     if server.visit(eng, board, &st, wraps) == modbus::After::Written {
                         hal::kept::reseal(&eng.prog);
                     }
-                    if server.master_active(board) {
+                    // As before the scans: a master that has just appeared is seen next time.
+                    if quiet {
                         // The terminal waits: displays requested meanwhile are dropped.
                         eng.take_port_view();
                         eng.take_bs_view();

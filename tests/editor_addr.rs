@@ -1,4 +1,4 @@
-//! `ADDR` (SPEC §13): the Modbus slave address, typed as a number then `ADDR`, shown by
+//! `ADDR` (SPEC §13): the Modbus address, typed as a number then `ADDR`, shown by
 //! `ADDR` alone and by `VER`, kept in its own EEPROM cell that STORE, LOAD and FILL leave
 //! alone.
 
@@ -12,10 +12,10 @@ use utile_core::store::{self, ADDR_CELL};
 fn a_number_then_addr_sets_the_address_and_addr_alone_shows_it() {
     let mut r = Session::new();
     r.enter("addr");
-    assert!(r.row(19).contains("Modbus slave address 1"), "{}", r.row(19));
+    assert!(r.row(19).contains("Modbus address 1"), "{}", r.row(19));
     r.enter("17");
     r.enter("addr");
-    assert!(r.row(19).contains("Modbus slave address 17"), "{}", r.row(19));
+    assert!(r.row(19).contains("Modbus address 17"), "{}", r.row(19));
     assert_eq!(r.b.eeprom[usize::from(ADDR_CELL)], 17);
     assert_eq!(r.b.eeprom[usize::from(ADDR_CELL) + 1], !17);
     // A command in between: ADDR no longer takes the old number.
@@ -24,7 +24,7 @@ fn a_number_then_addr_sets_the_address_and_addr_alone_shows_it() {
     r.enter("addr");
     assert!(r.row(19).contains("address 17"), "{}", r.row(19));
     r.enter("ver");
-    assert!(r.row(19).contains("Modbus slave address 17"), "VER shows it");
+    assert!(r.row(19).contains("Modbus address 17"), "VER shows it");
 }
 
 #[test]
@@ -35,7 +35,7 @@ fn addresses_outside_1_to_247_are_refused_and_nothing_changes() {
     for bad in ["0", "248", "300", "65535"] {
         r.enter(bad);
         r.enter("addr");
-        assert!(r.status().contains("Address must be 1..247"), "{bad}: {}", r.status());
+        assert!(r.status().contains("Address 1..247"), "{bad}: {}", r.status());
         assert!(r.row(19).contains("address 9"), "{bad}: {}", r.row(19));
     }
     assert_eq!(store::slave_address(&mut r.b), 9);

@@ -6,6 +6,7 @@ use utile_core::engine::Engine;
 use utile_core::modbus::crc::crc16;
 use utile_core::modbus::plc::{PlcMap, Status, STATUS_RUNNING};
 use utile_core::modbus::slave::{Event, Slave, ACTIVE_MS};
+use utile_core::stats::ScanStats;
 use utile_kit::listing;
 use utile_kit::sim::SimBoard;
 
@@ -27,10 +28,7 @@ impl Rig {
             eng,
             b,
             slave: Slave::new(),
-            status: Status {
-                flags: STATUS_RUNNING,
-                ..Status::default()
-            },
+            status: Status::new(STATUS_RUNNING, &ScanStats::new(), 0, 0),
         }
     }
 

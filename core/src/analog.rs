@@ -113,16 +113,10 @@ impl Analog {
         self.readings
     }
 
-    /// New set-points S6, S7 (0 disables a threshold; values above 1023 act as 1023). A
-    /// disabled threshold's bit drops at once; the others follow at their next reading.
+    /// New set-points S6, S7 (0 disables a threshold; values above 1023 act as 1023). The
+    /// bits follow at their channel's next reading (within 8 ms at one sample per ms).
     pub fn set_points(&mut self, sp: [u16; CHANNELS]) {
         self.set_points = sp;
-        if sp[0] == 0 {
-            self.bits &= !0x40;
-        }
-        if sp[1] == 0 {
-            self.bits &= !0x80;
-        }
     }
 }
 

@@ -114,7 +114,8 @@ pub fn image_byte(prog: &Program, crc: u16, i: usize) -> u8 {
 
 /// Put image byte `i` (a line, a preset, a byte of a counter preset or set-point) into
 /// `prog`: the inverse of [`image_byte`] for `UF_OFFSET..CRC_OFFSET`; other offsets change
-/// nothing. LOAD and READ fill a program with it one byte at a time.
+/// nothing. LOAD and READ fill a program with it one byte at a time (one copy for both).
+#[inline(never)]
 pub fn set_image_byte(prog: &mut Program, i: usize, byte: u8) {
     if i < UF_OFFSET {
     } else if i < PRESETS_OFFSET {

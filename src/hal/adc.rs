@@ -71,16 +71,8 @@ pub(super) fn readings() -> [u16; CHANNELS] {
     interrupt::free(|cs| unsafe { ANALOG.with(cs, |a| a.readings()) })
 }
 
-/// New set-points for the thresholds.
+/// New set-points for the thresholds (the bits follow at the next readings).
 pub(super) fn set_points(sp: [u16; CHANNELS]) {
-    interrupt::free(|cs| {
-        // SAFETY: the closure does not re-enter ANALOG.
-        let bits = unsafe {
-            ANALOG.with(cs, |a| {
-                a.set_points(sp);
-                a.bits()
-            })
-        };
-        BITS.store(bits, Ordering::Relaxed);
-    });
+    // SAFETY: the closure does not re-enter ANALOG.
+    interrupt::free(|cs| unsafe { ANALOG.with(cs, |a| a.set_points(sp)) });
 }

@@ -134,6 +134,7 @@ impl Board for Nano {
         adc::BITS.load(Ordering::Relaxed)
     }
 
+    #[inline(never)]
     fn analog_readings(&mut self) -> [u16; utile_core::analog::CHANNELS] {
         adc::readings()
     }

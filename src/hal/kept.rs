@@ -11,7 +11,6 @@ use core::ptr::{addr_of, addr_of_mut};
 
 use utile_core::board::Board;
 use utile_core::engine::{Engine, Program, COUNTERS, LINES, SET_POINTS, UNITS};
-use utile_core::image;
 use utile_core::opcodes::BLANK;
 
 /// Marks a sealed program ("uTiL").
@@ -91,13 +90,19 @@ fn seal(start: u32, bytes: &[u8]) -> u32 {
 /// The seal's starting sums.
 const SEAL_START: u32 = 0x5555;
 
-/// The seal of the timer presets, counter presets and set-points, as their image bytes.
+/// Bytes of the timer presets, counter presets and set-points, which lie back to back.
+const SETTINGS_LEN: usize = UNITS + 2 * COUNTERS + 2 * SET_POINTS;
+const _: () = assert!(
+    core::mem::offset_of!(Program, set_points) + 2 * SET_POINTS
+        == core::mem::offset_of!(Program, presets) + SETTINGS_LEN
+);
+
+/// The seal of the timer presets, counter presets and set-points.
 fn seal_settings(prog: &Program) -> u32 {
-    let mut bytes = [0u8; image::CRC_OFFSET - image::PRESETS_OFFSET];
-    for (i, b) in bytes.iter_mut().enumerate() {
-        *b = image::image_byte(prog, 0, image::PRESETS_OFFSET + i);
-    }
-    seal(SEAL_START, &bytes)
+    // SAFETY: `Program` is `repr(C)` with alignment 1 on the AVR; the assertion above shows
+    // the three arrays are SETTINGS_LEN contiguous bytes of integers, valid as `u8`s.
+    let bytes = unsafe { core::slice::from_raw_parts(addr_of!(prog.presets).cast::<u8>(), SETTINGS_LEN) };
+    seal(SEAL_START, bytes)
 }
 
 /// Record the present program as the one to keep over a warm reset.

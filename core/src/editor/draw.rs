@@ -35,7 +35,7 @@ pub(super) const STEPS: u8 = 52;
 impl Editor {
     /// Put the terminal cursor where the next typed character goes.
     pub(super) fn park<B: Board>(&mut self, b: &mut B) {
-        if matches!(self.screen, Screen::Page | Screen::Ldt { .. }) {
+        if matches!(self.screen, Screen::Page | Screen::Ldt { .. } | Screen::Ldc { .. }) {
             goto(b, ROW_PROMPT, COL_INPUT + self.len.min(LINE_MAX));
         }
     }
@@ -74,7 +74,7 @@ impl Editor {
         {
             return;
         }
-        let typing = matches!(self.screen, Screen::Page | Screen::Ldt { .. });
+        let typing = matches!(self.screen, Screen::Page | Screen::Ldt { .. } | Screen::Ldc { .. });
         match i {
             S_CLEAR => {
                 term::clear(b);
@@ -159,6 +159,7 @@ impl Editor {
         match self.screen {
             Screen::Help => self.help(b),
             Screen::Ldt { sel } => self.ldt_draw(eng, b, sel),
+            Screen::Ldc { sel, .. } => self.ldc_draw(eng, b, sel),
             Screen::List { .. } => {
                 text::LIST_PROMPT.send(b);
                 crlf(b);
@@ -188,7 +189,7 @@ impl Editor {
         }
         let (row, col) = entry_pos(line);
         goto(b, row, col);
-        let rev = line == self.cursor && !matches!(self.screen, Screen::Ldt { .. });
+        let rev = line == self.cursor && !matches!(self.screen, Screen::Ldt { .. } | Screen::Ldc { .. });
         if rev {
             reverse(b);
         }
@@ -268,7 +269,7 @@ impl Editor {
 
     /// Where messages go on the status line.
     fn status_col(&self) -> u8 {
-        if matches!(self.screen, Screen::Ldt { .. }) {
+        if matches!(self.screen, Screen::Ldt { .. } | Screen::Ldc { .. }) {
             COL_LDT_MSG
         } else {
             COL_STATUS_B

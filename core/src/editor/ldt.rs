@@ -94,20 +94,22 @@ impl Editor {
         Self::preset_cell(eng, b, to, true);
     }
 
+    /// From LDT or LDC back to the main screen.
+    pub(super) fn presets_done<B: Board>(&mut self, eng: &Engine, b: &mut B) {
+        self.screen = Screen::Page;
+        self.clear_area(b);
+        self.draw_page(eng, b, false);
+        text::USER_FILE.send_at(b, ROW_STATUS, COL_STATUS_A);
+        ceol(b);
+        self.msg = None;
+    }
+
     pub(super) fn submit_ldt<B: Board>(&mut self, sel: u8, eng: &mut Engine, b: &mut B) {
         let Some(n) = self.take_line(b) else {
             return;
         };
         match self.parse(n) {
-            Parsed::Empty => {
-                // Back to the page.
-                self.screen = Screen::Page;
-                self.clear_area(b);
-                self.draw_page(eng, b, false);
-                text::USER_FILE.send_at(b, ROW_STATUS, COL_STATUS_A);
-                ceol(b);
-                self.msg = None;
-            }
+            Parsed::Empty => self.presets_done(eng, b),
             Parsed::Number(v) => {
                 eng.prog.presets[usize::from(sel) % UNITS] = v.min(255) as u8;
                 self.data = v.min(0xFFFF) as u16;

@@ -28,6 +28,7 @@ mod help;
 mod huffman;
 pub mod keys;
 mod layout;
+mod ldc;
 mod ldt;
 mod line;
 mod page;
@@ -88,6 +89,13 @@ enum Screen {
     Help,
     /// The timer-preset screen with the selected timer.
     Ldt { sel: u8 },
+    /// The counter-preset and set-point screen: the selected cell, the live values on the
+    /// screen, when to look at them again.
+    Ldc {
+        sel: u8,
+        shown: ldc::Shown,
+        next_ms: u32,
+    },
     /// LIST: waiting for CR to send (`false`) or for CR after sending (`true`).
     List { sent: bool },
     /// WRITE: the same two waits.
@@ -212,6 +220,8 @@ impl Editor {
     pub fn boot<B: Board>(&mut self, eng: &Engine, b: &mut B) {
         // One instance of the drawing code: every entry point goes through `Tracked`.
         let b = &mut Tracked::new(b, false);
+        // Checking both slots takes about 3 ms: here, never on the autostart's way.
+        self.stored = store::newest_slot(b).is_some();
         self.screen = Screen::Page;
         self.full_redraw();
         self.catch_up(eng, b);
@@ -304,6 +314,7 @@ impl Editor {
         match self.screen {
             Screen::Page => self.page_event(event, eng, b),
             Screen::Ldt { sel } => self.ldt_event(sel, event, eng, b),
+            Screen::Ldc { sel, .. } => self.ldc_event(sel, event, eng, b),
             Screen::Help => self.help_event(eng, b),
             Screen::Break => self.break_event(eng, b),
             Screen::List { sent } | Screen::Write { sent } => {
@@ -332,6 +343,7 @@ impl Editor {
         if self.render >= STEPS {
             let now = b.now_ms();
             self.read_idle(now, b);
+            self.ldc_idle(eng, now, b);
         }
     }
 

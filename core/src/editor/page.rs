@@ -8,7 +8,7 @@ use super::*;
 progmem! {
     /// The interpreter's words (manual ch. 9), each after its length, in the order of the
     /// arms of `submit_page`: one compare loop instead of inline code for every word.
-    static progmem WORDS: [u8; 70] = *b"\x01?\x01/\x03INS\x03DEL\x03RUN\x03EX0\x04FILL\x03VER\x03LDT\x04LIST\x04STAT\x05STORE\x04LOAD\x05WRITE\x04READ\x04ADDR";
+    static progmem WORDS: [u8; 74] = *b"\x01?\x01/\x03INS\x03DEL\x03RUN\x03EX0\x04FILL\x03VER\x03LDT\x04LIST\x04STAT\x05STORE\x04LOAD\x05WRITE\x04READ\x04ADDR\x03LDC";
 }
 
 // Indices into [`WORDS`].
@@ -28,6 +28,7 @@ const W_LOAD: u8 = 12;
 const W_WRITE: u8 = 13;
 const W_READ: u8 = 14;
 const W_ADDR: u8 = 15;
+const W_LDC: u8 = 16;
 
 /// The index of `word` in [`WORDS`].
 fn interpreter_word(word: &[u8]) -> Option<u8> {
@@ -149,6 +150,7 @@ impl Editor {
                         self.show_address(b);
                     }
                     Some(W_LDT) => self.ldt_enter(eng, b),
+                    Some(W_LDC) => self.ldc_enter(eng, b),
                     Some(W_LIST) => {
                         self.screen = Screen::List { sent: false };
                         term::clear(b);

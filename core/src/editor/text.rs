@@ -214,10 +214,22 @@ texts! {
     TOO_LONG = "*** Line too long (8 max) ***";
     /// A number past 65535.
     TOO_BIG = "*** Number too big (65535 max) ***";
+    /// LDC's row labels.
+    LDC_PRESET = "preset";
+    /// LDC's row labels.
+    LDC_COUNT = "count";
+    /// LDC's row labels.
+    LDC_SET_POINT = "set-point";
+    /// LDC's row labels.
+    LDC_READING = "reading";
+    /// LDC's status line.
+    LDC_STATUS = "*** C/S: Z clear all, <CR> exit ***";
+    /// LDC refused a value.
+    LDC_TOO_BIG = "*** C 0..65535, S 0..1023 ***";
     /// VER and ADDR: the Modbus slave address follows.
-    ADDRESS = "Modbus slave address ";
+    ADDRESS = "Modbus address ";
     /// ADDR refused.
-    ADDR_RANGE = "*** Address must be 1..247 ***";
+    ADDR_RANGE = "*** Address 1..247 ***";
     /// VER.
     VERSION = concat!("*** Version ", env!("CARGO_PKG_VERSION"), " - ", build_date!(), " ***");
     /// STORE in progress.
@@ -277,7 +289,7 @@ texts! {
     /// Read error reason.
     WHY_CRC = "image CRC error";
     /// Read error reason.
-    WHY_VALUE = "set-point above 1023";
+    WHY_VALUE = "set-point > 1023";
     /// LIST prompt.
     LIST_PROMPT = "# LIST .... 'CR' to send .... '/' to abort";
     /// LIST header comment.

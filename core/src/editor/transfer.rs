@@ -1,6 +1,7 @@
 //! LIST and WRITE: the transfer screen and what they send.
 
 use super::*;
+use crate::engine::{COUNTERS, SET_POINTS};
 
 impl Editor {
     /// A key on the LIST or WRITE screen: CR sends, `/` aborts; after sending, CR returns.
@@ -43,7 +44,8 @@ impl Editor {
         self.msg = None;
     }
 
-    /// LIST's text: `NNN NAME` per programmed line, `Tm = preset` per timer, `#` comments.
+    /// LIST's text: `NNN NAME` per programmed line, `Tm = preset` per timer, `Cm = preset`
+    /// per counter, `Sn = set-point` for A6 and A7, `#` comments.
     pub(super) fn send_listing<B: Board>(eng: &Engine, b: &mut B) {
         crlf(b);
         text::LIST_HEAD.send(b);
@@ -56,11 +58,19 @@ impl Editor {
                 crlf(b);
             }
         }
-        for (m, &p) in eng.prog.presets.iter().enumerate() {
-            b.tx(b'T');
-            b.tx(term::hex_digit(m as u8));
+        // Timer presets T0..TF, counter presets C0..C7, set-points S6, S7: one line each.
+        let p = &eng.prog;
+        for i in 0..(UNITS + COUNTERS + SET_POINTS) as u8 {
+            let (name, v) = if i < 16 {
+                ([b'T', term::hex_digit(i)], p.presets.get(usize::from(i)).map(|&t| u16::from(t)))
+            } else if i < 24 {
+                ([b'C', b'0' + i - 16], p.counter_presets.get(usize::from(i - 16)).copied())
+            } else {
+                ([b'S', b'6' + i - 24], p.set_points.get(usize::from(i - 24)).copied())
+            };
+            raw(b, &name);
             text::PRESET_EQ.send(b);
-            num(b, u32::from(p));
+            num(b, u32::from(v.unwrap_or(0)));
             crlf(b);
         }
         text::LIST_END.send(b);

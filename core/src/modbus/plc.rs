@@ -29,17 +29,33 @@ pub const IR_READINGS: u16 = IR_COUNTS + COUNTERS as u16;
 /// First input register of the timers' time left.
 pub const IR_TIME_LEFT: u16 = 32;
 
-/// What the input registers report besides the engine, kept up to date by the firmware.
+/// Input registers 0..7, kept up to date by the firmware: status bits, STAT's scan times,
+/// the scan count, receive overruns and dropped frames.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Status {
-    /// `STATUS_*` bits.
-    pub flags: u16,
-    /// STAT's figures since RUN (min/max in timer ticks, scans, run time).
-    pub stats: ScanStats,
-    /// Received bytes lost since reset.
-    pub overruns: u16,
-    /// Modbus frames dropped since RUN.
-    pub dropped: u16,
+    /// The registers, in address order.
+    pub regs: [u16; 8],
+}
+
+impl Status {
+    /// The registers for `flags` (`STATUS_*` bits), STAT's figures since RUN (min/max in
+    /// Timer1 ticks of 0.5 µs, scans, run time), overruns since reset and frames dropped.
+    pub fn new(flags: u16, st: &ScanStats, overruns: u16, dropped: u16) -> Self {
+        // No scan yet shows 0.
+        let us = |ticks: u16| if st.count == 0 { 0 } else { ticks >> 1 };
+        Self {
+            regs: [
+                flags,
+                us(st.min),
+                stats::per_1000(st.run_ms, st.count).min(0xFFFF) as u16,
+                us(st.max),
+                (st.count >> 16) as u16,
+                st.count as u16,
+                overruns,
+                dropped,
+            ],
+        }
+    }
 }
 
 /// Report server ID's text after the run indicator.
@@ -95,38 +111,19 @@ impl<B: Board> PlcMap<'_, B> {
     }
 
     fn input_register(&mut self, addr: u16) -> u16 {
-        let st = self.status.stats;
-        let us = |ticks: u16| {
-            let t = if st.count == 0 { 0 } else { ticks };
-            ScanStats::ticks_to_us(u32::from(t)).min(0xFFFF) as u16
-        };
-        match addr {
-            0 => self.status.flags,
-            1 => us(st.min),
-            2 => stats::per_1000(st.run_ms, st.count).min(0xFFFF) as u16,
-            3 => us(st.max),
-            4 => (st.count >> 16) as u16,
-            5 => st.count as u16,
-            6 => self.status.overruns,
-            7 => self.status.dropped,
-            IR_COUNTS..IR_READINGS => {
-                let m = usize::from(addr - IR_COUNTS);
-                self.eng.count.get(m).copied().unwrap_or(0)
-            }
-            IR_READINGS.. if addr < IR_READINGS + SET_POINTS as u16 => {
-                let readings = self.b.analog_readings();
-                readings.get(usize::from(addr - IR_READINGS)).copied().unwrap_or(0)
-            }
-            _ => {
-                let now = self.b.now_ms();
-                let left = self.eng.time_left_ms((addr - IR_TIME_LEFT) as u8, now);
-                // 0.1 s steps, rounded up; at most 65535 (6,553.5 s).
-                if left > 6_553_400 {
-                    0xFFFF
-                } else {
-                    stats::div(left + 99, 100) as u16
-                }
-            }
+        let a = usize::from(addr);
+        // Masks instead of checks: `contains` has kept the address in range.
+        if addr < IR_COUNTS {
+            self.status.regs[a & 7]
+        } else if addr < IR_READINGS {
+            self.eng.count[a & 7]
+        } else if addr < IR_TIME_LEFT {
+            self.b.analog_readings()[a & 1]
+        } else {
+            let now = self.b.now_ms();
+            let left = self.eng.time_left_ms((addr - IR_TIME_LEFT) as u8, now);
+            // 0.1 s steps, rounded up; at most 65535 (6,553.5 s).
+            stats::div(left.min(6_553_500) + 99, 100) as u16
         }
     }
 }
@@ -150,29 +147,29 @@ impl<B: Board> Map for PlcMap<'_, B> {
                 let byte = *self.port(addr);
                 bit(byte, addr)
             }
-            Table::DiscreteInputs => match addr {
-                0..=5 => bit(self.b.inputs(), addr),
-                8..=23 => bit16(self.eng.q, addr - 8),
-                24..=39 => {
-                    let now = self.b.now_ms();
-                    u16::from(self.eng.time_left_ms((addr - 24) as u8, now) != 0)
+            Table::DiscreteInputs => {
+                // Eight addresses per byte of state: A, Q (two), TQ (two), CQ, H.
+                let (word, first) = match addr >> 3 {
+                    0 => (u16::from(self.b.inputs()), 0),
+                    1 | 2 => (self.eng.q, 8),
+                    // A TQ bit is retired when a scan starts (or the editor idles).
+                    3 | 4 => (self.eng.tq, 24),
+                    5 => (u16::from(self.eng.cq), 40),
+                    _ => (u16::from(self.b.analog_bits() >> analog::FIRST_CHANNEL), 48),
+                };
+                bit16(word, addr - first)
+            }
+            // Masks instead of checks: `contains` has kept the address in range.
+            Table::HoldingRegisters => {
+                let (p, a) = (&self.eng.prog, usize::from(addr));
+                if addr < HR_COUNTER_PRESETS {
+                    u16::from(p.presets[a & 15])
+                } else if addr < HR_SET_POINTS {
+                    p.counter_presets[a & 7]
+                } else {
+                    p.set_points[a & 1]
                 }
-                40..=47 => bit(self.eng.cq, addr - 40),
-                _ => bit(self.b.analog_bits(), addr - 48 + u16::from(analog::FIRST_CHANNEL)),
-            },
-            Table::HoldingRegisters => match addr {
-                0..HR_COUNTER_PRESETS => {
-                    u16::from(self.eng.prog.presets.get(usize::from(addr)).copied().unwrap_or(0))
-                }
-                HR_COUNTER_PRESETS..HR_SET_POINTS => {
-                    let m = usize::from(addr - HR_COUNTER_PRESETS);
-                    self.eng.prog.counter_presets.get(m).copied().unwrap_or(0)
-                }
-                _ => {
-                    let k = usize::from(addr - HR_SET_POINTS);
-                    self.eng.prog.set_points.get(k).copied().unwrap_or(0)
-                }
-            },
+            }
             Table::InputRegisters => self.input_register(addr),
         }
     }
@@ -224,7 +221,7 @@ impl<B: Board> Map for PlcMap<'_, B> {
     }
 
     fn running(&self) -> bool {
-        self.status.flags & STATUS_RUNNING != 0
+        self.status.regs[0] & STATUS_RUNNING != 0
     }
 
     fn id_len(&self) -> u8 {

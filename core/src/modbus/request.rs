@@ -97,72 +97,54 @@ fn check<M: Map + ?Sized>(function: u8, pdu: &[u8], map: &mut M) -> Result<Answe
                 qty: b,
             })
         }
-        WRITE_SINGLE_COIL => {
-            if len != 5 || (b != 0x0000 && b != 0xFF00) {
+        WRITE_SINGLE_COIL | WRITE_SINGLE_REGISTER => {
+            let coil = function == WRITE_SINGLE_COIL;
+            let table = if coil {
+                Table::Coils
+            } else {
+                Table::HoldingRegisters
+            };
+            if len != 5 || (coil && b != 0x0000 && b != 0xFF00) {
                 return Err(Exception::IllegalDataValue);
             }
-            if !map.contains(Table::Coils, a) {
+            if !map.contains(table, a) {
                 return Err(Exception::IllegalDataAddress);
             }
-            map.write(Table::Coils, a, u16::from(b != 0));
-            Ok(Answer::Echo { len: 5 })
-        }
-        WRITE_SINGLE_REGISTER => {
-            if len != 5 {
+            if !coil && !map.accepts(a, b) {
                 return Err(Exception::IllegalDataValue);
             }
-            if !map.contains(Table::HoldingRegisters, a) {
-                return Err(Exception::IllegalDataAddress);
-            }
-            if !map.accepts(a, b) {
-                return Err(Exception::IllegalDataValue);
-            }
-            map.write(Table::HoldingRegisters, a, b);
+            map.write(table, a, if coil { u16::from(b != 0) } else { b });
             Ok(Answer::Echo { len: 5 })
         }
-        WRITE_MULTIPLE_COILS => {
+        WRITE_MULTIPLE_COILS | WRITE_MULTIPLE_REGISTERS => {
+            let coils = function == WRITE_MULTIPLE_COILS;
+            let (table, max, bytes) = if coils {
+                (Table::Coils, MAX_WRITE_COILS, b.div_ceil(8))
+            } else {
+                (Table::HoldingRegisters, MAX_WRITE_REGISTERS, 2 * b)
+            };
             let count = pdu.get(5).copied().unwrap_or(0);
-            if b == 0
-                || b > MAX_WRITE_COILS
-                || u16::from(count) != b.div_ceil(8)
-                || len != 6 + usize::from(count)
-            {
+            if b == 0 || b > max || u16::from(count) != bytes || len != 6 + usize::from(count) {
                 return Err(Exception::IllegalDataValue);
             }
-            if !fits(a, b) || !covers(map, Table::Coils, a, b) {
+            if !fits(a, b) || !covers(map, table, a, b) {
                 return Err(Exception::IllegalDataAddress);
             }
-            for i in 0..b {
-                let byte = pdu.get(6 + usize::from(i >> 3)).copied().unwrap_or(0);
-                let bit = (byte >> (i & 7)) & 1;
-                map.write(Table::Coils, a.wrapping_add(i), u16::from(bit));
-            }
-            Ok(Answer::Echo { len: 5 })
-        }
-        WRITE_MULTIPLE_REGISTERS => {
-            let count = pdu.get(5).copied().unwrap_or(0);
-            if b == 0
-                || b > MAX_WRITE_REGISTERS
-                || u16::from(count) != 2 * b
-                || len != 6 + usize::from(count)
-            {
-                return Err(Exception::IllegalDataValue);
-            }
-            if !fits(a, b) || !covers(map, Table::HoldingRegisters, a, b) {
-                return Err(Exception::IllegalDataAddress);
-            }
-            // Every value is checked before the first write: an exception changes nothing.
-            for i in 0..b {
-                if !map.accepts(a.wrapping_add(i), word(pdu, 6 + 2 * usize::from(i))) {
-                    return Err(Exception::IllegalDataValue);
+            // Value i: a bit of the packed coils (first in bit 0), or a register.
+            let value = |i: u16| {
+                if coils {
+                    let byte = pdu.get(6 + usize::from(i >> 3)).copied().unwrap_or(0);
+                    u16::from((byte >> (i & 7)) & 1)
+                } else {
+                    word(pdu, 6 + 2 * usize::from(i))
                 }
+            };
+            // Every value is checked before the first write: an exception changes nothing.
+            if !coils && (0..b).any(|i| !map.accepts(a.wrapping_add(i), value(i))) {
+                return Err(Exception::IllegalDataValue);
             }
             for i in 0..b {
-                map.write(
-                    Table::HoldingRegisters,
-                    a.wrapping_add(i),
-                    word(pdu, 6 + 2 * usize::from(i)),
-                );
+                map.write(table, a.wrapping_add(i), value(i));
             }
             Ok(Answer::Echo { len: 5 })
         }

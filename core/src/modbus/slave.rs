@@ -9,8 +9,7 @@ use super::frame::{Receiver, Verdict};
 use super::map::Map;
 use super::reply::Reply;
 use super::request::{handle, Answer};
-use super::{BROADCAST, WRITE_MULTIPLE_COILS, WRITE_MULTIPLE_REGISTERS, WRITE_SINGLE_COIL};
-use super::WRITE_SINGLE_REGISTER;
+use super::BROADCAST;
 
 /// A master counts as active this long after its last valid frame for this slave (SPEC §13:
 /// the terminal's RUN displays resume after 3 s of silence).
@@ -91,17 +90,8 @@ impl Slave {
         let to = frame.first().copied().unwrap_or(0);
         let pdu = frame.get(1..len - 2).unwrap_or(&[]);
         if to == BROADCAST {
-            // Only writes mean something to every slave at once; nothing is answered.
-            let function = pdu.first().copied().unwrap_or(0);
-            if matches!(
-                function,
-                WRITE_SINGLE_COIL
-                    | WRITE_SINGLE_REGISTER
-                    | WRITE_MULTIPLE_COILS
-                    | WRITE_MULTIPLE_REGISTERS
-            ) {
-                handle(pdu, map);
-            }
+            // Carried out, never answered: only a write changes anything.
+            handle(pdu, map);
             return Event::Broadcast;
         }
         if to != address {
@@ -118,19 +108,6 @@ impl Slave {
     fn drop(&mut self) -> Event {
         self.dropped = self.dropped.saturating_add(1);
         Event::Dropped
-    }
-
-    /// Whether the request being answered wrote (functions 05, 06, 15, 16).
-    pub fn request_writes(&self) -> bool {
-        let function = self.rx.frame().get(1).copied().unwrap_or(0);
-        self.replying
-            && matches!(
-                function,
-                WRITE_SINGLE_COIL
-                    | WRITE_SINGLE_REGISTER
-                    | WRITE_MULTIPLE_COILS
-                    | WRITE_MULTIPLE_REGISTERS
-            )
     }
 
     /// Whether a reply is being sent.

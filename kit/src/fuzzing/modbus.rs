@@ -213,10 +213,7 @@ pub fn modbus_plc(data: &[u8]) -> Verdict {
     let mut b = crate::sim::SimBoard::new();
     eng.clear_runtime(&mut b);
     let mut slave = Slave::new();
-    let status = Status {
-        flags: STATUS_RUNNING,
-        ..Status::default()
-    };
+    let status = Status::new(STATUS_RUNNING, &utile_core::stats::ScanStats::new(), 0, 0);
     let mut pairs = data.chunks_exact(2);
     while let Some(pair) = pairs.next() {
         let (control, value) = (pair[0], pair[1]);
