@@ -1,5 +1,6 @@
 //! One simulated ATmega328P: loading the images, running, the cycle count, resets, memory.
 
+use super::flash::FlashImage;
 use super::{ioctl_def, uart, LoadError, F_CPU, VCC_MV};
 use simavr_ffi as ffi;
 use std::ffi::{c_char, c_int, c_void, CString};
@@ -11,7 +12,7 @@ pub(crate) const MCUSR: usize = 0x54;
 /// simavr's watchdog-reset ioctl (the `wdr` instruction): re-arms the watchdog timer.
 const IOCTL_WATCHDOG_RESET: u32 = ioctl_def(b'w', b'd', b't', b'r');
 /// Flash size of the ATmega328P in bytes.
-const FLASH_SIZE: u32 = 32 * 1024;
+pub(crate) const FLASH_SIZE: u32 = 32 * 1024;
 
 /// What the CPU is doing after a run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -140,7 +141,25 @@ impl Chip {
     /// EEPROM erased to 0xFF unless the ELF carries an `.eeprom` section, MCUSR = PORF).
     pub fn load(elf: &Path) -> Result<Chip, LoadError> {
         let mut firmware = read_elf(elf)?;
-        firmware.frequency = F_CPU as u32;
+        Chip::make(Some(&mut firmware))
+    }
+
+    /// A fresh ATmega328P at 16 MHz with erased flash (0xFF) and EEPROM: a blank chip, for a
+    /// boot loader alone ([`Chip::load_boot_image`]) or an image from [`Chip::write_flash`].
+    pub fn blank() -> Result<Chip, LoadError> {
+        Chip::make(None)
+    }
+
+    /// A fresh ATmega328P with the firmware of an Intel HEX file (as avrdude would write it;
+    /// no EEPROM contents in it): [`Chip::blank`] plus [`Chip::write_flash`].
+    pub fn load_hex(hex: &Path) -> Result<Chip, LoadError> {
+        let image = FlashImage::read_hex(hex)?;
+        let mut chip = Chip::blank()?;
+        chip.write_flash(&image)?;
+        Ok(chip)
+    }
+
+    fn make(firmware: Option<&mut ffi::elf_firmware_t>) -> Result<Chip, LoadError> {
         // SAFETY: installs a function pointer with the exact signature simavr expects.
         unsafe { ffi::avr_global_logger_set(Some(quiet_logger)) };
         let mcu = CString::new("atmega328p").expect("no NUL in a literal");
@@ -160,7 +179,10 @@ impl Chip {
             (*a).vcc = VCC_MV;
             (*a).avcc = VCC_MV;
             (*a).aref = VCC_MV;
-            ffi::avr_load_firmware(a, &mut *firmware);
+            if let Some(firmware) = firmware {
+                firmware.frequency = F_CPU as u32;
+                ffi::avr_load_firmware(a, firmware);
+            }
         }
         let link = Box::new(Link {
             avr: avr.as_ptr(),
@@ -178,6 +200,53 @@ impl Chip {
         chip.attach_uart()?;
         chip.attach_eeprom();
         Ok(chip)
+    }
+
+    /// Writes an image into flash as a programmer would (no reset; later chunks win).
+    /// Fails, writing nothing, if a chunk lies past the end of flash.
+    pub fn write_flash(&mut self, image: &FlashImage) -> Result<(), LoadError> {
+        let len = self.flash_len();
+        if let Some((at, _)) = image
+            .chunks
+            .iter()
+            .find(|(a, d)| *a as usize + d.len() > len)
+        {
+            return Err(LoadError::BadHex(format!(
+                "data at {at:#06x} runs past the end of flash ({len:#06x})"
+            )));
+        }
+        let flash = self.avr().flash;
+        for (at, data) in &image.chunks {
+            // SAFETY: checked above: `at + len` is within the `flashend + 1` bytes.
+            unsafe {
+                std::ptr::copy_nonoverlapping(data.as_ptr(), flash.add(*at as usize), data.len())
+            };
+        }
+        Ok(())
+    }
+
+    /// Loads a boot loader image (e.g. from [`FlashImage::read_hex`]) into the boot section
+    /// `section`, as with the fuses BOOTRST programmed and BOOTSZ = `section`: from now on
+    /// every reset (and this call, a power-on reset) starts at [`BootSection::start`].
+    /// Fails if the image does not lie within the section.
+    pub fn load_boot_image(
+        &mut self,
+        image: &FlashImage,
+        section: BootSection,
+    ) -> Result<(), LoadError> {
+        if image.start() < section.start() || image.end() > FLASH_SIZE {
+            return Err(LoadError::BadHex(format!(
+                "boot image {:#06x}..{:#06x} is not within the boot section {:#06x}..{FLASH_SIZE:#06x}",
+                image.start(),
+                image.end(),
+                section.start()
+            )));
+        }
+        self.write_flash(image)?;
+        // SAFETY: `avr` is valid and not running.
+        unsafe { (*self.avr.as_ptr()).reset_pc = section.start() };
+        self.reset(Reset::PowerOn);
+        Ok(())
     }
 
     /// Loads a boot loader ELF into the boot section beside the firmware, as with the fuses

@@ -7,7 +7,8 @@
 //! boot section, EEPROM access and write time, the ADC in millivolts, a UART fed and timed
 //! at any baud, single instructions with the PC after each.
 //!
-//! One file per job: [`chip`] (load, step, cycles, reset, memory), [`uart`] (the serial
+//! One file per job: [`chip`] (load, step, cycles, reset, memory), [`flash`] (Intel HEX
+//! images, the Arduino boot loaders), [`uart`] (the serial
 //! port), [`pins`] (driven inputs, output levels), [`adc`], [`eeprom`], [`bus`].
 //!
 //! ```no_run
@@ -35,11 +36,13 @@ pub mod adc;
 pub mod bus;
 pub mod chip;
 pub mod eeprom;
+pub mod flash;
 pub mod pins;
 pub mod uart;
 
 pub use bus::{Bus, BusByte, Collision};
 pub use chip::{BootSection, Chip, CpuState, Reset};
+pub use flash::{ArduinoBoot, FlashImage};
 pub use pins::RigPin;
 pub use uart::RxPacing;
 
@@ -91,6 +94,8 @@ pub enum LoadError {
     BadElf(String),
     /// simavr does not know the MCU.
     NoMcu,
+    /// An Intel HEX image that cannot be read or does not fit where it must go.
+    BadHex(String),
 }
 
 impl fmt::Display for LoadError {
@@ -101,6 +106,7 @@ impl fmt::Display for LoadError {
             }
             LoadError::BadElf(p) => write!(f, "simavr cannot read the ELF file {p}"),
             LoadError::NoMcu => write!(f, "simavr does not know the atmega328p"),
+            LoadError::BadHex(why) => write!(f, "flash image: {why}"),
         }
     }
 }

@@ -410,6 +410,55 @@ pub fn measure_autostart(elf: &Path) -> Result<f64, String> {
     Ok(c as f64 / CYCLES_PER_MS as f64)
 }
 
+/// Start-up behind a boot loader: from a reset to the boot loader handing over and to the
+/// first autostarted output, in milliseconds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BootStart {
+    /// Reset → the application's first instruction (the boot loader's own wait).
+    pub boot_ms: f64,
+    /// Reset → Y0 on (`SET .Y0 END` autostarted).
+    pub output_ms: f64,
+}
+
+/// Runs `chip` from a reset at `reset_cycle` until the boot loader hands over (PC below
+/// `boot_start`) and then until Y0 comes on.
+fn boot_start(chip: &mut Chip, reset_cycle: u64, boot_start: u32) -> Result<BootStart, String> {
+    let ms = |c: u64| (c - reset_cycle) as f64 / CYCLES_PER_MS as f64;
+    let handed = chip
+        .run_until(5000 * CYCLES_PER_MS, |c| c.pc() < boot_start)
+        .ok_or("the boot loader never started the application")?;
+    let on = chip
+        .run_until(3000 * CYCLES_PER_MS, |c| c.y(0))
+        .ok_or("Y0 never came on")?;
+    Ok(BootStart {
+        boot_ms: ms(handed),
+        output_ms: ms(on),
+    })
+}
+
+/// Start-up of an autostarted `SET .Y0 END` (stored in EEPROM, D8 grounded) behind `boot`:
+/// from power-up, and (`port_open`) from the external reset a port open makes once it runs.
+pub fn measure_autostart_boot(
+    elf: &Path,
+    boot: utile_kit::simavr::ArduinoBoot,
+    port_open: bool,
+) -> Result<BootStart, String> {
+    let mut chip = chip::load(elf)?;
+    chip.set_eeprom(0, &eeprom_with(&program(&["SET", ".Y0", "END"]), 1));
+    boot.load_into(&mut chip).map_err(|e| e.to_string())?;
+    chip.hold_low(RigPin::D8, true);
+    let start = boot.section().start();
+    let from = chip.cycle();
+    let power_up = boot_start(&mut chip, from, start)?;
+    if !port_open {
+        return Ok(power_up);
+    }
+    chip.run_rig(100 * CYCLES_PER_MS);
+    chip.reset(utile_kit::simavr::Reset::External);
+    let from = chip.cycle();
+    boot_start(&mut chip, from, start)
+}
+
 /// Section sizes from `avr-size -A`: (flash = .text + .data, static RAM = .data + .bss +
 /// .noinit).
 pub fn sizes(elf: &Path) -> Result<(u64, u64), String> {

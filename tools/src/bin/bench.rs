@@ -2,8 +2,8 @@
 //! simavr and prints a Markdown table beside the original assembly firmware's figures.
 //!
 //! Usage: `bench [--quick | --long] [--scans N] [SECTION...]` with sections `scan`,
-//! `opcodes` (cycles per command line), `latency`, `timers`, `autostart`, `size`, `stack`, `uart`, `store`,
-//! `modbus` (default: all).
+//! `opcodes` (cycles per command line), `latency`, `timers`, `autostart` (also behind each
+//! Arduino boot loader), `size`, `stack`, `uart`, `store`, `modbus` (default: all).
 //! Timer runs up to 60 s of simulated time run in simavr, longer ones on the host core;
 //! `--quick` lowers that to 10 s and uses 1000 scans, `--long` raises it to 600 s.
 //! Not a test: nothing is asserted; an unmeasurable row says why.
@@ -300,6 +300,33 @@ fn timer_rows(rows: &mut Vec<Row>, elf: &Path, limit_ms: u64) {
     }
 }
 
+/// Start-up behind each Arduino boot loader (Debian's arduino-core-avr): power-up and a
+/// port-open (DTR) reset to the first autostarted output, the boot loader's own wait beside.
+fn autostart_boot_rows(rows: &mut Vec<Row>, elf: &Path) {
+    use utile_kit::simavr::ArduinoBoot;
+    for boot in ArduinoBoot::ALL {
+        for (port_open, when) in [(false, "power-up"), (true, "port-open reset")] {
+            let what = format!(
+                "{when} → first output with autostart behind {}",
+                match boot {
+                    ArduinoBoot::Old => "the old boot loader",
+                    ArduinoBoot::Optiboot => "Optiboot",
+                }
+            );
+            let text = match bench::measure_autostart_boot(elf, boot, port_open) {
+                Ok(t) => format!(
+                    "{:.1} ms ({:.2} ms boot loader + {:.2} ms uTile)",
+                    t.output_ms,
+                    t.boot_ms,
+                    t.output_ms - t.boot_ms
+                ),
+                Err(e) => format!("not measurable: {e}"),
+            };
+            row(rows, what, text, "—", "≤ boot loader's wait + 10 ms");
+        }
+    }
+}
+
 fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
     let quick = args.iter().any(|a| a == "--quick");
@@ -365,6 +392,7 @@ fn main() {
             "~540 ms",
             "≤ 100 ms",
         );
+        autostart_boot_rows(&mut rows, &elf);
     }
     if want("uart") {
         match bench::measure_uart(&elf) {

@@ -9,7 +9,7 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
-use utile_kit::simavr::{self as nano, Chip, CpuState, Reset, RigPin};
+use utile_kit::simavr::{self as nano, Chip, CpuState, Reset, RigPin, RxPacing};
 use utile_tools::vnano::args::{self, Options, USAGE};
 use utile_tools::vnano::load::{Loader, Step};
 use utile_tools::vnano::pty::Pty;
@@ -101,6 +101,10 @@ struct Session {
     reset: bool,
     /// Levels on A6 and A7 in millivolts, as put on the chip's ADC inputs.
     analog_mv: [u32; 2],
+    /// First address of the boot loader's section (`--bootloader`).
+    boot: Option<u32>,
+    /// Reset the chip when a client opens the pty.
+    dtr_reset: bool,
 }
 
 fn run(o: &Options) -> Result<(), String> {
@@ -110,7 +114,20 @@ fn run(o: &Options) -> Result<(), String> {
         Some(file) => Some(Loader::from_file(file)?),
         None => None,
     };
-    let mut nano = Chip::load(&elf).map_err(|e| e.to_string())?;
+    let mut nano = if o.blank {
+        Chip::blank()
+    } else if elf
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("hex"))
+    {
+        Chip::load_hex(&elf)
+    } else {
+        Chip::load(&elf)
+    }
+    .map_err(|e| e.to_string())?;
+    if let Some(boot) = o.bootloader {
+        boot.load_into(&mut nano).map_err(|e| e.to_string())?;
+    }
     if let Some(file) = &o.eeprom {
         let bytes = std::fs::read(file).map_err(|e| format!("--eeprom {}: {e}", file.display()))?;
         nano.set_eeprom(0, &bytes);
@@ -137,8 +154,21 @@ fn run(o: &Options) -> Result<(), String> {
     let own_keys = !stdin_tty || term::owns_terminal(STDIN);
     let stdout_tty = term::is_tty(STDOUT);
     let uart = if o.pty {
-        let pty = Pty::open(o.link.as_deref()).map_err(|e| format!("cannot open a pty: {e}"))?;
-        let mut line = format!("vnano: UART (19200 8N1) on {}", pty.path().display());
+        let mut pty =
+            Pty::open(o.link.as_deref()).map_err(|e| format!("cannot open a pty: {e}"))?;
+        if o.dtr_reset {
+            pty.watch_opens()
+                .map_err(|e| format!("cannot watch the pty for opens: {e}"))?;
+        }
+        let mut line = match o.bootloader {
+            Some(b) => format!(
+                "vnano: UART ({} baud boot loader {}, then 19200 8N1) on {}",
+                b.baud(),
+                b.name(),
+                pty.path().display()
+            ),
+            None => format!("vnano: UART (19200 8N1) on {}", pty.path().display()),
+        };
         if let Some(l) = &o.link {
             line.push_str(&format!(" (link {})", l.display()));
         }
@@ -149,7 +179,15 @@ fn run(o: &Options) -> Result<(), String> {
         } else {
             "in the background: no rig keys (its terminal is the shell's); end it with kill"
         };
-        let _ = writeln!(out, "vnano: firmware {}; {keys}", elf.display());
+        let shown = if o.blank {
+            "none (blank flash)".to_string()
+        } else {
+            elf.display().to_string()
+        };
+        let _ = writeln!(out, "vnano: firmware {shown}; {keys}");
+        if o.dtr_reset {
+            let _ = writeln!(out, "vnano: opening the port resets the chip (DTR)");
+        }
         if let Some(file) = &o.load {
             let _ = writeln!(out, "vnano: loading {} through READ", file.display());
         }
@@ -175,6 +213,8 @@ fn run(o: &Options) -> Result<(), String> {
         quit: false,
         reset: false,
         analog_mv: o.analog_mv,
+        boot: o.bootloader.map(|b| b.section().start()),
+        dtr_reset: o.dtr_reset,
     };
     if matches!(s.uart, Uart::Terminal) && stdout_tty {
         // A clean screen below uTile's: its screen is drawn with absolute positions.
@@ -194,6 +234,7 @@ fn run(o: &Options) -> Result<(), String> {
                 break;
             }
         }
+        port_open_reset(&mut s, &mut nano);
         // While --load feeds READ, the user's keys wait (in the terminal or the pty).
         if loader.is_none() {
             read_input(&mut s, &mut nano);
@@ -295,6 +336,13 @@ fn wait_input(s: &Session, timeout: Duration) {
             events: libc::POLLIN,
             revents: 0,
         });
+        if let Some(fd) = p.opens_fd() {
+            fds.push(libc::pollfd {
+                fd,
+                events: libc::POLLIN,
+                revents: 0,
+            });
+        }
     }
     let ts = libc::timespec {
         tv_sec: timeout.as_secs() as libc::time_t,
@@ -341,9 +389,52 @@ fn read_input(s: &mut Session, nano: &mut Chip) {
     if let Uart::Pty(p) = &mut s.uart {
         let mut bytes = Vec::new();
         if p.read_into(&mut bytes) > 0 {
+            if let Some(start) = s.boot {
+                line_pacing(nano, start);
+            }
             nano.send(&bytes);
         }
     }
+}
+
+/// How a client's bytes reach the chip behind a boot loader: at the line rate of the baud
+/// the running code programmed while the boot loader runs (avrdude writes a page at once,
+/// and the boot loader polls the UART: nothing waits for it), the firmware's own pacing
+/// (after each byte is read, as a typist) once uTile runs. Switched only with nothing
+/// queued, so no byte waits in the other queue.
+fn line_pacing(nano: &mut Chip, boot_start: u32) {
+    if nano.pending_input() != 0 {
+        return;
+    }
+    let pacing = if nano.pc() >= boot_start {
+        RxPacing::Line { baud: nano.baud() }
+    } else {
+        RxPacing::AfterRead
+    };
+    nano.set_rx_pacing(pacing);
+}
+
+/// A client opened the pty: reset the chip as a Nano's DTR line does, dropping what the old
+/// run still had on its way (the client reads the new run only).
+fn port_open_reset(s: &mut Session, nano: &mut Chip) {
+    if !s.dtr_reset {
+        return;
+    }
+    let Uart::Pty(p) = &mut s.uart else {
+        return;
+    };
+    if !p.opened() {
+        return;
+    }
+    p.discard_output();
+    nano.clear_input();
+    nano.take_output();
+    nano.reset(Reset::External);
+    s.notice = Some((
+        "port opened: chip reset (DTR)".into(),
+        Instant::now() + Duration::from_secs(2),
+    ));
+    s.drawn = None;
 }
 
 /// One byte from the keyboard.

@@ -1,13 +1,15 @@
 //! Command line of `cargo nano` (the `vnano` binary).
 
 use std::path::PathBuf;
+use utile_kit::simavr::ArduinoBoot;
 
 /// The usage text.
 pub const USAGE: &str = "\
 usage: cargo nano [OPTIONS]       (the vnano binary)
 
 Runs the uTile firmware image in simavr: a virtual Arduino Nano at 16 MHz, paced to the
-wall clock, its UART (19200 8N1) on this terminal, with a virtual test rig.
+wall clock, its UART (19200 8N1; any baud the code programs) on this terminal, with a
+virtual test rig.
 
 Rig keys: press Ctrl-] then
   0..5  press/release switch A0..A5      8  fit/remove the D8 jumper (autostart, read at reset)
@@ -18,7 +20,19 @@ The line below the uTile screen shows the switches, jumpers and the LEDs Y0..Y7,
 levels on A6 and A7 once either is above 0 V.
 
 options:
-  --elf PATH          firmware ELF (default: $UTILE_ELF, else out/m328-nano-utile.elf)
+  --elf PATH          firmware ELF, or Intel HEX if PATH ends in .hex (default: $UTILE_ELF,
+                      else out/m328-nano-utile.elf)
+  --bootloader NAME   a Nano's boot loader beside the firmware (Debian's arduino-core-avr):
+                        old       ATmegaBOOT, 2 KB at 0x7800 (hfuse 0xDA), 57600 baud,
+                                  waits about 1 s after every reset
+                        optiboot  Optiboot, 115200 baud, waits only after an external
+                                  reset; Debian's build is 532 bytes, so it runs in the
+                                  1 KB section at 0x7C00 (hfuse 0xDC), not 512 B at 0x7E00
+                      every reset starts in it; with --pty a client opening the port resets
+                      the chip as a Nano's DTR does, so avrdude -c arduino can flash it
+  --blank             no firmware in flash (a new chip; with --bootloader, a blank Nano)
+  --dtr-reset         with --pty: reset the chip when a client opens the port (the default
+                      with --bootloader)
   --pty               put the UART on a pseudo-terminal (connect minicom, picocom or
                       C-Kermit to the printed /dev/pts/N); rig keys without Ctrl-]
   --link PATH         with --pty: also make PATH a symlink to it (e.g. /tmp/utile-tty)
@@ -68,6 +82,12 @@ pub struct Options {
     pub save_eeprom: Option<PathBuf>,
     /// Listing to load through READ right after boot (`--load`).
     pub load: Option<PathBuf>,
+    /// The boot loader in the boot section (`--bootloader`).
+    pub bootloader: Option<ArduinoBoot>,
+    /// No firmware in flash (`--blank`).
+    pub blank: bool,
+    /// Reset the chip when a client opens the pty (`--dtr-reset`, or `--bootloader`).
+    pub dtr_reset: bool,
     /// `-h`/`--help`.
     pub help: bool,
 }
@@ -127,6 +147,16 @@ pub fn parse<I: IntoIterator<Item = String>>(
                 o.save_eeprom = Some(persist_file.clone());
             }
             "--load" => o.load = Some(PathBuf::from(value("--load")?)),
+            "--bootloader" => {
+                let v = value("--bootloader")?;
+                o.bootloader = Some(
+                    ArduinoBoot::from_name(&v)
+                        .ok_or_else(|| format!("--bootloader: old or optiboot, not {v}"))?,
+                );
+                o.dtr_reset = true;
+            }
+            "--blank" => o.blank = true,
+            "--dtr-reset" => o.dtr_reset = true,
             other => return Err(format!("unknown option {other} (see --help)")),
         }
     }
@@ -223,5 +253,18 @@ mod tests {
             .contains("--a7: a level is 0..5 volts"));
         assert!(p(&["--a7", "x"]).unwrap_err().contains("not x"));
         assert!(p(&["--a6"]).unwrap_err().contains("needs a value"));
+        assert!(p(&["--bootloader", "new"])
+            .unwrap_err()
+            .contains("old or optiboot"));
+    }
+
+    #[test]
+    fn a_boot_loader_resets_on_port_open() {
+        let o = p(&["--bootloader", "optiboot", "--blank"]).unwrap();
+        assert_eq!(o.bootloader, Some(ArduinoBoot::Optiboot));
+        assert!(o.blank && o.dtr_reset);
+        let o = p(&["--bootloader", "old"]).unwrap();
+        assert_eq!(o.bootloader, Some(ArduinoBoot::Old));
+        assert!(!p(&[]).unwrap().dtr_reset);
     }
 }

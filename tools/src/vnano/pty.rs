@@ -4,6 +4,10 @@
 //! We keep our own descriptor on the slave side open: a client may come and go (the master
 //! never sees a hang-up), and what the firmware sent before the client connected (the boot
 //! screen) waits in the line's buffer for it.
+//!
+//! A Nano resets when a client opens its port (DTR pulls RESET low through a capacitor).
+//! That open cannot be seen on the master while we hold the slave open, so
+//! [`Pty::watch_opens`] watches the slave node with inotify (`IN_OPEN`) instead.
 
 use std::collections::VecDeque;
 use std::ffi::CStr;
@@ -22,6 +26,8 @@ pub struct Pty {
     path: PathBuf,
     link: Option<PathBuf>,
     out: VecDeque<u8>,
+    /// inotify on the slave node, when client opens are watched.
+    opens: Option<OwnedFd>,
 }
 
 fn check(ret: libc::c_int) -> io::Result<libc::c_int> {
@@ -78,7 +84,72 @@ impl Pty {
             path,
             link,
             out: VecDeque::new(),
+            opens: None,
         })
+    }
+
+    /// Watches the slave node for clients opening it (see [`Pty::opened`]). Our own open
+    /// came before the watch, so it is not reported.
+    pub fn watch_opens(&mut self) -> io::Result<()> {
+        let c_path = std::ffi::CString::new(self.path.as_os_str().as_encoded_bytes())
+            .map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, e))?;
+        // SAFETY: a new inotify descriptor we own; a watch on a valid C string.
+        unsafe {
+            let fd = check(libc::inotify_init1(libc::IN_NONBLOCK | libc::IN_CLOEXEC))?;
+            let fd = OwnedFd::from_raw_fd(fd);
+            check(libc::inotify_add_watch(
+                fd.as_raw_fd(),
+                c_path.as_ptr(),
+                libc::IN_OPEN,
+            ))?;
+            self.opens = Some(fd);
+        }
+        Ok(())
+    }
+
+    /// The inotify descriptor (to poll), if opens are watched.
+    pub fn opens_fd(&self) -> Option<i32> {
+        self.opens.as_ref().map(|f| f.as_raw_fd())
+    }
+
+    /// True if a client opened the pty since the last call (several opens count as one).
+    pub fn opened(&mut self) -> bool {
+        let Some(fd) = &self.opens else {
+            return false;
+        };
+        let mut any = false;
+        // Aligned for `inotify_event`; only the masks matter, not the (empty) names.
+        let mut buf = [0u64; 64];
+        loop {
+            // SAFETY: reading into a buffer of the given length.
+            let n = unsafe {
+                libc::read(
+                    fd.as_raw_fd(),
+                    buf.as_mut_ptr() as *mut libc::c_void,
+                    std::mem::size_of_val(&buf),
+                )
+            };
+            if n <= 0 {
+                return any;
+            }
+            let bytes = n as usize;
+            let mut at = 0;
+            let head = std::mem::size_of::<libc::inotify_event>();
+            while at + head <= bytes {
+                // SAFETY: the kernel wrote whole events; `at` is at an event's start, and
+                // read_unaligned copes with the byte offset.
+                let ev: libc::inotify_event = unsafe {
+                    std::ptr::read_unaligned((buf.as_ptr() as *const u8).add(at) as *const _)
+                };
+                any |= ev.mask & libc::IN_OPEN != 0;
+                at += head + ev.len as usize;
+            }
+        }
+    }
+
+    /// Drops the output held back for a client: after a reset it is the old chip's.
+    pub fn discard_output(&mut self) {
+        self.out.clear();
     }
 
     /// The slave device clients open (`/dev/pts/N`).
