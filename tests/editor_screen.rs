@@ -512,8 +512,11 @@ fn list_sends_a_listing() {
     assert_eq!(&lines[1..4], &["000 A0.", "001 .Y0", "002 END"]);
     assert_eq!(lines[4], "T0 = 5");
     assert_eq!(lines[19], "TF = 255");
-    assert!(lines[20].starts_with("# end of listing"));
-    assert_eq!(lines.len(), 21);
+    // Version 2: the counter presets and set-points follow.
+    assert_eq!(lines[20], "C0 = 0");
+    assert_eq!(lines[29], "S7 = 0");
+    assert!(lines[30].starts_with("# end of listing"));
+    assert_eq!(lines.len(), 31);
     assert!(!out.contains('\x1b'));
     r.type_bytes(b"\r");
     assert_eq!(r.status(), " *** User File 0 ***");

@@ -288,3 +288,43 @@ fn read_takes_version_1_and_version_2_files_and_write_sends_version_2() {
     nano.run_ms(300);
     assert_eq!(write_file(&mut nano), img.to_vec(), "nothing changed");
 }
+
+#[test]
+fn ldc_by_keys_sets_a_preset_that_the_running_program_uses_and_store_keeps_it() {
+    let prog = example("parts-counter");
+    let mut nano = Board::boot_with(Rig {
+        d8: false,
+        d9: false,
+        eeprom: Some(eeprom_with(&prog)),
+    });
+    assert!(nano.wait_for("*** User File 0 ***", 2_000));
+    nano.enter("load", 300);
+    nano.enter("ldc", 300);
+    assert!(nano.wait_for("Z clear all", 1_000), "{}", nano.screen());
+    nano.run_ms(100);
+    let screen = nano.screen();
+    assert!(screen.contains("C0") && screen.contains("S7"), "{screen}");
+    assert!(screen.contains("00005"), "C0's preset from the stored program:\n{screen}");
+    let reading_row = screen.lines().find(|l| l.starts_with("reading")).unwrap_or("");
+    assert_eq!(reading_row.split_whitespace().count(), 3, "two readings: {reading_row}");
+    nano.enter("2", 300);
+    nano.enter("70000", 300);
+    assert!(nano.wait_for("65535", 500), "refused: {}", nano.screen());
+    nano.enter("", 300);
+    nano.enter("store", 0);
+    assert!(nano.wait_for("stored in EEPROM", 3_000));
+    nano.enter("ex0", 300);
+    nano.run_ms(100);
+    assert_eq!(nano.outputs() & (Y0 | Y1), Y0, "running, the belt on");
+    one_box(&mut nano);
+    assert_eq!(nano.outputs() & Y0, Y0);
+    one_box(&mut nano);
+    assert_eq!(nano.outputs() & (Y0 | Y1), Y1, "the new preset 2 stops the belt");
+    // STORE kept it: the stored image has C0 = 2.
+    let ee = nano.eeprom();
+    let newest = [&ee[2..300], &ee[0x202..0x202 + 298]]
+        .into_iter()
+        .filter_map(|img| image::decode(img).ok())
+        .find(|p| p.counter_presets[0] == 2);
+    assert!(newest.is_some(), "a stored image with C0 = 2");
+}

@@ -45,7 +45,7 @@ impl Editor {
     pub(super) fn full_redraw(&mut self) {
         self.render = 0;
         self.msg = None;
-        self.info = false;
+        self.info = INFO_NONE;
         self.len = 0;
         self.overlong = false;
     }
@@ -136,8 +136,10 @@ impl Editor {
                         erase_at(b, ROW_STATUS, self.status_col());
                     }
                     // STAT's report as it stands (a muted line may have erased it).
-                    if self.info {
+                    if self.info == INFO_STAT {
                         self.stat(b);
+                    } else if self.info == INFO_ADDRESS {
+                        self.show_address(b);
                     } else if !self.blank {
                         erase_at(b, ROW_INFO, 1);
                     }
@@ -292,9 +294,9 @@ impl Editor {
         if self.render >= STEPS {
             self.lost = false;
         }
-        if self.info {
+        if self.info != INFO_NONE {
             erase_at(b, ROW_INFO, 1);
-            self.info = false;
+            self.info = INFO_NONE;
         }
     }
 
@@ -307,6 +309,6 @@ impl Editor {
                 b.tx(b'\n');
             }
         }
-        self.info = false;
+        self.info = INFO_NONE;
     }
 }

@@ -78,6 +78,13 @@ pub enum Mode {
     Run,
 }
 
+/// What row 19 (the info row) shows, so a redraw shows it again.
+pub(super) const INFO_NONE: u8 = 0;
+/// STAT's report.
+pub(super) const INFO_STAT: u8 = 1;
+/// The Modbus slave address (VER, ADDR).
+pub(super) const INFO_ADDRESS: u8 = 2;
+
 /// Which screen the editor shows.
 // No heap to box READ's staging buffer into: the variants share its space instead.
 #[allow(clippy::large_enum_variant)]
@@ -147,8 +154,8 @@ pub struct Editor {
     seen_lost: u16,
     /// The redraw under way started from a cleared screen.
     blank: bool,
-    /// STAT's report sits on row 19.
-    info: bool,
+    /// What row 19 shows (`INFO_*`).
+    info: u8,
     /// Next step of a deferred full redraw ([`STEPS`] = done).
     render: u8,
     /// When the bit-stack and port displays were last updated in RUN mode.
@@ -187,7 +194,7 @@ impl Editor {
             lost: false,
             seen_lost: 0,
             blank: false,
-            info: false,
+            info: INFO_NONE,
             render: STEPS,
             bs_ms: 0,
             port_ms: 0,

@@ -203,12 +203,12 @@ impl Editor {
     }
 
     /// The Modbus slave address, on the info row (as STAT's report).
-    fn show_address<B: Board>(&mut self, b: &mut B) {
+    pub(super) fn show_address<B: Board>(&mut self, b: &mut B) {
         text::ADDRESS.send_at(b, ROW_INFO, 1);
         let a = store::slave_address(b);
         num(b, u32::from(a));
         ceol(b);
-        self.info = true;
+        self.info = INFO_ADDRESS;
     }
 
     /// An executable command: run it now, store it at the cursor line, advance.

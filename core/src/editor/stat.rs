@@ -19,6 +19,6 @@ impl Editor {
         let overruns = b.rx_overruns();
         num(b, u32::from(overruns));
         ceol(b);
-        self.info = true;
+        self.info = INFO_STAT;
     }
 }
