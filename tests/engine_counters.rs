@@ -104,7 +104,7 @@ fn h6_follows_the_level_with_hysteresis_and_set_point_0_disables_it() {
     let (mut eng, mut b) = run(&["H6.", ".Y0", "H7.", ".Y1", "END"]);
     eng.prog.set_points = [600, 0];
     eng.clear_runtime(&mut b);
-    let mut level = |eng: &mut Engine, b: &mut SimBoard, counts: u16| {
+    let level = |eng: &mut Engine, b: &mut SimBoard, counts: u16| {
         b.set_analog(6, counts);
         b.set_analog(7, counts);
         b.run_for(eng, 20, 2);
