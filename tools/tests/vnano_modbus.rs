@@ -1,0 +1,171 @@
+//! Real Modbus masters against the real image in the virtual Nano, over its pty (SPEC §13,
+//! issue 16): pymodbus (`modbus_master.py`: every function and exception, values, writes)
+//! and mbpoll. A program with U0 as a remote start and a counter, and the tank example whose
+//! behaviour a written set-point changes. `./x setup` installs both masters; without them
+//! the tests say so and pass, unless `CI` is set.
+
+mod vnano_util;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use utile_core::engine::Program;
+use utile_core::store;
+use utile_kit::listing;
+use utile_kit::sim::SimBoard;
+use vnano_util::*;
+
+const T: Duration = Duration::from_secs(30);
+
+/// Whether `what` can run here; in CI it must.
+fn have(what: &str, check: &mut Command) -> bool {
+    let ok = check.output().map(|o| o.status.success()).unwrap_or(false);
+    if !ok {
+        assert!(std::env::var_os("CI").is_none(), "{what} is missing (./x setup installs it)");
+        eprintln!("skipped: {what} is missing (./x setup installs it)");
+    }
+    ok
+}
+
+fn pymodbus() -> bool {
+    have("pymodbus", Command::new("python3").args(["-c", "import pymodbus, serial"]))
+}
+
+/// An EEPROM file holding `prog` as STORE leaves it.
+fn eeprom_file(name: &str, prog: &Program) -> PathBuf {
+    let mut b = SimBoard::new();
+    store::store(prog, &mut b).expect("STORE");
+    let path = scratch(name).join("eeprom.bin");
+    std::fs::write(&path, &b.eeprom).expect("write EEPROM file");
+    path
+}
+
+/// The virtual Nano autostarting `prog`, plus extra options; waits out the RUN screen.
+fn nano(name: &str, prog: &Program, extra: &[&str]) -> PtyNano {
+    let elf = firmware_elf();
+    let ee = eeprom_file(name, prog);
+    let mut args = vec!["--elf", elf.to_str().unwrap(), "--eeprom", ee.to_str().unwrap(), "--d8-low"];
+    args.extend_from_slice(extra);
+    let nano = PtyNano::start(&args);
+    // The RUN screen goes out first (about 0.6 s at 19200 baud): drain it.
+    let (_f, mut tty) = nano.connect();
+    tty.wait_for("Running", T);
+    tty.collect_for(Duration::from_millis(1_500));
+    nano
+}
+
+/// `modbus_master.py PORT args...`: its output; fails the test on a failed check.
+fn master(port: &Path, args: &[&str]) -> String {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/modbus_master.py");
+    let out = Command::new("python3")
+        .arg(&script)
+        .arg(port)
+        .args(args)
+        .output()
+        .expect("run python3");
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        out.status.success(),
+        "modbus_master.py {args:?}:\n{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    text
+}
+
+/// Waits until the console's LED field shows `leds` (8 characters, `-` for off).
+fn wait_leds(n: &mut PtyNano, leds: &str) {
+    n.console.wait_for(&format!("LED Y0-Y7: {leds}"), T);
+}
+
+#[test]
+fn pymodbus_uses_every_function_and_gets_every_exception() {
+    if !pymodbus() {
+        return;
+    }
+    let prog = listing::commands(&["U0.", ".Y2", "A0.", "!", ".CU0", "KEY", "END"]);
+    let n = nano("functions.eeprom", &prog, &[]);
+    let out = master(&n.path, &["functions"]);
+    assert!(out.contains("ALL OK"), "{out}");
+}
+
+#[test]
+fn a_master_starts_and_stops_an_output_and_reads_a_counter() {
+    if !pymodbus() {
+        return;
+    }
+    let prog = listing::commands(&["U0.", ".Y2", "A0.", "!", ".CU0", "KEY", "END"]);
+    let mut n = nano("remote.eeprom", &prog, &[]);
+    wait_leds(&mut n, "--------");
+    master(&n.path, &["coil", "8", "1"]);
+    wait_leds(&mut n, "--2-----");
+    master(&n.path, &["coil", "8", "0"]);
+    wait_leds(&mut n, "--------");
+    // Three presses of A0 (a rig key toggles the switch): C0 counts three.
+    for _ in 0..3 {
+        n.key("0");
+        std::thread::sleep(Duration::from_millis(150));
+        n.key("0");
+        std::thread::sleep(Duration::from_millis(150));
+    }
+    let start = Instant::now();
+    loop {
+        let count = master(&n.path, &["read", "ir", "8", "1"]);
+        if count.trim() == "3" {
+            break;
+        }
+        assert!(start.elapsed() < T, "C0 as input register 8: {count}");
+        std::thread::sleep(Duration::from_millis(200));
+    }
+}
+
+#[test]
+fn a_set_point_written_by_the_master_changes_what_the_tank_does() {
+    if !pymodbus() {
+        return;
+    }
+    let tank = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/tank-fill.utl"),
+    )
+    .expect("tank example");
+    let prog = listing::parse("tank-fill", &tank).expect("tank listing");
+    // Level 2.0 V (409 counts), between the low mark (300) and the high mark (800): the
+    // pump has not started.
+    let mut n = nano("tank.eeprom", &prog, &["--a6", "2.0", "--a7", "2.0"]);
+    wait_leds(&mut n, "--------");
+    // The HMI raises the low mark above the level: the pump starts and the alarm lights.
+    master(&n.path, &["reg", "25", "500"]);
+    wait_leds(&mut n, "01------");
+    // It lowers the high mark under the level: the pump stops; the alarm stays (below 500).
+    master(&n.path, &["reg", "24", "400"]);
+    wait_leds(&mut n, "-1------");
+    let regs = master(&n.path, &["read", "hr", "24", "2"]);
+    assert_eq!(regs.trim(), "400 500");
+}
+
+#[test]
+fn mbpoll_reads_holding_registers_and_writes_a_coil() {
+    if !have("mbpoll", Command::new("mbpoll").arg("-V")) {
+        return;
+    }
+    let mut prog = listing::commands(&["U0.", ".Y2", "KEY", "END"]);
+    prog.presets[1] = 77;
+    let mut n = nano("mbpoll.eeprom", &prog, &[]);
+    let port = n.path.to_str().unwrap().to_string();
+    let out = Command::new("mbpoll")
+        .args(["-m", "rtu", "-b", "19200", "-P", "none", "-a", "1", "-t", "4", "-r", "1", "-c", "4", "-1"])
+        .arg(&port)
+        .output()
+        .expect("run mbpoll");
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(out.status.success(), "{text}");
+    assert!(text.contains("[2]: \t77") || text.contains("[2]:\t77") || text.contains("[2]: 77"), "{text}");
+    let out = Command::new("mbpoll")
+        .args(["-m", "rtu", "-b", "19200", "-P", "none", "-a", "1", "-t", "0", "-r", "9", "-1"])
+        .arg(&port)
+        .arg("1")
+        .output()
+        .expect("run mbpoll");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stdout));
+    wait_leds(&mut n, "--2-----");
+}
