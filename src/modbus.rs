@@ -14,9 +14,12 @@ use utile_core::store;
 use crate::hal::scan::RunState;
 use crate::hal::{serial, Nano};
 
-/// Reply bytes made per visit (a map read and the CRC each), so a visit stays far below
-/// the 0.5 ms a scan may wait; visits come every 16 scans, the line takes a byte per 521 µs.
-const BYTES_PER_VISIT: u8 = 4;
+/// Reply bytes made per visit at most (a map read and the CRC each), so a visit stays below
+/// the 0.5 ms a scan may wait.
+const BYTES_PER_VISIT: u8 = 6;
+/// Bytes kept queued ahead of the line (6 ms of it): visits come every 16 scans, 2.2 ms apart
+/// for a program of 200 lines, and a reply must not pause 1.5 characters.
+const AHEAD: u8 = 12;
 
 /// What the RUN loop must do after a visit.
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -86,13 +89,9 @@ impl Server {
     }
 
     /// One visit between scans, one job per visit so that none holds the scan up for long:
-    /// a finished frame judged and carried out, or the seal renewed after a write, or a few
-    /// reply bytes made.
+    /// a finished frame judged and carried out, or a few reply bytes made, or (the reply
+    /// queued) the warm-reset seal renewed.
     pub fn visit(&mut self, eng: &mut Engine, board: &mut Nano, st: &RunState, wraps: u16) -> After {
-        if self.reseal {
-            self.reseal = false;
-            return After::Written;
-        }
         let mut after = After::Nothing;
         if serial::take_frame_end() {
             self.refresh(board, st, wraps);
@@ -122,6 +121,10 @@ impl Server {
         }
         if self.pending {
             self.send(eng, board);
+        } else if self.reseal {
+            // After the reply is queued: the master waits for the reply, not for the seal.
+            self.reseal = false;
+            after = After::Written;
         }
         after
     }
@@ -137,7 +140,7 @@ impl Server {
         }
         let status = &self.status;
         for _ in 0..BYTES_PER_VISIT {
-            if serial::tx_room() == 0 {
+            if serial::tx_room() <= serial::TX_SIZE as u8 - AHEAD {
                 return;
             }
             let byte = interrupt::free(|cs| {

@@ -65,7 +65,8 @@ impl Line {
         }
     }
 
-    /// Send `frame` after `idle` cycles of silence; returns the cycle its last stop bit ends.
+    /// Send `frame` after `idle` cycles of silence; returns the cycle its last stop bit ends
+    /// (the request goes down the line while the chip runs).
     fn send(&mut self, idle: u64, frame: &[u8]) -> u64 {
         self.nano.chip.send_after(idle, frame);
         let now = self.nano.chip.cycle();
@@ -79,6 +80,9 @@ impl Line {
         frame.extend_from_slice(&crc16(&frame).to_le_bytes());
         self.nano.chip.take_output_timed();
         let end = self.send(4 * char_cycles(), &frame);
+        // The request goes out first (a long one takes several ms).
+        let now = self.nano.chip.cycle();
+        self.run(end.saturating_sub(now));
         (end, self.collect())
     }
 
@@ -230,3 +234,45 @@ fn the_terminal_is_quiet_while_a_master_is_active_and_resumes_after_three_second
     assert!(!line.nano.chip.take_output().is_empty(), "the displays resumed after 3 s");
 }
 
+
+
+#[test]
+fn a_long_write_then_reads_are_each_answered() {
+    let mut line = Line::new(&remote_start());
+    let (_, r) = line.transact(&[0x10, 0, 14, 0, 4, 8, 0, 9, 0, 10, 0x12, 0x34, 0x01, 0x00]);
+    assert_eq!(pdu(&r), vec![0x10, 0, 14, 0, 4]);
+    let (_, r) = line.transact(&[0x04, 0, 32, 0, 16]);
+    assert_eq!(pdu(&r).len(), 2 + 32, "time left of T0..TF");
+    let (_, r) = line.transact(&[0x03, 0, 16, 0, 2]);
+    assert_eq!(pdu(&r), vec![0x03, 4, 0x12, 0x34, 0x01, 0x00], "C0, C1 as written");
+}
+
+#[test]
+fn a_slow_program_still_gets_every_reply_whole_and_without_gaps() {
+    // Every opcode once: about 140 µs a scan, so the slave is visited every 2.2 ms.
+    use utile_core::opcodes::{is_valid, END, NOP};
+    let mut p = Program::blank();
+    p.uf = [NOP; 256];
+    let ops: Vec<u8> = (0..=0xFEu8).filter(|&op| op != END && is_valid(op)).collect();
+    for (l, op) in p.uf.iter_mut().zip(&ops) {
+        *l = *op;
+    }
+    p.uf[ops.len()] = END;
+    p.presets = [10; 16];
+    let mut line = Line::new(&p);
+    let requests: [(&[u8], usize); 6] = [
+        (&[0x03, 0, 0, 0, 26], 2 + 52),
+        (&[0x06, 0, 14, 0, 9], 5),
+        (&[0x04, 0, 32, 0, 16], 2 + 32),
+        (&[0x10, 0, 16, 0, 2, 4, 0x12, 0x34, 0, 7], 5),
+        (&[0x02, 0, 8, 0, 42], 2 + 6),
+        (&[0x11], 2 + 2 + 11),
+    ];
+    for (req, len) in requests {
+        let (_, reply) = line.transact(req);
+        assert_eq!(pdu(&reply).len(), len, "reply to {req:02X?}");
+        for w in reply.windows(2) {
+            assert!(w[1].1 - w[0].1 < char_cycles() * 3 / 2, "a gap inside the reply to {req:02X?}");
+        }
+    }
+}

@@ -160,7 +160,8 @@ pub fn on_rx(cs: CriticalSection) {
     // DOR0 (bit 3): the USART already lost a byte before this one.
     let hw_overrun = dp.USART0.ucsr0a().read().bits() & 0x08 != 0;
     let byte = dp.USART0.udr0().read().bits();
-    if MODBUS.load(Ordering::Relaxed) != 0 {
+    let modbus = MODBUS.load(Ordering::Relaxed) != 0;
+    if modbus {
         let now = dp.TC1.tcnt1().read().bits();
         // SAFETY: the closure does not re-enter LINE.
         unsafe {
@@ -175,17 +176,12 @@ pub fn on_rx(cs: CriticalSection) {
         wr!(dp.TC1.tifr1(), 0x04);
         // TIMSK1: OCIE1B.
         wr!(dp.TC1.timsk1(), 0x04);
-        if hw_overrun {
-            // SAFETY: the closure does not re-enter RX.
-            unsafe { RX.with(cs, |rx| rx.overruns = rx.overruns.saturating_add(1)) };
-        }
         super::scan::want_cpu();
-        return;
     }
     // SAFETY: the closure does not re-enter RX.
     unsafe {
         RX.with(cs, |rx| {
-            let lost = u16::from(hw_overrun) + u16::from(!rx.ring.push(byte));
+            let lost = u16::from(hw_overrun) + u16::from(!modbus && !rx.ring.push(byte));
             rx.overruns = rx.overruns.saturating_add(lost);
         })
     };
@@ -223,28 +219,36 @@ pub fn on_silence(_cs: CriticalSection) {
 /// enable falls (its last stop bit has left).
 #[inline(always)]
 pub fn on_tx_complete(cs: CriticalSection) {
-    // UCSR0A: UDRE0 (bit 5). A real chip sets TXC0 only with UDR0 empty; a simulator that
+    // UCSR0B: UDRIE0 off means the data-register-empty interrupt found the ring empty: every
+    // byte has gone to the transmitter. A real chip raises TXC0 only then; a simulator that
     // raises it after every byte is held to that here.
-    let udr_empty = regs().USART0.ucsr0a().read().bits() & 0x20 != 0;
+    let udr_empty = regs().USART0.ucsr0b().read().bits() & UDRIE0 == 0;
     // SAFETY: the closure does not re-enter TX.
     let empty = udr_empty && unsafe { TX.with(cs, |tx| tx.len() == 0) };
+    if !empty {
+        return;
+    }
+    // The line is idle: if the whole reply was queued, it is over; if its last byte is yet
+    // to be reported queued (the main loop learns that a visit later), `reply_queued` ends it.
+    TX_IDLE.store(1, Ordering::Relaxed);
     // SAFETY: the closure does not re-enter LINE.
-    let done = unsafe {
+    if unsafe { LINE.with(cs, |l| l.queued) } {
+        reply_over(cs);
+    }
+}
+
+/// The reply has left the line: the driver enable falls, transmit complete goes quiet.
+fn reply_over(cs: CriticalSection) {
+    // SAFETY: the closure does not re-enter LINE.
+    unsafe {
         LINE.with(cs, |l| {
-            let done = empty && l.queued;
-            if done {
-                l.txcie = 0;
-                l.queued = false;
-            }
-            done
+            l.txcie = 0;
+            l.queued = false;
         })
     };
-    if done {
-        TX_IDLE.store(1, Ordering::Relaxed);
-        pins::driver_enable(cs, false);
-        // UCSR0B: TXCIE0 off (the ring is empty: no UDRIE0 either).
-        wr!(regs().USART0.ucsr0b(), UCSR0B_ON);
-    }
+    pins::driver_enable(cs, false);
+    // UCSR0B: TXCIE0 off (the ring is empty: no UDRIE0 either).
+    wr!(regs().USART0.ucsr0b(), UCSR0B_ON);
 }
 
 /// Switch the line between the terminal's ring (EDIT mode) and the Modbus slave (RUN mode).
@@ -303,12 +307,17 @@ pub(crate) fn reply_start() -> bool {
     })
 }
 
-/// The whole reply is in the transmit ring: the driver enable falls when it has left.
+/// The whole reply is in the transmit ring: the driver enable falls when it has left, or
+/// now if the line has gone idle already.
 pub(crate) fn reply_queued() {
     interrupt::free(|cs| {
+        if TX_IDLE.load(Ordering::Relaxed) != 0 {
+            reply_over(cs);
+            return;
+        }
         // SAFETY: the closure does not re-enter LINE.
         unsafe { LINE.with(cs, |l| l.queued = true) };
-        // UCSR0B: TXCIE0 on, UDRIE0 on (the ring has the reply's last bytes).
+        // UCSR0B: TXCIE0 on, UDRIE0 on (the ring may hold the reply's last bytes).
         wr!(regs().USART0.ucsr0b(), UCSR0B_ON | UDRIE0 | TXCIE0);
     });
 }

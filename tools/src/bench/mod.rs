@@ -534,6 +534,13 @@ pub fn measure_uart(elf: &Path) -> Result<UartBytes, String> {
     })
 }
 
+/// A Modbus RTU frame: `body` and its CRC-16/MODBUS, low byte first.
+fn modbus_frame(body: &[u8]) -> Vec<u8> {
+    let mut f = body.to_vec();
+    f.extend_from_slice(&utile_core::modbus::crc::crc16(body).to_le_bytes());
+    f
+}
+
 /// Stack use: (bytes of stack used at the deepest point, free bytes never touched).
 pub fn measure_stack(elf: &Path) -> Result<(usize, usize, Vec<String>), String> {
     let heap = symbol(elf, "__heap_start").ok_or("no __heap_start symbol")?;
@@ -562,9 +569,18 @@ pub fn measure_stack(elf: &Path) -> Result<(usize, usize, Vec<String>), String> 
             b"\x1b[C\x1b[D\x1b[A\x1b[B\x1b[1~\x1b[2~\x1b[3~40\r\x1bH".to_vec(),
         ),
         ("entry", b"A0.\r!\r.Y0\rINS\rDEL\rVER\r99999\r".to_vec()),
+        ("LDC", b"LDC\r5\r\x1b[C70000\r1023\rZ\r\r".to_vec()),
+        ("ADDR", b"7\rADDR\r".to_vec()),
         ("STORE", b"STORE\r".to_vec()),
         ("LOAD", b"LOAD\r".to_vec()),
         ("RUN", b"EX0\r".to_vec()),
+        // Modbus requests to slave 7 while the program runs: the deepest map paths.
+        ("Modbus FC03 x 26", modbus_frame(&[7, 0x03, 0, 0, 0, 26])),
+        ("Modbus FC16", modbus_frame(&[7, 0x10, 0, 14, 0, 4, 8, 0, 9, 0, 10, 0x12, 0x34, 0x01, 0x00])),
+        ("Modbus FC04 time left", modbus_frame(&[7, 0x04, 0, 32, 0, 16])),
+        ("Modbus FC02", modbus_frame(&[7, 0x02, 0, 8, 0, 42])),
+        ("Modbus FC15", modbus_frame(&[7, 0x0F, 0, 0, 0, 24, 3, 0xFF, 0, 0xFF])),
+        ("Modbus FC17", modbus_frame(&[7, 0x11])),
         ("break", b"/".to_vec()),
         ("strike", b" ".to_vec()),
         ("STAT", b"STAT\r".to_vec()),
@@ -574,6 +590,8 @@ pub fn measure_stack(elf: &Path) -> Result<(usize, usize, Vec<String>), String> 
         // READ ignores input for 200 ms after the file; RUN needs time to scan.
         let quiet = match name {
             "READ file of 256 lines" | "RUN" => 400,
+            // A reply starts 1.8 ms after the request and takes up to 60 ms.
+            n if n.starts_with("Modbus") => 100,
             // STORE writes for up to a second without a word.
             "STORE" => 2000,
             _ => 40,

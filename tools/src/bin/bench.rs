@@ -474,7 +474,7 @@ fn main() {
                 }
                 row(
                     &mut rows,
-                    "stack high-water (after help, LDT, READ/LIST/WRITE of 256 lines, RUN, STORE)",
+                    "stack high-water (after help, LDT, LDC, ADDR, READ/LIST/WRITE of 256 lines, RUN with Modbus requests, STORE)",
                     format!("{used} bytes used, {free} bytes never touched"),
                     "n/a",
                     "—",
