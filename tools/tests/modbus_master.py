@@ -5,6 +5,9 @@
     modbus_master.py PORT read TABLE A N   print N values of TABLE (co, di, hr, ir) from A
     modbus_master.py PORT coil A 0|1       write single coil A
     modbus_master.py PORT reg A V          write single register A
+    modbus_master.py PORT wire             bad CRC, another address, a broadcast
+    modbus_master.py PORT poll N           N reads of coils in a row, all answered
+    modbus_master.py PORT slave S ...      the same commands, to slave S
 
 Prints one line per check or value; exits 1 with the reason when a check fails.
 """
@@ -108,14 +111,53 @@ def functions(c):
     print("ALL OK")
 
 
+def silent(c, frame, what):
+    """A frame that must get no answer at all."""
+    c.socket.reset_input_buffer()
+    c.socket.write(frame)
+    time.sleep(0.3)
+    got = c.socket.read(c.socket.in_waiting or 0) if c.socket.in_waiting else b""
+    if got:
+        fail(f"{what}: answered {got.hex()}")
+    print(f"{what}: no answer")
+
+
+def wire(c):
+    good = bytes([SLAVE, 0x03, 0, 0, 0, 1])
+    silent(c, good + ((crc16(good) ^ 0x0101).to_bytes(2, "little")), "bad CRC")
+    other = bytes([SLAVE + 1, 0x03, 0, 0, 0, 1])
+    silent(c, other + crc16(other).to_bytes(2, "little"), "another address")
+    # Broadcast: write coil V7 (23) on; no answer, but it is done.
+    bcast = bytes([0, 0x05, 0, 23, 0xFF, 0])
+    silent(c, bcast + crc16(bcast).to_bytes(2, "little"), "broadcast")
+    if not ok(c.read_coils(23, count=1, slave=SLAVE), "01 V7").bits[0]:
+        fail("the broadcast write was not done")
+    ir = ok(c.read_input_registers(7, count=1, slave=SLAVE), "04 dropped").registers[0]
+    if ir < 2:
+        fail(f"dropped frames {ir}")
+    print(f"broadcast done; {ir} frames dropped")
+    print("ALL OK")
+
+
 def main():
+    global SLAVE
     port, what = sys.argv[1], sys.argv[2]
+    if what == "slave":
+        SLAVE = int(sys.argv[3])
+        del sys.argv[2:4]
+        what = sys.argv[2]
     c = ModbusSerialClient(port=port, baudrate=19200, parity="N", stopbits=1, bytesize=8,
                            timeout=1, retries=2)
     if not c.connect():
         fail("cannot open " + port)
     if what == "functions":
         functions(c)
+    elif what == "wire":
+        wire(c)
+    elif what == "poll":
+        for k in range(int(sys.argv[3])):
+            ok(c.read_coils(0, count=8, slave=SLAVE), f"poll {k}")
+        print("ALL OK")
     elif what == "read":
         table, a, n = sys.argv[3], int(sys.argv[4]), int(sys.argv[5])
         call = {"co": c.read_coils, "di": c.read_discrete_inputs,

@@ -169,3 +169,74 @@ fn mbpoll_reads_holding_registers_and_writes_a_coil() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stdout));
     wait_leds(&mut n, "--2-----");
 }
+
+#[test]
+fn broken_frames_get_no_answer_and_a_broadcast_is_done_silently() {
+    if !pymodbus() {
+        return;
+    }
+    let n = nano("wire.eeprom", &listing::commands(&["KEY", "END"]), &[]);
+    let out = master(&n.path, &["wire"]);
+    assert!(out.contains("ALL OK"), "{out}");
+}
+
+#[test]
+fn addr_moves_the_slave_and_a_lone_slash_still_stops_the_program() {
+    if !pymodbus() {
+        return;
+    }
+    // Stored address 1; the user sets 7 at the terminal, then runs the program.
+    let n = nano("addr.eeprom", &listing::commands(&["U0.", ".Y2", "KEY", "END"]), &[]);
+    let (mut f, mut tty) = n.connect();
+    use std::io::Write;
+    f.write_all(b"/").unwrap();
+    let at = tty.wait_for("Strike any key", T);
+    f.write_all(b" ").unwrap();
+    // Back in the editor (its status line was kept: nothing new to wait for).
+    std::thread::sleep(Duration::from_millis(500));
+    f.write_all(b"7\rADDR\r").unwrap();
+    let at = tty.wait_for_from(at, b"Modbus address 7", T);
+    f.write_all(b"EX0\r").unwrap();
+    tty.wait_for_from(at, b"Running", T);
+    drop(f);
+    drop(tty);
+    std::thread::sleep(Duration::from_millis(1_500));
+    let out = master(&n.path, &["slave", "7", "poll", "3"]);
+    assert!(out.contains("ALL OK"), "{out}");
+    // Slave 1 no longer answers: pymodbus gives up (the script fails).
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/modbus_master.py");
+    let old = Command::new("python3")
+        .arg(&script)
+        .arg(&n.path)
+        .args(["poll", "1"])
+        .output()
+        .expect("run python3");
+    assert!(!old.status.success(), "slave 1 answered after ADDR 7");
+    // A lone `/` from the terminal stops the program (it has KEY).
+    let (mut f, mut tty) = n.connect();
+    std::thread::sleep(Duration::from_millis(3_500));
+    f.write_all(b"/").unwrap();
+    tty.wait_for("Strike any key", T);
+}
+
+#[test]
+fn the_terminal_stays_quiet_while_a_master_polls() {
+    if !pymodbus() {
+        return;
+    }
+    // PPA every scan: without the muting, port displays would break the master's replies.
+    let n = nano("quiet.eeprom", &listing::commands(&["PPA", "KEY", "END"]), &[]);
+    // The first request may meet a display on its way out; then every one is answered.
+    let _ = Command::new("python3")
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/modbus_master.py"))
+        .arg(&n.path)
+        .args(["poll", "1"])
+        .output();
+    let out = master(&n.path, &["poll", "20"]);
+    assert!(out.contains("ALL OK"), "{out}");
+    // Three seconds after the last request the displays come back.
+    let (_f, mut tty) = n.connect();
+    std::thread::sleep(Duration::from_millis(3_500));
+    tty.collect_for(Duration::from_millis(1_000));
+    assert!(tty.text().contains("\u{1b}["), "RUN displays resumed: {:?}", tty.text());
+}
