@@ -79,7 +79,8 @@ impl Analog {
     /// Take one raw conversion (0..1023) of [`Analog::channel`]. Returns true when a new
     /// reading was made (and the channel to convert has changed).
     pub fn sample(&mut self, raw: u16) -> bool {
-        self.sum = self.sum.wrapping_add(raw.min(MAX));
+        // A 10-bit conversion: four of them fit 16 bits.
+        self.sum = self.sum.wrapping_add(raw & MAX);
         self.n += 1;
         if self.n < SAMPLES {
             return false;
@@ -87,15 +88,13 @@ impl Analog {
         let c = usize::from(self.chan & 1);
         let reading = self.sum / u16::from(SAMPLES);
         // No variable shift: the AVR would loop for it.
-        let mask = if self.chan == 0 { 0x40 } else { 0x80 };
+        let mask = if c == 0 { 0x40 } else { 0x80 };
         let was = self.bits & mask != 0;
-        if let (Some(r), Some(&sp)) = (self.readings.get_mut(c), self.set_points.get(c)) {
-            *r = reading;
-            if threshold(was, reading, sp) {
-                self.bits |= mask;
-            } else {
-                self.bits &= !mask;
-            }
+        self.readings[c] = reading;
+        if threshold(was, reading, self.set_points[c]) {
+            self.bits |= mask;
+        } else {
+            self.bits &= !mask;
         }
         self.sum = 0;
         self.n = 0;

@@ -86,10 +86,8 @@ impl Editor {
     /// The LDC screen over the work area and the status line, cell `sel` selected.
     pub(super) fn ldc_draw<B: Board>(&mut self, eng: &Engine, b: &mut B, sel: u8) {
         self.clear_area(b);
-        text::LDC_PRESET.send_at(b, ROW_C + 1, 1);
-        text::LDC_COUNT.send_at(b, ROW_C + 2, 1);
-        text::LDC_SET_POINT.send_at(b, ROW_S + 1, 1);
-        text::LDC_READING.send_at(b, ROW_S + 2, 1);
+        text::LDC_COUNTERS.send_at(b, ROW_C + 1, 1);
+        text::LDC_SET_POINTS.send_at(b, ROW_S + 1, 1);
         for i in 0..CELLS {
             let (row, col) = cell_pos(i);
             goto(b, row - 1, col + 2);
@@ -180,9 +178,7 @@ impl Editor {
                 eng.prog.counter_presets = [0; COUNTERS];
                 eng.prog.set_points = [0; SET_POINTS];
                 self.ldc_changed(eng, b);
-                for i in 0..CELLS {
-                    Self::ldc_cell(eng, b, i, i == sel);
-                }
+                self.ldc_draw(eng, b, sel);
             }
             Parsed::Word => self.message(b, text::UNRECOGNIZED),
         }

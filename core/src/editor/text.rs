@@ -214,14 +214,10 @@ texts! {
     TOO_LONG = "*** Line too long (8 max) ***";
     /// A number past 65535.
     TOO_BIG = "*** Number too big (65535 max) ***";
-    /// LDC's row labels.
-    LDC_PRESET = "preset";
-    /// LDC's row labels.
-    LDC_COUNT = "count";
-    /// LDC's row labels.
-    LDC_SET_POINT = "set-point";
-    /// LDC's row labels.
-    LDC_READING = "reading";
+    /// LDC's row labels of the counters (CR LF: the next row, column 1).
+    LDC_COUNTERS = "preset\r\ncount";
+    /// LDC's row labels of the set-points.
+    LDC_SET_POINTS = "set-point\r\nreading";
     /// LDC's status line.
     LDC_STATUS = "*** C/S: Z clear all, <CR> exit ***";
     /// LDC refused a value.

@@ -195,25 +195,20 @@ impl<B: Board> Map for PlcMap<'_, B> {
                     *byte &= !mask;
                 }
             }
+            // Masks instead of checks: `contains` has kept the address in range. Outputs
+            // and thresholds follow the new values at once, as after LDT or LDC.
             Table::HoldingRegisters => {
+                let (p, a) = (&mut self.eng.prog, usize::from(addr));
                 if addr < HR_COUNTER_PRESETS {
-                    if let Some(p) = self.eng.prog.presets.get_mut(usize::from(addr)) {
-                        *p = value as u8;
-                    }
+                    p.presets[a & 15] = value as u8;
                 } else if addr < HR_SET_POINTS {
-                    let m = usize::from(addr - HR_COUNTER_PRESETS);
-                    if let Some(p) = self.eng.prog.counter_presets.get_mut(m) {
-                        *p = value;
-                    }
-                    self.eng.refresh_counter_outputs();
+                    p.counter_presets[a & 7] = value;
                 } else {
-                    let k = usize::from(addr - HR_SET_POINTS);
-                    if let Some(p) = self.eng.prog.set_points.get_mut(k) {
-                        *p = value;
-                    }
-                    let sp = self.eng.prog.set_points;
-                    self.b.set_points(sp);
+                    p.set_points[a & 1] = value;
                 }
+                self.eng.refresh_counter_outputs();
+                let sp = self.eng.prog.set_points;
+                self.b.set_points(sp);
             }
             // Read-only tables: the codec never writes them.
             Table::DiscreteInputs | Table::InputRegisters => {}
