@@ -8,6 +8,7 @@
     modbus_master.py PORT wire             bad CRC, another address, a broadcast
     modbus_master.py PORT poll N           N reads of coils in a row, all answered
     modbus_master.py PORT slave S ...      the same commands, to slave S
+    modbus_master.py PORT bus N            slaves 1..N on one line, and a broadcast
 
 Prints one line per check or value; exits 1 with the reason when a check fails.
 """
@@ -49,6 +50,7 @@ def crc16(data):
 
 def raw(c, pdu):
     """A request pymodbus itself refuses to build; the reply's bytes."""
+    time.sleep(0.05)  # the silence a master leaves before a frame
     frame = bytes([SLAVE]) + bytes(pdu)
     frame += crc16(frame).to_bytes(2, "little")
     c.socket.reset_input_buffer()
@@ -113,6 +115,7 @@ def functions(c):
 
 def silent(c, frame, what):
     """A frame that must get no answer at all."""
+    time.sleep(0.05)  # the silence a master leaves before a frame
     c.socket.reset_input_buffer()
     c.socket.write(frame)
     time.sleep(0.3)
@@ -139,6 +142,26 @@ def wire(c):
     print("ALL OK")
 
 
+def bus(c, n):
+    for s in range(1, n + 1):
+        # Coil 8 + s is U(s): with PU. .PY, output Y(s) of slave s only.
+        ok(c.write_coil(8 + s, True, slave=s), f"05 slave {s}")
+    for s in range(1, n + 1):
+        bits = ok(c.read_coils(0, count=8, slave=s), f"01 slave {s}").bits[:8]
+        want = [i == s for i in range(8)]
+        if bits != want:
+            fail(f"slave {s} outputs {bits}, expected {want}")
+        print(f"slave {s}: Y{s} on, the others off")
+    # A broadcast: U0 on in every slave, nobody answers.
+    frame = bytes([0, 0x05, 0, 8, 0xFF, 0])
+    silent(c, frame + crc16(frame).to_bytes(2, "little"), "broadcast")
+    for s in range(1, n + 1):
+        if not ok(c.read_coils(0, count=1, slave=s), f"01 slave {s}").bits[0]:
+            fail(f"slave {s} missed the broadcast")
+    print("broadcast reached every slave")
+    print("ALL OK")
+
+
 def main():
     global SLAVE
     port, what = sys.argv[1], sys.argv[2]
@@ -154,6 +177,8 @@ def main():
         functions(c)
     elif what == "wire":
         wire(c)
+    elif what == "bus":
+        bus(c, int(sys.argv[3]))
     elif what == "poll":
         for k in range(int(sys.argv[3])):
             ok(c.read_coils(0, count=8, slave=SLAVE), f"poll {k}")

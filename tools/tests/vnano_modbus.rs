@@ -240,3 +240,18 @@ fn the_terminal_stays_quiet_while_a_master_polls() {
     tty.collect_for(Duration::from_millis(1_000));
     assert!(tty.text().contains("\u{1b}["), "RUN displays resumed: {:?}", tty.text());
 }
+
+#[test]
+fn three_nanos_on_one_line_are_polled_through_one_pty() {
+    if !pymodbus() {
+        return;
+    }
+    let elf = firmware_elf();
+    let mut n = PtyNano::start(&["--elf", elf.to_str().unwrap(), "--bus", "3"]);
+    // Boot, autostart and the RUN screens (which stay off the line: D10 low).
+    std::thread::sleep(Duration::from_millis(2_500));
+    let out = master(&n.path, &["bus", "3"]);
+    assert!(out.contains("ALL OK"), "{out}");
+    n.console.collect_for(Duration::from_millis(200));
+    assert!(!n.console.text().contains("collisions"), "{}", n.console.text());
+}

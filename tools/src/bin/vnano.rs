@@ -109,6 +109,9 @@ struct Session {
 
 fn run(o: &Options) -> Result<(), String> {
     let elf = elf_path(o);
+    if let Some(n) = o.bus {
+        return utile_tools::vnano::bus::run(o, n, &elf);
+    }
     // A listing with mistakes stops here, before any terminal set-up.
     let mut loader = match &o.load {
         Some(file) => Some(Loader::from_file(file)?),

@@ -31,6 +31,10 @@ options:
                       every reset starts in it; with --pty a client opening the port resets
                       the chip as a Nano's DTR does, so avrdude -c arduino can flash it
   --blank             no firmware in flash (a new chip; with --bootloader, a blank Nano)
+  --bus N             N Nanos (2..8) on one RS-485 line on the pty (implies --pty): the
+                      client is the Modbus master; slave addresses 1..N, D8 fitted, each
+                      running the --eeprom program (default: PU. .PY KEY END, outputs =
+                      coils 8..15); two drivers (D10) at once are reported
   --dtr-reset         with --pty: reset the chip when a client opens the port (the default
                       with --bootloader)
   --pty               put the UART on a pseudo-terminal (connect minicom, picocom or
@@ -88,6 +92,8 @@ pub struct Options {
     pub blank: bool,
     /// Reset the chip when a client opens the pty (`--dtr-reset`, or `--bootloader`).
     pub dtr_reset: bool,
+    /// Nanos on one line (`--bus N`).
+    pub bus: Option<usize>,
     /// `-h`/`--help`.
     pub help: bool,
 }
@@ -111,6 +117,15 @@ pub fn parse<I: IntoIterator<Item = String>>(
                 o.pty = true;
             }
             "--fast" => o.fast = true,
+            "--bus" => {
+                let v = value("--bus")?;
+                let n: usize = v.parse().map_err(|_| format!("--bus: not a number: {v}"))?;
+                if !(2..=8).contains(&n) {
+                    return Err(format!("--bus: 2..8 Nanos, not {n}"));
+                }
+                o.bus = Some(n);
+                o.pty = true;
+            }
             "--for" => {
                 let v = value("--for")?;
                 let secs: f64 = v

@@ -3,6 +3,7 @@
 //! The `vnano` binary (`cargo nano`) puts these pieces together.
 
 pub mod args;
+pub mod bus;
 pub mod load;
 pub mod pty;
 pub mod rig;

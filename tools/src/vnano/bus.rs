@@ -1,0 +1,94 @@
+//! `cargo nano --bus N`: N virtual Nanos on one RS-485 line (the kit's [`Bus`]), the line on
+//! a pty whose client is the Modbus master (an HMI, pymodbus, mbpoll). Each Nano has slave
+//! address i + 1 (`ADDR`'s EEPROM cell), the D8 jumper fitted, and the `--eeprom` program
+//! (by default `PU. .PY KEY END`: outputs Y0..Y7 follow coils 8..15).
+
+use std::io::Write;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use utile_core::store::{self, ADDR_CELL};
+use utile_kit::listing;
+use utile_kit::sim::SimBoard;
+use utile_kit::simavr::{Bus, Chip, RigPin, F_CPU};
+
+use super::args::Options;
+use super::pty::Pty;
+use super::term;
+
+/// Simulated time per step: 1 ms.
+const STEP: u64 = F_CPU / 1000;
+
+/// The EEPROM of Nano `i`: the program of `--eeprom` (or the default one), address i + 1.
+fn eeprom(o: &Options, i: usize) -> Result<Vec<u8>, String> {
+    let mut ee = match &o.eeprom {
+        Some(f) => std::fs::read(f).map_err(|e| format!("--eeprom {}: {e}", f.display()))?,
+        None => {
+            let mut b = SimBoard::new();
+            let prog = listing::commands(&["PU.", ".PY", "KEY", "END"]);
+            store::store(&prog, &mut b).map_err(|e| format!("default program: {e:?}"))?;
+            b.eeprom
+        }
+    };
+    ee.resize(1024, 0xFF);
+    let a = (i + 1) as u8;
+    let at = usize::from(ADDR_CELL);
+    ee[at] = a;
+    ee[at + 1] = !a;
+    Ok(ee)
+}
+
+/// Runs the bus until a signal or `--for`.
+pub fn run(o: &Options, n: usize, elf: &Path) -> Result<(), String> {
+    let mut chips = Vec::new();
+    for i in 0..n {
+        let mut c = Chip::load(elf).map_err(|e| e.to_string())?;
+        c.set_eeprom(0, &eeprom(o, i)?);
+        c.hold_low(RigPin::D8, true);
+        chips.push(c);
+    }
+    let mut bus = Bus::new(chips, 19_200).with_driver_enable();
+    let mut pty = Pty::open(o.link.as_deref()).map_err(|e| format!("cannot open a pty: {e}"))?;
+    let mut out = std::io::stdout();
+    let _ = writeln!(
+        out,
+        "vnano: bus of {n} uTiles (slave addresses 1..{n}), the line (19200 8N1) on {}",
+        pty.path().display()
+    );
+    let _ = writeln!(out, "vnano: firmware {}; end with Ctrl-C", elf.display());
+    let _ = out.flush();
+    term::catch_quit_signals();
+    let limit = o.run_for.map(|secs| (secs * F_CPU as f64) as u64);
+    let (wall0, sim0) = (Instant::now(), bus.cycle());
+    let mut collisions = 0;
+    loop {
+        if term::quit_requested() || limit.is_some_and(|l| bus.cycle() >= l) {
+            break;
+        }
+        let mut bytes = Vec::new();
+        if pty.read_into(&mut bytes) > 0 {
+            bus.send(&bytes);
+        }
+        if let Some((i, state)) = bus.run_for(STEP) {
+            return Err(format!("Nano {} stopped: {state:?}", i + 1));
+        }
+        let sent: Vec<u8> = bus.take_master().iter().map(|b| b.byte).collect();
+        if !sent.is_empty() {
+            pty.write(&sent);
+            pty.flush();
+        }
+        if bus.collisions().len() != collisions {
+            collisions = bus.collisions().len();
+            let _ = writeln!(out, "vnano: {collisions} collisions (two drivers at once)");
+            let _ = out.flush();
+        }
+        if !o.fast {
+            let sim = Duration::from_nanos((bus.cycle() - sim0) * 1000 / (F_CPU / 1_000_000));
+            if let Some(wait) = sim.checked_sub(wall0.elapsed()) {
+                std::thread::sleep(wait.min(Duration::from_millis(5)));
+            }
+        }
+    }
+    let _ = writeln!(out, "vnano: bus stopped after {:.1} s", bus.cycle() as f64 / F_CPU as f64);
+    Ok(())
+}
