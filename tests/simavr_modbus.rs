@@ -276,3 +276,40 @@ fn a_slow_program_still_gets_every_reply_whole_and_without_gaps() {
         }
     }
 }
+
+#[test]
+fn store_keeps_presets_and_set_points_written_over_modbus() {
+    let mut line = Line::new(&remote_start());
+    // Write multiple registers 15..25: TF = 42, C0 = 0x1234, C1..C7 = 0, S6 = 500, S7 = 0.
+    let mut req = vec![0x10, 0, 15, 0, 11, 22];
+    let values: [u16; 11] = [42, 0x1234, 0, 0, 0, 0, 0, 0, 0, 500, 0];
+    for v in values {
+        req.extend_from_slice(&v.to_be_bytes());
+    }
+    let (_, r) = line.transact(&req);
+    assert_eq!(pdu(&r), vec![0x10, 0, 15, 0, 11], "TF, C0..C7, S6 written");
+    // The master goes quiet; the user stops the program at the terminal and STOREs.
+    line.run(3_100 * CYCLES_PER_MS);
+    line.nano.chip.take_output();
+    line.send(4 * char_cycles(), b"/");
+    line.run(200 * CYCLES_PER_MS);
+    assert!(String::from_utf8_lossy(&line.nano.chip.take_output()).contains("Strike any key"));
+    line.send(0, b" ");
+    line.run(300 * CYCLES_PER_MS);
+    for &c in b"store\r" {
+        line.send(0, &[c]);
+        line.run(5 * CYCLES_PER_MS);
+    }
+    line.run(2_000 * CYCLES_PER_MS);
+    let ee = line.nano.eeprom();
+    let stored: Vec<Program> = [&ee[2..300], &ee[0x202..0x202 + 298]]
+        .into_iter()
+        .filter_map(|img| utile_core::image::decode(img).ok())
+        .collect();
+    assert!(
+        stored.iter().any(|p| p.presets[15] == 42
+            && p.counter_presets[0] == 0x1234
+            && p.set_points == [500, 0]),
+        "a stored image holds the values written over Modbus"
+    );
+}
