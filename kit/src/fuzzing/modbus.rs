@@ -133,73 +133,90 @@ fn check_reply(reply: &[u8], pdu: &[u8], answer: Answer) -> Verdict {
     Ok(())
 }
 
-/// The harness: pairs of bytes (control, value). Control `& 3`: 0 a byte, 1 a byte after a
-/// 1.5-character gap, 2 the 3.5-character silence that ends a frame, 3 a frame built from
-/// the next `value` bytes with a correct CRC (so the handler is reached often).
-pub fn modbus(data: &[u8]) -> Verdict {
-    let mut rx = Receiver::new();
-    let mut map = ShapedMap::new();
+/// What the fuzz bytes put on the line.
+enum Line {
+    /// A byte; `true` after a 1.5-character gap.
+    Byte(u8, bool),
+    /// The 3.5-character silence that ends a frame.
+    End,
+}
+
+/// Pairs of bytes (control, value). Control `& 3`: 0 a byte, 1 a byte after a 1.5-character
+/// gap, 2 the silence that ends a frame, 3 a frame built from the next `value % 40` values
+/// with a correct CRC (so the handler is reached often), addressed by `control >> 6` (0 all,
+/// 1 another slave, else this one), and its end.
+fn line_events(data: &[u8]) -> Vec<Line> {
+    let mut events = Vec::new();
     let mut pairs = data.chunks_exact(2);
     while let Some(pair) = pairs.next() {
         let (control, value) = (pair[0], pair[1]);
         match control & 3 {
-            0 => rx.push(value, false),
-            1 => rx.push(value, true),
-            3 => {
-                let body: Vec<u8> = pairs
-                    .by_ref()
-                    .take(usize::from(value % 40))
-                    .map(|p| p[1])
-                    .collect();
-                let mut frame = std::vec![ADDRESS];
-                frame.extend_from_slice(&body);
+            0 => events.push(Line::Byte(value, false)),
+            1 => events.push(Line::Byte(value, true)),
+            2 => events.push(Line::End),
+            _ => {
+                let to = match control >> 6 {
+                    0 => 0,
+                    1 => 2,
+                    _ => ADDRESS,
+                };
+                let mut frame = std::vec![to];
+                frame.extend(pairs.by_ref().take(usize::from(value % 40)).map(|p| p[1]));
                 frame.extend_from_slice(&crc16(&frame).to_le_bytes());
-                for b in frame {
-                    rx.push(b, false);
-                }
+                events.extend(frame.into_iter().map(|b| Line::Byte(b, false)));
+                events.push(Line::End);
             }
-            _ => {}
         }
-        if control & 3 >= 2 {
-            let before = map.clone();
-            match rx.end() {
-                FrameVerdict::Frame { len } => {
-                    let frame = rx.frame().to_vec();
-                    if frame.len() != usize::from(len) || crc16(&frame) != 0 {
-                        return Err(format!("frame {frame:02X?} taken with a bad CRC"));
-                    }
-                    let pdu = &frame[1..frame.len() - 2];
-                    let answer = handle(pdu, &mut map);
-                    if matches!(answer, Answer::Exception { .. }) && map != before {
-                        return Err(format!("exception to {pdu:02X?} changed the map"));
-                    }
-                    let mut reply = Reply::new(ADDRESS, answer, &map);
-                    let bytes: Vec<u8> =
-                        std::iter::from_fn(|| reply.next_byte(&mut map, pdu)).collect();
-                    if bytes.len() > 256 {
-                        return Err(format!("reply of {} bytes", bytes.len()));
-                    }
-                    check_reply(&bytes, pdu, answer)?;
+    }
+    events
+}
+
+/// The harness: the line events of [`line_events`] into the codec's receiver, every frame
+/// taken through the request handler and its reply checked.
+pub fn modbus(data: &[u8]) -> Verdict {
+    let mut rx = Receiver::new();
+    let mut map = ShapedMap::new();
+    for event in line_events(data) {
+        if let Line::Byte(byte, gap) = event {
+            rx.push(byte, gap);
+            continue;
+        }
+        let before = map.clone();
+        match rx.end() {
+            FrameVerdict::Frame { len } => {
+                let frame = rx.frame().to_vec();
+                if frame.len() != usize::from(len) || crc16(&frame) != 0 {
+                    return Err(format!("frame {frame:02X?} taken with a bad CRC"));
                 }
-                _ => {
-                    if map != before {
-                        return Err("a dropped frame changed the map".into());
-                    }
+                let pdu = &frame[1..frame.len() - 2];
+                let answer = handle(pdu, &mut map);
+                if matches!(answer, Answer::Exception { .. }) && map != before {
+                    return Err(format!("exception to {pdu:02X?} changed the map"));
+                }
+                let mut reply = Reply::new(ADDRESS, answer, &map);
+                let bytes: Vec<u8> =
+                    std::iter::from_fn(|| reply.next_byte(&mut map, pdu)).collect();
+                if bytes.len() > 256 {
+                    return Err(format!("reply of {} bytes", bytes.len()));
+                }
+                check_reply(&bytes, pdu, answer)?;
+            }
+            _ => {
+                if map != before {
+                    return Err("a dropped frame changed the map".into());
                 }
             }
-            if let Some(why) = map.outside.take() {
-                return Err(why);
-            }
+        }
+        if let Some(why) = map.outside.take() {
+            return Err(why);
         }
     }
     Ok(())
 }
 
-/// The harness of the slave on the real map (`plc`): frames built from the bytes go through
-/// [`Slave`] to §13's map over an engine running a program. Pairs of bytes (control,
-/// value): control `& 3` as in [`modbus`] (0/1 a byte, 2 a frame end, 3 a frame of the
-/// next `value` bytes with a good CRC, addressed to this slave, another or all); the engine
-/// scans between frames.
+/// The harness of the slave on the real map (`plc`): the line events of [`line_events`]
+/// go through [`Slave`] to §13's map over an engine running a program, which scans between
+/// frames.
 ///
 /// Invariants: no panic; a request changes only what the map names (PY, PU, PV, the
 /// presets and set-points, and the counter outputs a preset moves), an exception or a
@@ -214,33 +231,9 @@ pub fn modbus_plc(data: &[u8]) -> Verdict {
     eng.clear_runtime(&mut b);
     let mut slave = Slave::new();
     let status = Status::new(STATUS_RUNNING, &utile_core::stats::ScanStats::new(), 0, 0);
-    let mut pairs = data.chunks_exact(2);
-    while let Some(pair) = pairs.next() {
-        let (control, value) = (pair[0], pair[1]);
-        match control & 3 {
-            0 => slave.push(value, false),
-            1 => slave.push(value, true),
-            3 => {
-                let body: Vec<u8> = pairs
-                    .by_ref()
-                    .take(usize::from(value % 40))
-                    .map(|p| p[1])
-                    .collect();
-                let to = match control >> 6 {
-                    0 => 0,
-                    1 => 2,
-                    _ => ADDRESS,
-                };
-                let mut frame = std::vec![to];
-                frame.extend_from_slice(&body);
-                frame.extend_from_slice(&crc16(&frame).to_le_bytes());
-                for x in frame {
-                    slave.push(x, false);
-                }
-            }
-            _ => {}
-        }
-        if control & 3 < 2 {
+    for event in line_events(data) {
+        if let Line::Byte(byte, gap) = event {
+            slave.push(byte, gap);
             continue;
         }
         b.run_for(&mut eng, 1, 1);

@@ -23,17 +23,29 @@ pub struct ModbusFigures {
     pub requests: usize,
 }
 
+/// FC03 for holding registers 0..15 of slave 1, CRC included.
+fn fc03_16() -> Vec<u8> {
+    let mut request = vec![1u8, 0x03, 0, 0, 0, 16];
+    request.extend_from_slice(&crc16(&request).to_le_bytes());
+    request
+}
+
+/// The image autostarting `prog` with its line timed as a wire, the RUN screen gone out
+/// (about 0.6 s of line time).
+fn line_chip(elf: &Path, prog: &utile_core::engine::Program) -> Result<Chip, String> {
+    let mut chip = autostarting(elf, prog)?;
+    chip.set_rx_pacing(RxPacing::Line { baud: 19_200 });
+    chip.run_rig(1_000 * CYCLES_PER_MS);
+    chip.take_output();
+    Ok(chip)
+}
+
 /// Polls FC03 ×16 for `polls` requests; see [`ModbusFigures`].
 pub fn measure_modbus(elf: &Path, polls: usize) -> Result<ModbusFigures, String> {
     let prog = program(&["Y0.", "!", ".Y0", "END"]);
-    let mut chip = autostarting(elf, &prog)?;
-    chip.set_rx_pacing(RxPacing::Line { baud: 19_200 });
-    // The RUN screen goes out first (about 0.6 s of line time).
-    chip.run_rig(1_000 * CYCLES_PER_MS);
-    chip.take_output();
+    let mut chip = line_chip(elf, &prog)?;
     let c = frame_cycles(19_200);
-    let mut request = vec![1u8, 0x03, 0, 0, 0, 16];
-    request.extend_from_slice(&crc16(&request).to_le_bytes());
+    let request = fc03_16();
     let reply_len = 5 + 32;
     let mut starts = Vec::new();
     let mut level = chip.y(0);
@@ -78,13 +90,9 @@ pub fn measure_modbus(elf: &Path, polls: usize) -> Result<ModbusFigures, String>
 /// Press → Y0 latency (`A0. ! .Y0 END`) while a master polls at line rate.
 pub fn measure_latency_served(elf: &Path, presses: usize) -> Result<Spread, String> {
     let prog = program(&["A0.", "!", ".Y0", "END"]);
-    let mut chip: Chip = autostarting(elf, &prog)?;
-    chip.set_rx_pacing(RxPacing::Line { baud: 19_200 });
-    chip.run_rig(1_000 * CYCLES_PER_MS);
-    chip.take_output();
+    let mut chip = line_chip(elf, &prog)?;
     let c = frame_cycles(19_200);
-    let mut request = vec![1u8, 0x03, 0, 0, 0, 16];
-    request.extend_from_slice(&crc16(&request).to_le_bytes());
+    let request = fc03_16();
     // Requests every 27 ms (the line's limit for this poll) all along the presses.
     let per_poll = (8 + 37) * c + 7 * c;
     let total = presses as u64 * 80 * CYCLES_PER_MS;
