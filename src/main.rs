@@ -32,10 +32,6 @@ mod firmware {
     use crate::hal::scan::{self, Exit, RunState};
     use crate::modbus;
 
-    /// Byte that makes a `hang-test` build stop feeding the watchdog (FS, Ctrl-\).
-    #[cfg(feature = "hang-test")]
-    pub const HANG_BYTE: u8 = 0x1C;
-
     /// The editor lives in static RAM, so the linker counts it against the RAM budget
     /// (memory.x) instead of it hiding in `main`'s stack frame.
     /// Uninitialised (`.bss`) and written at boot: a `const` initial value would put the
@@ -79,12 +75,6 @@ mod firmware {
             board.feed_watchdog();
             match board.rx() {
                 Some(byte) => {
-                    #[cfg(feature = "hang-test")]
-                    if byte == HANG_BYTE {
-                        // Hang on purpose: the watchdog must reset the chip.
-                        #[allow(clippy::empty_loop)]
-                        loop {}
-                    }
                     mode = editor.key(byte, eng, &mut board);
                     // Only a control byte (CR, LF: a submitted line), `~` (the Insert and
                     // Delete keys) or a byte of READ's file changes the program; resealing

@@ -1,7 +1,8 @@
 //! The simavr harness's own capabilities, each on a tiny fixture built here with avr-gcc
 //! (`kit/tests/fixtures/*.c`): a boot loader beside the application, reset flags and the
-//! cycle count over resets, the watchdog after a reset, the ADC in millivolts, UART bytes
-//! timed at any baud, several chips on one RS-485 line.
+//! cycle count over resets, the watchdog after a reset and in interrupt-and-system-reset
+//! mode, the ADC in millivolts, UART bytes timed at any baud, several chips on one RS-485
+//! line.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -174,6 +175,52 @@ fn after_a_reset_the_watchdog_fires_on_time() {
         // 16.4 ms of timeout (2048 cycles of the 128 kHz oscillator; simavr says 16 ms).
         assert!((15.5..17.5).contains(&ms), "resets {ms} ms apart: {got:?}");
     }
+}
+
+/// Sends `cmd` to the app (after its boot line), runs until the next boot line, and returns
+/// the lines after the command and the ms from the command to that boot line.
+fn hang_until_reset(cmd: u8, max_ms: u64) -> (Vec<String>, f64) {
+    let mut chip = Chip::load(&app()).expect("load");
+    chip.set_rx_pacing(RxPacing::Line { baud: 19_200 });
+    lines(&mut chip, 1, 50);
+    chip.send(&[cmd]);
+    // The byte's frame ends when the app can take it.
+    let sent = chip.cycle() + frame_cycles(19_200);
+    let mut got = Vec::new();
+    loop {
+        let (line, at) = lines(&mut chip, 1, max_ms).remove(0);
+        got.push(line.clone());
+        if line.starts_with("APP") {
+            let ms = (at - sent) as f64 / CYCLES_PER_MS as f64;
+            return (got, ms);
+        }
+    }
+}
+
+#[test]
+fn with_interrupts_off_the_watchdog_interrupt_becomes_a_reset_at_the_next_time_out() {
+    // simavr alone would raise the pending interrupt again for ever; a real chip resets.
+    let (got, ms) = hang_until_reset(b'i', 200);
+    assert_eq!(got, ["APP mcusr=08"], "WDRF after the reset");
+    // Two time-outs of 16 ms (2048 cycles of simavr's 128 kHz), then the 7.3 ms boot line.
+    assert!((38.0..41.0).contains(&ms), "reset and boot line {ms} ms after the hang");
+}
+
+#[test]
+fn with_interrupts_on_the_watchdog_interrupt_runs_first_then_the_reset() {
+    let (got, ms) = hang_until_reset(b'j', 200);
+    assert_eq!(got, ["WDT", "APP mcusr=08"]);
+    // The handler ran at the first time-out (clearing WDIE); the reset came at the second.
+    assert!((38.0..41.0).contains(&ms), "reset and boot line {ms} ms after the hang");
+}
+
+#[test]
+fn a_wdr_while_the_interrupt_waits_puts_the_reset_off() {
+    // Pending at 16 ms; wdr at 20, 30, 40 and 50 ms; the reset 16 ms after the last (66 ms),
+    // the boot line 7.3 ms later.
+    let (got, ms) = hang_until_reset(b'k', 300);
+    assert_eq!(got, ["APP mcusr=08"]);
+    assert!((70.0..77.0).contains(&ms), "reset and boot line {ms} ms after the hang");
 }
 
 #[test]

@@ -7,22 +7,25 @@
 //! | `pins.rs` | Y0..Y7 with out_sense, A0..A5, the D8/D9 jumpers |
 //! | `tick.rs` | Timer0's 1 ms tick (the core's `Ticker`), Timer1 for STAT |
 //! | `adc.rs` | A6/A7 in the background (the core's `Analog`: H6, H7) |
-//! | `watchdog.rs` | the watchdog and the reset flags |
+//! | `watchdog.rs` | the watchdog (software restart first) and the reset flags |
 //! | `eeprom.rs` | EEPROM bytes |
 //! | `serial.rs` | USART0 and its receive/transmit rings |
 //! | `kept.rs` | the program kept over a warm reset (`.noinit`) |
 //! | `scan.rs`, `scan.S` | the threaded RUN-mode scan |
 //! | `scan_check/` | the `scan-check` build: `scan.S` against `Engine::scan` on the chip |
+//! | `hang_test.rs` | the `hang-test` build: hangs on purpose, with interrupts on or off |
 //! | `stack.rs` | stack painting for the high-water mark |
 //! | `regs.rs`, `isr_cell.rs` | register access, state shared with interrupts |
 //!
 //! The interrupt vectors themselves are declared in `src/main.rs` (they need a crate
 //! feature) and call [`on_tick`], [`adc::on_conversion`], [`serial::on_rx`] and
-//! [`serial::on_udre`].
+//! [`serial::on_udre`]; the watchdog's, which never returns, is assembly in `watchdog.rs`.
 
 pub mod adc;
 mod board;
 mod eeprom;
+#[cfg(feature = "hang-test")]
+mod hang_test;
 mod isr_cell;
 pub mod kept;
 mod pins;

@@ -160,6 +160,8 @@ pub fn on_rx(cs: CriticalSection) {
     // DOR0 (bit 3): the USART already lost a byte before this one.
     let hw_overrun = dp.USART0.ucsr0a().read().bits() & 0x08 != 0;
     let byte = dp.USART0.udr0().read().bits();
+    #[cfg(feature = "hang-test")]
+    super::hang_test::on_rx(byte);
     let modbus = MODBUS.load(Ordering::Relaxed) != 0;
     if modbus {
         let now = dp.TC1.tcnt1().read().bits();

@@ -50,6 +50,8 @@ pub(super) fn init() {
     wr!(dp.TC1.tccr1a(), 0);
     // TCCR1B: CS11 = clk/8.
     wr!(dp.TC1.tccr1b(), 0x02);
+    // TIMSK1: no compare interrupt (after a watchdog restart, a Modbus silence may be armed).
+    wr!(dp.TC1.timsk1(), 0);
 }
 
 /// Take the pins' present levels as the debounced levels (no edges).

@@ -9,6 +9,13 @@ use std::ptr::NonNull;
 
 /// Data-space address of MCUSR (reset flags).
 pub(crate) const MCUSR: usize = 0x54;
+/// Data-space address of WDTCSR (the watchdog's control register).
+const WDTCSR: usize = 0x60;
+/// WDTCSR's WDIF, WDIE and WDE: the watchdog's interrupt is pending in interrupt-and-system-
+/// reset mode.
+const WD_PENDING_IN_RESET_MODE: u8 = 0xC8;
+/// The `wdr` instruction.
+const WDR: u16 = 0x95A8;
 /// simavr's watchdog-reset ioctl (the `wdr` instruction): re-arms the watchdog timer.
 const IOCTL_WATCHDOG_RESET: u32 = ioctl_def(b'w', b'd', b't', b'r');
 /// Flash size of the ATmega328P in bytes.
@@ -105,6 +112,11 @@ pub struct Chip {
     pub(crate) rx: uart::Rx,
     /// Pins driven from outside.
     pub(crate) pins: super::pins::Pins,
+    /// Since when (cycle, or the last `wdr`) the watchdog's interrupt has waited to run in
+    /// interrupt-and-system-reset mode (see [`Chip::watchdog_rule`]).
+    wd_pending: Option<u64>,
+    /// Resets so far (any kind, by the harness or by simavr's watchdog).
+    resets: u32,
 }
 
 /// simavr's sleep hook: the default one waits on the wall clock; pacing is ours.
@@ -196,6 +208,8 @@ impl Chip {
             link,
             rx: uart::Rx::new(),
             pins: Default::default(),
+            wd_pending: None,
+            resets: 0,
         };
         chip.attach_uart()?;
         chip.attach_eeprom();
@@ -328,6 +342,7 @@ impl Chip {
     pub fn step(&mut self) -> CpuState {
         self.feed_uart();
         let before = self.avr().cycle;
+        let wdr = self.wd_pending.is_some() && self.flash_word(self.pc()) == WDR;
         // SAFETY: `avr` is valid; callbacks it fires only touch our boxed `Link`.
         let state = unsafe { ffi::avr_run(self.avr.as_ptr()) } as u32;
         if self.avr().cycle < before {
@@ -335,6 +350,7 @@ impl Chip {
             self.link.base += before;
             self.after_reset();
         }
+        self.watchdog_rule(wdr);
         match state {
             ffi::cpu_Crashed => CpuState::Crashed,
             ffi::cpu_Done | ffi::cpu_Stopped => CpuState::Done,
@@ -378,6 +394,12 @@ impl Chip {
         unsafe { u16::from_le_bytes([*flash.add(pc), *flash.add(pc + 1)]) }
     }
 
+    /// Resets since the chip was made, of any kind: a firmware that restarts itself by a
+    /// jump adds none.
+    pub fn resets(&self) -> u32 {
+        self.resets
+    }
+
     /// MCUSR, the reset flags as the firmware reads them.
     pub fn mcusr(&self) -> u8 {
         self.peek(MCUSR)
@@ -398,10 +420,37 @@ impl Chip {
         self.after_reset();
     }
 
+    /// The rule of the watchdog's interrupt-and-system-reset mode that simavr leaves out:
+    /// "if the interrupt is not executed before the next time-out, a System Reset will be
+    /// applied" (ATmega328P datasheet, WDTCSR). simavr raises the interrupt again at every
+    /// time-out instead, so a chip with interrupts off for good would never reset. Here the
+    /// reset comes one watchdog period after the interrupt became pending without running,
+    /// or after the last `wdr` (`wdr_now`) since then, which restarts the period.
+    fn watchdog_rule(&mut self, wdr_now: bool) {
+        let wdtcsr = self.peek(WDTCSR);
+        if wdtcsr & WD_PENDING_IN_RESET_MODE != WD_PENDING_IN_RESET_MODE {
+            self.wd_pending = None;
+            return;
+        }
+        let now = self.cycle();
+        if wdr_now {
+            self.wd_pending = Some(now);
+        }
+        let since = *self.wd_pending.get_or_insert(now);
+        // WDP3 is bit 5, WDP2..0 bits 2..0; 2048 << WDP cycles of the 128 kHz oscillator.
+        let wdp = (wdtcsr & 0x07) | ((wdtcsr & 0x20) >> 2);
+        let period = (2048u64 << wdp) * F_CPU / 128_000;
+        if now - since >= period {
+            self.wd_pending = None;
+            self.reset(Reset::Watchdog);
+        }
+    }
+
     /// What follows every reset: the watchdog re-armed from the new cycle 0 (simavr arms it
     /// against the cycle count of before the reset, so it would fire late), the UART's
     /// receive side restarted, the driven pins driven again.
     fn after_reset(&mut self) {
+        self.resets += 1;
         // SAFETY: the watchdog ioctl takes no parameter; simavr is not running.
         unsafe {
             ffi::avr_ioctl(
