@@ -6,12 +6,15 @@
 //! utile fmt prog.utl                    canonical listing of a listing
 //! utile sim prog.utl --inputs t.timeline [--until 120s] [--scans 4]
 //!           [--signals A0,Y0,TQ0,C0,A6,H6] [--svg out.svg] [--vcd out.vcd]
+//! utile push prog.utl|prog.hex --port /dev/ttyUSB0 [--store] [--stop]
+//! utile pull --port /dev/ttyUSB0 [-o prog.utl] [--hex]
 //! ```
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use utile_kit::{diagram, listing, simulate};
+use utile_tools::link;
 
 const USAGE: &str = "usage:
   utile asm PROG.utl [-o PROG.hex]     listing -> Intel HEX image (as WRITE sends it)
@@ -19,7 +22,16 @@ const USAGE: &str = "usage:
   utile fmt PROG.utl                   print the canonical listing of a listing
   utile sim PROG.utl --inputs TIMELINE [--until 120s] [--scans 4]
             [--signals A0,Y0,TQ0,C0,A6,H6,...] [--svg OUT.svg] [--vcd OUT.vcd]
-                                       simulate and print the output changes";
+                                       simulate and print the output changes
+  utile push PROG.utl|PROG.hex --port PATH [--store] [--stop] [--wait SECS]
+                                       send a program to uTile's editor (READ), check
+                                       its answer and read it back; --store: STORE it too
+  utile pull --port PATH [-o FILE] [--hex] [--stop] [--wait SECS]
+                                       the program from uTile (WRITE) as a listing, or
+                                       the Intel HEX file with --hex
+    --stop   stop a running program first (refused otherwise)
+    --wait   the longest wait for uTile after the port opens (default 2.5 s: a
+             Nano's boot loader waits about 1.4 s after the port-open reset)";
 
 /// A failure: the message printed before exiting with status 1.
 type Failure = String;
@@ -45,13 +57,20 @@ struct Args {
 
 impl Args {
     fn parse(words: &[String], known: &[&str]) -> Result<Args, Failure> {
+        Args::parse_with(words, known, &[])
+    }
+
+    /// As `parse`, with `switches`: options without a value (kept with an empty value).
+    fn parse_with(words: &[String], known: &[&str], switches: &[&str]) -> Result<Args, Failure> {
         let mut args = Args {
             positional: Vec::new(),
             flags: Vec::new(),
         };
         let mut it = words.iter();
         while let Some(w) = it.next() {
-            if w.starts_with('-') && w.len() > 1 {
+            if switches.contains(&w.as_str()) {
+                args.flags.push((w.clone(), String::new()));
+            } else if w.starts_with('-') && w.len() > 1 {
                 if !known.contains(&w.as_str()) {
                     return Err(format!("unknown option '{w}'\n{USAGE}"));
                 }
@@ -106,6 +125,90 @@ fn dis(words: &[String]) -> Result<(), Failure> {
             Ok(())
         }
     }
+}
+
+/// Progress on standard error, one line each.
+fn say(line: &str) {
+    eprintln!("utile: {line}");
+}
+
+/// The session's options from `--stop` and `--wait SECS`.
+fn link_options(args: &Args) -> Result<link::Options, Failure> {
+    let mut opts = link::Options {
+        stop: args.flag("--stop").is_some(),
+        ..Default::default()
+    };
+    if let Some(w) = args.flag("--wait") {
+        let secs: f64 = w
+            .trim_end_matches('s')
+            .parse()
+            .ok()
+            .filter(|s: &f64| (0.0..=60.0).contains(s))
+            .ok_or_else(|| format!("--wait takes seconds (0..60), not '{w}'"))?;
+        opts.boot_wait = std::time::Duration::from_secs_f64(secs);
+    }
+    Ok(opts)
+}
+
+fn port_of(args: &Args) -> Result<&str, Failure> {
+    args.flag("--port")
+        .ok_or_else(|| format!("--port PATH is needed (e.g. /dev/ttyUSB0)\n{USAGE}"))
+}
+
+/// A listing or an Intel HEX file, checked whole as uTile's READ would check it.
+fn load_program(path: &Path) -> Result<utile_core::Program, Failure> {
+    let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let first = bytes.iter().find(|b| !b.is_ascii_whitespace());
+    if first == Some(&b':') {
+        listing::from_hex(&bytes).map_err(|e| format!("{}: not a uTile image: {e}", path.display()))
+    } else {
+        load_listing(path)
+    }
+}
+
+fn push(words: &[String]) -> Result<(), Failure> {
+    let args = Args::parse_with(words, &["--port", "--wait"], &["--store", "--stop"])?;
+    let input = args.one_input()?;
+    // Checked before the port is even opened: a bad file sends nothing.
+    let prog = load_program(&input)?;
+    let mut session = link::Session::connect(port_of(&args)?, link_options(&args)?, &mut say)?;
+    session.push(&prog, &mut say)?;
+    if args.flag("--store").is_some() {
+        session.store(&mut say)?;
+    }
+    say(&format!(
+        "{} is uTile's program now{}",
+        input.display(),
+        if args.flag("--store").is_some() { " and stored in its EEPROM" } else { " (STORE keeps it over a power cycle)" }
+    ));
+    Ok(())
+}
+
+fn pull(words: &[String]) -> Result<(), Failure> {
+    let args = Args::parse_with(words, &["--port", "--wait", "-o"], &["--hex", "--stop"])?;
+    if let Some(extra) = args.positional.first() {
+        return Err(format!("unexpected argument '{extra}'\n{USAGE}"));
+    }
+    let mut session = link::Session::connect(port_of(&args)?, link_options(&args)?, &mut say)?;
+    let (prog, hex) = session.pull(&mut say)?;
+    let out = if args.flag("--hex").is_some() { hex } else { listing::print(&prog).into_bytes() };
+    match args.flag("-o") {
+        Some(path) => {
+            // Never a half-written file: a temporary beside it, then a rename.
+            let path = Path::new(path);
+            let tmp = path.with_extension("utile-tmp");
+            write_file(&tmp, &out)?;
+            std::fs::rename(&tmp, path).map_err(|e| format!("{}: {e}", path.display()))?;
+            say(&format!("saved uTile's program to {}", path.display()));
+        }
+        None => {
+            use std::io::Write;
+            std::io::stdout()
+                .write_all(&out)
+                .map_err(|e| format!("standard output: {e}"))?;
+        }
+    }
+    Ok(())
 }
 
 fn fmt(words: &[String]) -> Result<(), Failure> {
@@ -190,6 +293,8 @@ fn main() -> ExitCode {
         "dis" => dis(rest),
         "fmt" => fmt(rest),
         "sim" => sim(rest),
+        "push" => push(rest),
+        "pull" => pull(rest),
         "-h" | "--help" | "help" => {
             println!("{USAGE}");
             Ok(())

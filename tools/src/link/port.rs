@@ -1,0 +1,119 @@
+//! The serial port to a uTile: 19200 baud 8N1 through the `serialport` crate, with
+//! everything received kept so that the session can look for the firmware's texts.
+
+use std::io::Write;
+use std::time::{Duration, Instant};
+
+use serialport::SerialPort;
+
+/// uTile's terminal speed (SPEC §8).
+pub const BAUD: u32 = 19_200;
+
+/// How long one read waits for a byte.
+const POLL: Duration = Duration::from_millis(20);
+
+/// An open port and the transcript of what came in.
+pub struct Port {
+    port: Box<dyn SerialPort>,
+    /// Every byte received since the port was opened.
+    pub seen: Vec<u8>,
+}
+
+impl Port {
+    /// Opens `path` at 19200 baud, 8N1, no flow control. On a Nano the open resets the chip
+    /// (DTR), so the boot loader runs first.
+    pub fn open(path: &str) -> Result<Port, String> {
+        let port = serialport::new(path, BAUD)
+            .data_bits(serialport::DataBits::Eight)
+            .parity(serialport::Parity::None)
+            .stop_bits(serialport::StopBits::One)
+            .flow_control(serialport::FlowControl::None)
+            .timeout(POLL)
+            .open()
+            .map_err(|e| format!("cannot open {path}: {e}"))?;
+        Ok(Port { port, seen: Vec::new() })
+    }
+
+    /// Sends `bytes` and waits until the system has taken them.
+    pub fn send(&mut self, bytes: &[u8]) -> Result<(), String> {
+        self.port
+            .write_all(bytes)
+            .and_then(|()| self.port.flush())
+            .map_err(|e| format!("writing to the port: {e}"))
+    }
+
+    /// One read of up to a poll's time; whether anything came.
+    fn pump(&mut self) -> Result<bool, String> {
+        let mut buf = [0u8; 512];
+        match self.port.read(&mut buf) {
+            Ok(0) => Ok(false),
+            Ok(n) => {
+                self.seen.extend_from_slice(&buf[..n]);
+                Ok(true)
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::TimedOut => Ok(false),
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => Ok(false),
+            Err(e) => Err(format!("reading from the port: {e}")),
+        }
+    }
+
+    /// Reads until one of `needles` appears after offset `from` (at most `timeout`).
+    /// Returns which one and the offset just past it.
+    pub fn wait_for(
+        &mut self,
+        from: usize,
+        needles: &[&[u8]],
+        timeout: Duration,
+    ) -> Result<Option<(usize, usize)>, String> {
+        let deadline = Instant::now() + timeout;
+        loop {
+            let hay = self.seen.get(from..).unwrap_or(&[]);
+            // The earliest match wins: it is what the firmware said first.
+            let found = needles
+                .iter()
+                .enumerate()
+                .filter_map(|(i, n)| find(hay, n).map(|at| (at, i, at + n.len())))
+                .min();
+            if let Some((_, i, end)) = found {
+                return Ok(Some((i, from + end)));
+            }
+            if Instant::now() >= deadline {
+                return Ok(None);
+            }
+            self.pump()?;
+        }
+    }
+
+    /// Reads until nothing has come for `quiet` (or `max` has passed); whether anything came.
+    pub fn settle(&mut self, quiet: Duration, max: Duration) -> Result<bool, String> {
+        let start = self.seen.len();
+        let deadline = Instant::now() + max;
+        let mut last = Instant::now();
+        while Instant::now() < deadline && last.elapsed() < quiet {
+            if self.pump()? {
+                last = Instant::now();
+            }
+        }
+        Ok(self.seen.len() > start)
+    }
+}
+
+/// Position of `needle` in `hay`.
+pub fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
+    if needle.is_empty() {
+        return Some(0);
+    }
+    hay.windows(needle.len()).position(|w| w == needle)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::find;
+
+    #[test]
+    fn find_gives_the_first_position() {
+        assert_eq!(find(b"abcabc", b"bc"), Some(1));
+        assert_eq!(find(b"abc", b"x"), None);
+        assert_eq!(find(b"", b"x"), None);
+    }
+}
