@@ -23,14 +23,14 @@ use panic_halt as _;
 mod firmware {
     use core::mem::MaybeUninit;
 
+    use crate::hal;
+    use crate::hal::scan::{self, Exit, RunState};
+    use crate::modbus;
     use avr_device::interrupt::CriticalSection;
     use utile_core::board::Board;
     use utile_core::editor::{Editor, Mode};
     use utile_core::engine::Engine;
     use utile_core::stats::ScanStats;
-    use crate::hal;
-    use crate::hal::scan::{self, Exit, RunState};
-    use crate::modbus;
 
     /// The editor lives in static RAM, so the linker counts it against the RAM budget
     /// (memory.x) instead of it hiding in `main`'s stack frame.

@@ -91,14 +91,24 @@ impl Server {
     /// One visit between scans, one job per visit so that none holds the scan up for long:
     /// a finished frame judged and carried out, or a few reply bytes made, or (the reply
     /// queued) the warm-reset seal renewed.
-    pub fn visit(&mut self, eng: &mut Engine, board: &mut Nano, st: &RunState, wraps: u16) -> After {
+    pub fn visit(
+        &mut self,
+        eng: &mut Engine,
+        board: &mut Nano,
+        st: &RunState,
+        wraps: u16,
+    ) -> After {
         let mut after = After::Nothing;
         if serial::take_frame_end() {
             self.refresh(board, st, wraps);
             let now = board.now_ms();
             let (address, status) = (self.address, &self.status);
             let event = interrupt::free(|cs| {
-                let mut map = PlcMap { eng: &mut *eng, b: &mut *board, status };
+                let mut map = PlcMap {
+                    eng: &mut *eng,
+                    b: &mut *board,
+                    status,
+                };
 
                 // SAFETY: the map reaches the ticker, the ADC and EEPROM, never LINE.
                 unsafe { serial::LINE.with(cs, |l| l.slave.end(address, &mut map, now)) }
@@ -144,7 +154,11 @@ impl Server {
                 return;
             }
             let byte = interrupt::free(|cs| {
-                let mut map = PlcMap { eng: &mut *eng, b: &mut *board, status };
+                let mut map = PlcMap {
+                    eng: &mut *eng,
+                    b: &mut *board,
+                    status,
+                };
 
                 // SAFETY: the map never reaches LINE.
                 unsafe { serial::LINE.with(cs, |l| l.slave.next_byte(&mut map)) }

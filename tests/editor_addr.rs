@@ -35,7 +35,11 @@ fn addresses_outside_1_to_247_are_refused_and_nothing_changes() {
     for bad in ["0", "248", "300", "65535"] {
         r.enter(bad);
         r.enter("addr");
-        assert!(r.status().contains("Address 1..247"), "{bad}: {}", r.status());
+        assert!(
+            r.status().contains("Address 1..247"),
+            "{bad}: {}",
+            r.status()
+        );
         assert!(r.row(19).contains("address 9"), "{bad}: {}", r.row(19));
     }
     assert_eq!(store::slave_address(&mut r.b), 9);

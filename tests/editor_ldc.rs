@@ -22,7 +22,16 @@ fn ldc_shows_presets_counts_set_points_and_readings_in_under_900_bytes() {
     println!("LDC full draw: {drawn} bytes");
     assert!(drawn <= 900, "full draw {drawn} bytes");
     let text = r.text();
-    for label in ["C0", "C7", "S6", "S7", "preset", "count", "set-point", "reading"] {
+    for label in [
+        "C0",
+        "C7",
+        "S6",
+        "S7",
+        "preset",
+        "count",
+        "set-point",
+        "reading",
+    ] {
         assert!(text.contains(label), "{label} missing:\n{text}");
     }
     assert!(r.status().contains("Z clear all"), "{}", r.status());
@@ -68,7 +77,10 @@ fn values_out_of_range_are_refused_with_a_message_and_nothing_changes() {
     assert_eq!(r.eng.prog.set_points, [0, 0]);
     r.enter("1023");
     assert_eq!(r.eng.prog.set_points, [1023, 0]);
-    assert!(!r.status().contains("65535"), "the message went with the good value");
+    assert!(
+        !r.status().contains("65535"),
+        "the message went with the good value"
+    );
 }
 
 #[test]
@@ -82,7 +94,11 @@ fn live_counts_and_readings_refresh_without_a_full_redraw_and_an_empty_line_exit
     assert!(r.row(15).contains("777"), "reading A7: {}", r.row(15));
     // Unchanged values are not sent again.
     r.wait_ms(600);
-    assert!(r.sent() - sent < 10, "{} bytes with nothing new", r.sent() - sent);
+    assert!(
+        r.sent() - sent < 10,
+        "{} bytes with nothing new",
+        r.sent() - sent
+    );
     r.enter("");
     assert!(r.status().contains("User File 0"), "{}", r.status());
     assert!(!r.text().contains("set-point"), "back on the main screen");

@@ -10,9 +10,27 @@ use utile_core::opcodes::{lookup, NOP};
 
 /// Sequences the editor does not use: nothing may change on any screen.
 const UNUSED: &[&[u8]] = &[
-    b"\x1b[Z", b"\x1b[F", b"\x1b[4~", b"\x1b[5~", b"\x1b[6~", b"\x1b[I", b"\x1b[O",
-    b"\x1b[15~", b"\x1b[1;5P", b"\x1b[1;2F", b"\x1b[200~", b"\x1bOF", b"\x1bOP", b"\x1bOS",
-    b"\x1b[[A", b"\x1b[[B", b"\x1b[[C", b"\x1b[[D", b"\x1b[[E", b"\x1bZ", b"\x1b[?1;2c",
+    b"\x1b[Z",
+    b"\x1b[F",
+    b"\x1b[4~",
+    b"\x1b[5~",
+    b"\x1b[6~",
+    b"\x1b[I",
+    b"\x1b[O",
+    b"\x1b[15~",
+    b"\x1b[1;5P",
+    b"\x1b[1;2F",
+    b"\x1b[200~",
+    b"\x1bOF",
+    b"\x1bOP",
+    b"\x1bOS",
+    b"\x1b[[A",
+    b"\x1b[[B",
+    b"\x1b[[C",
+    b"\x1b[[D",
+    b"\x1b[[E",
+    b"\x1bZ",
+    b"\x1b[?1;2c",
 ];
 
 /// Type `seq` in two pieces cut at `cut`, with a pause of `pause` ms between.
@@ -89,7 +107,10 @@ fn unused_sequences_split_anywhere_change_nothing_on_the_page_or_ldt() {
                 r.enter("9");
                 split(&mut r, seq, cut, pause);
                 r.type_bytes(b"\r");
-                assert_eq!(r.eng.prog.presets[0], 9, "{seq:?} cut at {cut}: presets cleared");
+                assert_eq!(
+                    r.eng.prog.presets[0], 9,
+                    "{seq:?} cut at {cut}: presets cleared"
+                );
                 assert!(r.status().contains("User File 0"), "{seq:?}: still in LDT");
                 assert_eq!(r.eng.prog.uf[0], lookup(b"DUP").unwrap());
             }
@@ -134,7 +155,11 @@ fn type_ahead_with_a_full_transmitter_takes_every_line_and_catches_up() {
         r.mode = r.ed.key(c, &mut r.eng, &mut r.b);
     }
     assert!(r.ed.drawing(), "the screen should be behind");
-    assert!(r.sent() - sent < 200, "drew {} bytes while input waited", r.sent() - sent);
+    assert!(
+        r.sent() - sent < 200,
+        "drew {} bytes while input waited",
+        r.sent() - sent
+    );
     // What went out stays well-formed (no half escape sequence, nothing off the screen).
     let mut term = utile_kit::fuzzing::Term::new();
     term.feed(&r.b.tx_log[sent..], false);
@@ -147,7 +172,12 @@ fn type_ahead_with_a_full_transmitter_takes_every_line_and_catches_up() {
     r.sync();
     for i in 0..40 {
         let want = if i % 2 == 0 { "A0." } else { ".Y1" };
-        assert_eq!(r.eng.prog.uf[2 + i], lookup(want.as_bytes()).unwrap(), "line {}", 2 + i);
+        assert_eq!(
+            r.eng.prog.uf[2 + i],
+            lookup(want.as_bytes()).unwrap(),
+            "line {}",
+            2 + i
+        );
     }
     assert_eq!(r.eng.prog.uf[42], NOP);
     r.wait_ms(5);
@@ -175,10 +205,32 @@ fn lost_input_is_reported_on_the_status_line() {
 #[test]
 fn random_bursts_with_a_choked_transmitter_always_catch_up_to_the_true_screen() {
     let pieces: &[&[u8]] = &[
-        b"dup\r", b"a0.\r", b".y1\r", b"set\r", b"x\x7f", b"\x1b[A", b"\x1b[B", b"\x1b[C",
-        b"\x1b[D", b"\x1b[2~", b"\x1b[3~", b"\x1b[H", b"\x1b[Z", b"42\r", b"bogus\r",
-        b"toolongword\r", b"\x0c", b"\x18", b"?\r", b" ", b"ldt\r5\r\r", b"stat\r", b"pbs\r",
-        b"ppy\r", b"fill\r", b"ver\r",
+        b"dup\r",
+        b"a0.\r",
+        b".y1\r",
+        b"set\r",
+        b"x\x7f",
+        b"\x1b[A",
+        b"\x1b[B",
+        b"\x1b[C",
+        b"\x1b[D",
+        b"\x1b[2~",
+        b"\x1b[3~",
+        b"\x1b[H",
+        b"\x1b[Z",
+        b"42\r",
+        b"bogus\r",
+        b"toolongword\r",
+        b"\x0c",
+        b"\x18",
+        b"?\r",
+        b" ",
+        b"ldt\r5\r\r",
+        b"stat\r",
+        b"pbs\r",
+        b"ppy\r",
+        b"fill\r",
+        b"ver\r",
     ];
     let mut x: u32 = 0x1234_5678;
     let mut next = |n: u32| {
@@ -209,7 +261,10 @@ fn random_bursts_with_a_choked_transmitter_always_catch_up_to_the_true_screen() 
             term.feed(&r.b.tx_log[fed..], false);
             fed = r.sent();
             assert_eq!(term.violation, None, "round {round}");
-            assert!(!r.ed.drawing(), "round {round}: still behind after input stopped");
+            assert!(
+                !r.ed.drawing(),
+                "round {round}: still behind after input stopped"
+            );
         }
         // Leave help (any key) so `/` below is a command; then the true screen.
         r.type_bytes(b"\x18");
@@ -217,7 +272,11 @@ fn random_bursts_with_a_choked_transmitter_always_catch_up_to_the_true_screen() 
         let shown = trimmed(&r.text());
         let cursor = r.cursor();
         r.type_bytes(b"\x0c");
-        assert_eq!(trimmed(&r.text()), shown, "round {round}: Ctrl-L shows something else");
+        assert_eq!(
+            trimmed(&r.text()),
+            shown,
+            "round {round}: Ctrl-L shows something else"
+        );
         assert_eq!(r.cursor(), cursor, "round {round}");
     }
 }

@@ -111,9 +111,21 @@ fn h6_follows_the_level_with_hysteresis_and_set_point_0_disables_it() {
         (b.output(0), b.output(1))
     };
     assert_eq!(level(&mut eng, &mut b, 599), (false, false));
-    assert_eq!(level(&mut eng, &mut b, 600), (true, false), "S7 = 0: H7 stays 0");
-    assert_eq!(level(&mut eng, &mut b, 593), (true, false), "inside the hysteresis");
-    assert_eq!(level(&mut eng, &mut b, 592), (true, false), "600 - 8 still holds it");
+    assert_eq!(
+        level(&mut eng, &mut b, 600),
+        (true, false),
+        "S7 = 0: H7 stays 0"
+    );
+    assert_eq!(
+        level(&mut eng, &mut b, 593),
+        (true, false),
+        "inside the hysteresis"
+    );
+    assert_eq!(
+        level(&mut eng, &mut b, 592),
+        (true, false),
+        "600 - 8 still holds it"
+    );
     assert_eq!(level(&mut eng, &mut b, 591), (false, false));
     assert_eq!(level(&mut eng, &mut b, 1023), (true, false));
 }

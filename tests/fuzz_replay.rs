@@ -184,13 +184,10 @@ fn write_seed_corpus() {
             cat(&[b"\x00", b"\x1b[\rset\x1bend\r\x1b[END\r\x1b[15~\x1b[1;5P"]),
         ),
         ("stat_ver", cat(&[b"\x00", b"stat\rver\r/\r"])),
-        (
-            "noise",
-            {
-                let mut rng = Rng::new(200);
-                (0..200).map(|_| rng.byte()).collect()
-            },
-        ),
+        ("noise", {
+            let mut rng = Rng::new(200);
+            (0..200).map(|_| rng.byte()).collect()
+        }),
     ];
     for (name, data) in editor {
         write("editor", name, data);

@@ -1,7 +1,7 @@
 //! The Modbus RTU codec of the core (SPEC §13): CRC-16/MODBUS, framing verdicts, every
 //! function and exception against a map shaped like §13's, replies produced byte by byte.
 
-use utile_core::modbus::crc::{crc16, Crc16};
+use utile_core::modbus::crc::{crc16_modbus, Crc16};
 use utile_core::modbus::frame::{Drop, Receiver, Verdict, FRAME_MAX};
 use utile_core::modbus::map::{Map, Table};
 use utile_core::modbus::reply::Reply;
@@ -84,7 +84,7 @@ impl Map for TestMap {
 /// `bytes` followed by their CRC, low byte first.
 fn with_crc(bytes: &[u8]) -> Vec<u8> {
     let mut v = bytes.to_vec();
-    v.extend_from_slice(&crc16(bytes).to_le_bytes());
+    v.extend_from_slice(&crc16_modbus(bytes).to_le_bytes());
     v
 }
 
@@ -112,7 +112,7 @@ fn transact(map: &mut TestMap, pdu: &[u8]) -> Vec<u8> {
     }
     assert!(reply.is_done());
     assert_eq!(out.len(), usize::from(reply.size()));
-    assert_eq!(crc16(&out), 0, "reply CRC");
+    assert_eq!(crc16_modbus(&out), 0, "reply CRC");
     out
 }
 
@@ -131,11 +131,11 @@ fn exception(map: &mut TestMap, pdu: &[u8]) -> (u8, u8) {
 fn crc_matches_the_specifications_examples() {
     // Modbus over serial line, the FC03 example: 11 03 00 6B 00 03 -> CRC 76 87 on the wire.
     assert_eq!(
-        crc16(&[0x11, 0x03, 0x00, 0x6B, 0x00, 0x03]).to_le_bytes(),
+        crc16_modbus(&[0x11, 0x03, 0x00, 0x6B, 0x00, 0x03]).to_le_bytes(),
         [0x76, 0x87]
     );
     assert_eq!(
-        crc16(&[0x01, 0x03, 0x00, 0x00, 0x00, 0x0A]).to_le_bytes(),
+        crc16_modbus(&[0x01, 0x03, 0x00, 0x00, 0x00, 0x0A]).to_le_bytes(),
         [0xC5, 0xCD]
     );
     let mut c = Crc16::new();

@@ -19,9 +19,9 @@ use std::sync::Once;
 
 use common::{Board, Rig, CYCLES_PER_MS};
 use utile_core::engine::Program;
-use utile_core::modbus::crc::crc16;
 use utile_core::modbus::plc::STATUS_WATCHDOG;
 use utile_core::opcodes::{lookup, END};
+use utile_kit::modbus;
 use utile_kit::sim::SimBoard;
 use utile_kit::simavr::{frame_cycles, ArduinoBoot, RxPacing};
 
@@ -76,7 +76,10 @@ fn installed(boot: Option<ArduinoBoot>) -> bool {
         "{} missing in CI: `./x setup` installs arduino-core-avr",
         boot.hex_path().display()
     );
-    eprintln!("SKIPPED: {} missing (`./x setup`)", boot.hex_path().display());
+    eprintln!(
+        "SKIPPED: {} missing (`./x setup`)",
+        boot.hex_path().display()
+    );
     false
 }
 
@@ -153,7 +156,11 @@ fn hang(nano: &mut Board, kind: Hang, off: u8) -> Recovery {
                 nano.step();
             }
         }
-        let pins = if pins_are_outputs(nano) { nano.y_pins() } else { 0x55 };
+        let pins = if pins_are_outputs(nano) {
+            nano.y_pins()
+        } else {
+            0x55
+        };
         return Recovery {
             resets: nano.chip.resets() - resets,
             restart_ms,
@@ -171,8 +178,7 @@ fn hang(nano: &mut Board, kind: Hang, off: u8) -> Recovery {
 /// Modbus status (input register 0) read over the line (address 1).
 fn modbus_status(nano: &mut Board) -> u16 {
     nano.chip.set_rx_pacing(RxPacing::Line { baud: 19_200 });
-    let mut frame = vec![1, 0x04, 0, 0, 0, 1];
-    frame.extend_from_slice(&crc16(&frame).to_le_bytes());
+    let frame = modbus::frame(1, &[0x04, 0, 0, 0, 1]);
     nano.take_output();
     nano.chip.send_after(4 * frame_cycles(19_200), &frame);
     nano.run_ms(30);
@@ -182,16 +188,24 @@ fn modbus_status(nano: &mut Board) -> u16 {
         .position(|w| w == [1, 0x04, 2])
         .unwrap_or_else(|| panic!("no reply to the status read: {got:02X?}"));
     let reply = &got[at..at + 7];
-    assert_eq!(crc16(&reply[..5]).to_le_bytes(), [reply[5], reply[6]], "reply CRC");
+    assert!(modbus::crc_ok(reply), "reply CRC: {reply:02X?}");
     u16::from_be_bytes([reply[3], reply[4]])
 }
 
 /// A stored program runs (D8 grounded, D9 as given) behind `boot`; the firmware hangs in RUN
 /// mode. Returns what happened and, if the program runs again, the ms it took and the status.
-fn hang_while_running(boot: Option<ArduinoBoot>, kind: Hang, d9: bool) -> Option<(Recovery, u64, u16)> {
+fn hang_while_running(
+    boot: Option<ArduinoBoot>,
+    kind: Hang,
+    d9: bool,
+) -> Option<(Recovery, u64, u16)> {
     let mut nano = power_up(
         boot,
-        Rig { d8: true, d9, eeprom: Some(eeprom_with_program()) },
+        Rig {
+            d8: true,
+            d9,
+            eeprom: Some(eeprom_with_program()),
+        },
     );
     // Behind the old boot loader the program starts after its 1.3 s wait.
     let first = until_running(&mut nano, 2000).expect("autostart");
@@ -221,10 +235,23 @@ fn interrupts_on(boot: Option<ArduinoBoot>) {
     }
     let (rec, again, status) =
         hang_while_running(boot, Hang::IrqOn, false).expect("the program runs again");
-    assert_eq!(rec.resets, 0, "the watchdog's interrupt restarts without a reset");
-    assert!(rec.restart_ms < 140.0, "{rec:?}: the interrupt comes after 128 ms");
-    assert!(again <= 20, "the program runs again {again} ms after the restart");
-    assert_ne!(status & STATUS_WATCHDOG, 0, "status {status:#06x} tells the watchdog");
+    assert_eq!(
+        rec.resets, 0,
+        "the watchdog's interrupt restarts without a reset"
+    );
+    assert!(
+        rec.restart_ms < 140.0,
+        "{rec:?}: the interrupt comes after 128 ms"
+    );
+    assert!(
+        again <= 20,
+        "the program runs again {again} ms after the restart"
+    );
+    assert_ne!(
+        status & STATUS_WATCHDOG,
+        0,
+        "status {status:#06x} tells the watchdog"
+    );
 }
 
 #[test]
@@ -249,17 +276,22 @@ fn a_hang_with_interrupts_off_resets_the_chip_and_the_program_runs_again() {
     assert_eq!(rec.resets, 1, "one watchdog reset");
     // The interrupt could not run at 128 ms: the reset comes at the next time-out.
     assert!((250.0..270.0).contains(&rec.restart_ms), "{rec:?}");
-    assert!(again <= 20, "the program runs again {again} ms after the reset");
-    assert_ne!(status & STATUS_WATCHDOG, 0, "status {status:#06x} tells the watchdog");
+    assert!(
+        again <= 20,
+        "the program runs again {again} ms after the reset"
+    );
+    assert_ne!(
+        status & STATUS_WATCHDOG,
+        0,
+        "status {status:#06x} tells the watchdog"
+    );
 }
 
 #[test]
 fn with_d9_grounded_the_outputs_are_high_from_the_first_instant_after_the_reset() {
-    let (rec, _, _) =
-        hang_while_running(None, Hang::IrqOff, true).expect("the program runs again");
+    let (rec, _, _) = hang_while_running(None, Hang::IrqOff, true).expect("the program runs again");
     assert_eq!(rec.resets, 1);
-    let (rec, _, _) =
-        hang_while_running(None, Hang::IrqOn, true).expect("the program runs again");
+    let (rec, _, _) = hang_while_running(None, Hang::IrqOn, true).expect("the program runs again");
     assert_eq!(rec.resets, 0);
 }
 
@@ -271,8 +303,14 @@ fn a_hang_with_interrupts_off_behind_optiboot_resets_and_optiboot_starts_the_fir
     }
     let (rec, again, status) =
         hang_while_running(boot, Hang::IrqOff, false).expect("the program runs again");
-    assert_eq!(rec.resets, 1, "one watchdog reset; Optiboot goes straight to the firmware");
-    assert!(again <= 20, "the program runs again {again} ms after the reset");
+    assert_eq!(
+        rec.resets, 1,
+        "one watchdog reset; Optiboot goes straight to the firmware"
+    );
+    assert!(
+        again <= 20,
+        "the program runs again {again} ms after the reset"
+    );
     // Optiboot clears MCUSR before it starts the firmware: this restart cannot be told.
     assert_eq!(status & STATUS_WATCHDOG, 0, "status {status:#06x}");
 }
@@ -285,7 +323,11 @@ fn a_hang_with_interrupts_off_behind_the_old_boot_loader_cannot_be_saved() {
     }
     let mut nano = power_up(
         boot,
-        Rig { d8: true, d9: false, eeprom: Some(eeprom_with_program()) },
+        Rig {
+            d8: true,
+            d9: false,
+            eeprom: Some(eeprom_with_program()),
+        },
     );
     until_running(&mut nano, 2000).expect("autostart");
     nano.run_ms(800);
@@ -302,11 +344,18 @@ fn a_hang_with_interrupts_off_behind_the_old_boot_loader_cannot_be_saved() {
             !pins_are_outputs(&nano),
             "the firmware ran again behind the old boot loader: RELIABILITY.md is out of date"
         );
-        assert!(nano.pc() >= ArduinoBoot::Old.section().start(), "PC {:#06x}", nano.pc());
+        assert!(
+            nano.pc() >= ArduinoBoot::Old.section().start(),
+            "PC {:#06x}",
+            nano.pc()
+        );
     }
     let resets = nano.chip.resets() - before;
     println!("old boot loader, interrupts off: {resets} resets in 3 s, the firmware never again");
-    assert!((150..200).contains(&resets), "{resets} resets in 3 s (one per 16 ms)");
+    assert!(
+        (150..200).contains(&resets),
+        "{resets} resets in 3 s (one per 16 ms)"
+    );
 }
 
 /// Without D8 the chip comes back in the editor: the screen drawn again, the outputs off
@@ -320,7 +369,11 @@ fn editor_comes_back(boot: Option<ArduinoBoot>, kind: Hang) {
     nano.run_ms(1000);
     nano.enter("set", 50);
     nano.enter(".y7", 50);
-    assert_eq!(nano.outputs(), 0x80, "SET .Y7 lights Y7 at once in the editor");
+    assert_eq!(
+        nano.outputs(),
+        0x80,
+        "SET .Y7 lights Y7 at once in the editor"
+    );
     nano.take_output();
     let rec = hang(&mut nano, kind, 0);
     println!("editor {boot:?} {kind:?}: {rec:?}");
@@ -343,7 +396,8 @@ fn in_the_editor_a_hang_with_interrupts_on_brings_the_screen_back_behind_every_l
 }
 
 #[test]
-fn in_the_editor_a_hang_with_interrupts_off_brings_the_screen_back_without_a_loader_and_behind_optiboot() {
+fn in_the_editor_a_hang_with_interrupts_off_brings_the_screen_back_without_a_loader_and_behind_optiboot(
+) {
     for boot in [None, Some(ArduinoBoot::Optiboot)] {
         editor_comes_back(boot, Hang::IrqOff);
     }

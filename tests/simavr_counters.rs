@@ -64,18 +64,34 @@ fn the_parts_counter_stops_the_belt_at_the_preset_and_its_reset_starts_it_again(
     let prog = example("parts-counter");
     assert_eq!(prog.counter_presets[0], 5);
     let mut nano = autostarted(&prog);
-    assert_eq!(nano.outputs() & (Y0 | Y1), Y0, "the belt runs, batch not full");
+    assert_eq!(
+        nano.outputs() & (Y0 | Y1),
+        Y0,
+        "the belt runs, batch not full"
+    );
     for n in 1..=4 {
         one_box(&mut nano);
-        assert_eq!(nano.outputs() & (Y0 | Y1), Y0, "after {n} boxes the belt still runs");
+        assert_eq!(
+            nano.outputs() & (Y0 | Y1),
+            Y0,
+            "after {n} boxes the belt still runs"
+        );
     }
     one_box(&mut nano);
-    assert_eq!(nano.outputs() & (Y0 | Y1), Y1, "the fifth box stops the belt");
+    assert_eq!(
+        nano.outputs() & (Y0 | Y1),
+        Y1,
+        "the fifth box stops the belt"
+    );
     // More boxes (a jam) do not restart it: the count stays at or above the preset.
     one_box(&mut nano);
     assert_eq!(nano.outputs() & (Y0 | Y1), Y1);
     reset_count(&mut nano);
-    assert_eq!(nano.outputs() & (Y0 | Y1), Y0, "reset: the count is 0, the belt runs");
+    assert_eq!(
+        nano.outputs() & (Y0 | Y1),
+        Y0,
+        "reset: the count is 0, the belt runs"
+    );
     // The reset button held while a box passes: the reset wins, nothing is counted.
     nano.switch(1, true);
     nano.run_ms(20);
@@ -84,7 +100,11 @@ fn the_parts_counter_stops_the_belt_at_the_preset_and_its_reset_starts_it_again(
     }
     nano.switch(1, false);
     nano.run_ms(50);
-    assert_eq!(nano.outputs() & (Y0 | Y1), Y0, "boxes during a reset are not counted");
+    assert_eq!(
+        nano.outputs() & (Y0 | Y1),
+        Y0,
+        "boxes during a reset are not counted"
+    );
     for _ in 0..4 {
         one_box(&mut nano);
     }
@@ -107,11 +127,19 @@ fn a_warm_reset_keeps_the_count_and_a_power_up_clears_it() {
     one_box(&mut nano);
     assert_eq!(nano.outputs() & Y0, Y0, "four counted");
     one_box(&mut nano);
-    assert_eq!(nano.outputs() & (Y0 | Y1), Y1, "the count went on from 3: five now");
+    assert_eq!(
+        nano.outputs() & (Y0 | Y1),
+        Y1,
+        "the count went on from 3: five now"
+    );
     // Power off and on: the count starts from 0.
     nano.power_cycle();
     nano.run_ms(100);
-    assert_eq!(nano.outputs() & (Y0 | Y1), Y0, "after a power-up the count is 0");
+    assert_eq!(
+        nano.outputs() & (Y0 | Y1),
+        Y0,
+        "after a power-up the count is 0"
+    );
     for _ in 0..4 {
         one_box(&mut nano);
     }
@@ -144,16 +172,28 @@ fn the_tank_fills_between_its_marks_raises_the_alarm_and_does_not_chatter() {
     level(&mut nano, 299, 40);
     assert_eq!(nano.outputs() & Y1, Y1, "299 is below the low mark");
     level(&mut nano, 300, 40);
-    assert_eq!(nano.outputs() & (Y0 | Y1), Y0, "at the low mark: alarm off, pump on");
+    assert_eq!(
+        nano.outputs() & (Y0 | Y1),
+        Y0,
+        "at the low mark: alarm off, pump on"
+    );
     level(&mut nano, 799, 40);
     assert_eq!(nano.outputs() & Y0, Y0, "799: still filling");
     level(&mut nano, 800, 40);
-    assert_eq!(nano.outputs() & (Y0 | Y1), 0, "the high mark stops the pump");
+    assert_eq!(
+        nano.outputs() & (Y0 | Y1),
+        0,
+        "the high mark stops the pump"
+    );
     // Emptying: the pump stays off down to the low mark's hysteresis (8 counts below it).
     level(&mut nano, 500, 40);
     assert_eq!(nano.outputs() & Y0, 0);
     level(&mut nano, 293, 40);
-    assert_eq!(nano.outputs() & (Y0 | Y1), 0, "293 is inside the hysteresis band");
+    assert_eq!(
+        nano.outputs() & (Y0 | Y1),
+        0,
+        "293 is inside the hysteresis band"
+    );
     level(&mut nano, 291, 40);
     assert_eq!(nano.outputs() & (Y0 | Y1), Y0 | Y1, "291: below 300 - 8");
     // A noisy level around the high mark: one stop, no chatter.
@@ -178,7 +218,7 @@ fn the_tank_fills_between_its_marks_raises_the_alarm_and_does_not_chatter() {
 fn version_1_image(prog: &Program) -> Vec<u8> {
     let mut v1 = image::encode(prog)[..image::COUNTER_PRESETS_OFFSET].to_vec();
     v1[image::VERSION_OFFSET] = image::VERSION_1;
-    let crc = image::crc16(&v1);
+    let crc = image::crc16_ccitt(&v1);
     v1.extend_from_slice(&crc.to_be_bytes());
     v1
 }
@@ -262,7 +302,11 @@ fn read_takes_version_1_and_version_2_files_and_write_sends_version_2() {
     assert!(nano.wait_for("*** User File 0 ***", 2_000));
     // A version-1 file: counter presets and set-points 0.
     read_file(&mut nano, &hex_of(&version_1_image(&v1_program())));
-    assert!(nano.wait_for("File read completed", 1_000), "{}", nano.screen());
+    assert!(
+        nano.wait_for("File read completed", 1_000),
+        "{}",
+        nano.screen()
+    );
     nano.enter("", 300);
     let sent = write_file(&mut nano);
     assert_eq!(sent.len(), image::IMAGE_LEN);
@@ -273,17 +317,25 @@ fn read_takes_version_1_and_version_2_files_and_write_sends_version_2() {
     let tank = example("tank-fill");
     let img = image::encode(&tank);
     read_file(&mut nano, &hex_of(&img));
-    assert!(nano.wait_for("File read completed", 1_000), "{}", nano.screen());
+    assert!(
+        nano.wait_for("File read completed", 1_000),
+        "{}",
+        nano.screen()
+    );
     nano.enter("", 300);
     assert_eq!(write_file(&mut nano), img.to_vec());
     nano.enter("", 300);
     // A newer version is refused with a message, and the program stays.
     let mut v3 = img.to_vec();
     v3[image::VERSION_OFFSET] = 3;
-    let crc = image::crc16(&v3[..image::CRC_OFFSET]);
+    let crc = image::crc16_ccitt(&v3[..image::CRC_OFFSET]);
     v3[image::CRC_OFFSET..].copy_from_slice(&crc.to_be_bytes());
     read_file(&mut nano, &hex_of(&v3));
-    assert!(nano.wait_for("unknown image version", 1_000), "{}", nano.screen());
+    assert!(
+        nano.wait_for("unknown image version", 1_000),
+        "{}",
+        nano.screen()
+    );
     nano.enter("", 300);
     nano.run_ms(300);
     assert_eq!(write_file(&mut nano), img.to_vec(), "nothing changed");
@@ -304,9 +356,19 @@ fn ldc_by_keys_sets_a_preset_that_the_running_program_uses_and_store_keeps_it() 
     nano.run_ms(100);
     let screen = nano.screen();
     assert!(screen.contains("C0") && screen.contains("S7"), "{screen}");
-    assert!(screen.contains("00005"), "C0's preset from the stored program:\n{screen}");
-    let reading_row = screen.lines().find(|l| l.starts_with("reading")).unwrap_or("");
-    assert_eq!(reading_row.split_whitespace().count(), 3, "two readings: {reading_row}");
+    assert!(
+        screen.contains("00005"),
+        "C0's preset from the stored program:\n{screen}"
+    );
+    let reading_row = screen
+        .lines()
+        .find(|l| l.starts_with("reading"))
+        .unwrap_or("");
+    assert_eq!(
+        reading_row.split_whitespace().count(),
+        3,
+        "two readings: {reading_row}"
+    );
     nano.enter("2", 300);
     nano.enter("70000", 300);
     assert!(nano.wait_for("65535", 500), "refused: {}", nano.screen());
@@ -319,7 +381,11 @@ fn ldc_by_keys_sets_a_preset_that_the_running_program_uses_and_store_keeps_it() 
     one_box(&mut nano);
     assert_eq!(nano.outputs() & Y0, Y0);
     one_box(&mut nano);
-    assert_eq!(nano.outputs() & (Y0 | Y1), Y1, "the new preset 2 stops the belt");
+    assert_eq!(
+        nano.outputs() & (Y0 | Y1),
+        Y1,
+        "the new preset 2 stops the belt"
+    );
     // STORE kept it: the stored image has C0 = 2.
     let ee = nano.eeprom();
     let newest = [&ee[2..300], &ee[0x202..0x202 + 298]]

@@ -9,9 +9,10 @@ mod common;
 
 use common::{Board, Rig, CYCLES_PER_MS};
 use utile_core::engine::Program;
-use utile_core::modbus::crc::crc16;
+use utile_core::modbus::crc::crc16_modbus;
 use utile_core::store;
 use utile_kit::listing;
+use utile_kit::modbus;
 use utile_kit::sim::SimBoard;
 use utile_kit::simavr::{frame_cycles, RxPacing};
 
@@ -44,7 +45,10 @@ impl Line {
         // The RUN screen is drawn first (about 0.4 s of line time): a master talks after it.
         nano.run_ms(1_000);
         nano.take_output();
-        Line { nano, de: Vec::new() }
+        Line {
+            nano,
+            de: Vec::new(),
+        }
     }
 
     fn de_level(&self) -> bool {
@@ -75,9 +79,7 @@ impl Line {
 
     /// A request (CRC appended) and the reply, with the cycle of each reply byte's stop bit.
     fn transact(&mut self, pdu: &[u8]) -> (u64, Vec<(u8, u64)>) {
-        let mut frame = vec![ADDRESS];
-        frame.extend_from_slice(pdu);
-        frame.extend_from_slice(&crc16(&frame).to_le_bytes());
+        let frame = modbus::frame(ADDRESS, pdu);
         self.nano.chip.take_output_timed();
         let end = self.send(4 * char_cycles(), &frame);
         // The request goes out first (a long one takes several ms).
@@ -111,11 +113,9 @@ fn bytes(reply: &[(u8, u64)]) -> Vec<u8> {
 /// The reply's PDU after checking address and CRC.
 fn pdu(reply: &[(u8, u64)]) -> Vec<u8> {
     let r = bytes(reply);
-    assert!(r.len() >= 4, "a reply: {r:02X?}");
-    assert_eq!(r[0], ADDRESS);
-    let n = r.len();
-    assert_eq!(crc16(&r[..n - 2]).to_le_bytes(), [r[n - 2], r[n - 1]], "reply CRC");
-    r[1..n - 2].to_vec()
+    modbus::reply_pdu(ADDRESS, &r)
+        .unwrap_or_else(|e| panic!("{e}: {r:02X?}"))
+        .to_vec()
 }
 
 fn remote_start() -> Program {
@@ -127,7 +127,11 @@ fn a_master_reads_and_writes_and_the_program_follows() {
     let mut line = Line::new(&remote_start());
     assert_eq!(line.nano.outputs() & 1, 0);
     let (_, reply) = line.transact(&[0x05, 0, 8, 0xFF, 0]);
-    assert_eq!(pdu(&reply), vec![0x05, 0, 8, 0xFF, 0], "write single coil U0 echoed");
+    assert_eq!(
+        pdu(&reply),
+        vec![0x05, 0, 8, 0xFF, 0],
+        "write single coil U0 echoed"
+    );
     line.run(2 * CYCLES_PER_MS);
     assert_eq!(line.nano.outputs() & 1, 1, "the program saw U0 and set Y0");
     let (_, reply) = line.transact(&[0x01, 0, 0, 0, 16]);
@@ -153,8 +157,14 @@ fn replies_start_soon_and_d10_frames_each_reply_exactly() {
         let first_start = reply[0].1 - c;
         let last_stop = reply.last().unwrap().1;
         let latency_ms = (first_start - end) as f64 / CYCLES_PER_MS as f64;
-        assert!(latency_ms >= 1.75, "the slave waits out 3.5 characters: {latency_ms:.2} ms");
-        assert!(latency_ms <= 5.0, "SPEC §13: a reply within 5 ms ({latency_ms:.2} ms)");
+        assert!(
+            latency_ms >= 1.75,
+            "the slave waits out 3.5 characters: {latency_ms:.2} ms"
+        );
+        assert!(
+            latency_ms <= 5.0,
+            "SPEC §13: a reply within 5 ms ({latency_ms:.2} ms)"
+        );
         // Back to back: no gap of 1.5 characters inside the reply.
         for w in reply.windows(2) {
             assert!(w[1].1 - w[0].1 < c * 3 / 2, "a gap inside the reply");
@@ -165,11 +175,24 @@ fn replies_start_soon_and_d10_frames_each_reply_exactly() {
         let falls: Vec<u64> = line.de.iter().filter(|d| !d.1).map(|d| d.0).collect();
         // D10 is sampled every `step` cycles: a change is seen up to a step late.
         let step = CYCLES_PER_MS / 32;
-        let rise = *rises.iter().rev().find(|&&t| t <= first_start + step).expect("D10 rose");
+        let rise = *rises
+            .iter()
+            .rev()
+            .find(|&&t| t <= first_start + step)
+            .expect("D10 rose");
         let fall = *falls.iter().find(|&&t| t >= rise).expect("D10 fell");
-        assert!(first_start.saturating_sub(rise) < 2 * CYCLES_PER_MS, "D10 up just before");
-        assert!(fall + step >= last_stop, "D10 held until the last stop bit has left");
-        assert!(fall.saturating_sub(last_stop) < c, "and dropped right after it");
+        assert!(
+            first_start.saturating_sub(rise) < 2 * CYCLES_PER_MS,
+            "D10 up just before"
+        );
+        assert!(
+            fall + step >= last_stop,
+            "D10 held until the last stop bit has left"
+        );
+        assert!(
+            fall.saturating_sub(last_stop) < c,
+            "and dropped right after it"
+        );
         line.de.clear();
         line.de.push((line.nano.chip.cycle(), line.de_level()));
         assert!(!line.de_level());
@@ -181,17 +204,15 @@ fn broken_frames_get_no_answer_and_are_counted() {
     let mut line = Line::new(&remote_start());
     // Bad CRC.
     let mut bad = vec![ADDRESS, 0x03, 0, 0, 0, 1];
-    bad.extend_from_slice(&(crc16(&bad) ^ 0x0101).to_le_bytes());
+    bad.extend_from_slice(&(crc16_modbus(&bad) ^ 0x0101).to_le_bytes());
     line.send(4 * char_cycles(), &bad);
     assert!(line.collect().is_empty(), "no answer to a bad CRC");
     // Another address.
-    let mut other = vec![9, 0x03, 0, 0, 0, 1];
-    other.extend_from_slice(&crc16(&other).to_le_bytes());
+    let other = modbus::frame(9, &[0x03, 0, 0, 0, 1]);
     line.send(4 * char_cycles(), &other);
     assert!(line.collect().is_empty(), "no answer for another slave");
     // A gap of 2.5 characters inside a frame.
-    let mut good = vec![ADDRESS, 0x03, 0, 0, 0, 1];
-    good.extend_from_slice(&crc16(&good).to_le_bytes());
+    let good = modbus::frame(ADDRESS, &[0x03, 0, 0, 0, 1]);
     line.send(4 * char_cycles(), &good[..3]);
     line.send(5 * char_cycles() / 2, &good[3..]);
     assert!(line.collect().is_empty(), "no answer to a frame with a gap");
@@ -221,20 +242,31 @@ fn the_terminal_is_quiet_while_a_master_is_active_and_resumes_after_three_second
     // PPA every scan: RUN mode shows the port byte every 100 ms.
     let mut line = Line::new(&listing::commands(&["PPA", "KEY", "END"]));
     line.run(300 * CYCLES_PER_MS);
-    assert!(!line.nano.chip.take_output().is_empty(), "the RUN screen shows PPA");
+    assert!(
+        !line.nano.chip.take_output().is_empty(),
+        "the RUN screen shows PPA"
+    );
     line.transact(&[0x08, 0, 0, 0x12, 0x34]);
     // Within the next 2.5 s: nothing but replies.
     for _ in 0..5 {
         let (_, reply) = line.transact(&[0x08, 0, 0, 0xAB, 0xCD]);
-        assert_eq!(pdu(&reply), vec![0x08, 0, 0, 0xAB, 0xCD], "only the reply is sent");
+        assert_eq!(
+            pdu(&reply),
+            vec![0x08, 0, 0, 0xAB, 0xCD],
+            "only the reply is sent"
+        );
         line.run(400 * CYCLES_PER_MS);
-        assert!(line.nano.chip.take_output_timed().is_empty(), "the terminal is quiet");
+        assert!(
+            line.nano.chip.take_output_timed().is_empty(),
+            "the terminal is quiet"
+        );
     }
     line.run(3_100 * CYCLES_PER_MS);
-    assert!(!line.nano.chip.take_output().is_empty(), "the displays resumed after 3 s");
+    assert!(
+        !line.nano.chip.take_output().is_empty(),
+        "the displays resumed after 3 s"
+    );
 }
-
-
 
 #[test]
 fn a_long_write_then_reads_are_each_answered() {
@@ -244,7 +276,11 @@ fn a_long_write_then_reads_are_each_answered() {
     let (_, r) = line.transact(&[0x04, 0, 32, 0, 16]);
     assert_eq!(pdu(&r).len(), 2 + 32, "time left of T0..TF");
     let (_, r) = line.transact(&[0x03, 0, 16, 0, 2]);
-    assert_eq!(pdu(&r), vec![0x03, 4, 0x12, 0x34, 0x01, 0x00], "C0, C1 as written");
+    assert_eq!(
+        pdu(&r),
+        vec![0x03, 4, 0x12, 0x34, 0x01, 0x00],
+        "C0, C1 as written"
+    );
 }
 
 #[test]
@@ -253,7 +289,9 @@ fn a_slow_program_still_gets_every_reply_whole_and_without_gaps() {
     use utile_core::opcodes::{is_valid, END, NOP};
     let mut p = Program::blank();
     p.uf = [NOP; 256];
-    let ops: Vec<u8> = (0..=0xFEu8).filter(|&op| op != END && is_valid(op)).collect();
+    let ops: Vec<u8> = (0..=0xFEu8)
+        .filter(|&op| op != END && is_valid(op))
+        .collect();
     for (l, op) in p.uf.iter_mut().zip(&ops) {
         *l = *op;
     }
@@ -272,7 +310,10 @@ fn a_slow_program_still_gets_every_reply_whole_and_without_gaps() {
         let (_, reply) = line.transact(req);
         assert_eq!(pdu(&reply).len(), len, "reply to {req:02X?}");
         for w in reply.windows(2) {
-            assert!(w[1].1 - w[0].1 < char_cycles() * 3 / 2, "a gap inside the reply to {req:02X?}");
+            assert!(
+                w[1].1 - w[0].1 < char_cycles() * 3 / 2,
+                "a gap inside the reply to {req:02X?}"
+            );
         }
     }
 }

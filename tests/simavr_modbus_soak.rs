@@ -8,9 +8,10 @@
 mod common;
 
 use common::{Board, Rig, CYCLES_PER_MS};
-use utile_core::modbus::crc::crc16;
+use utile_core::modbus::crc::crc16_modbus;
 use utile_core::store;
 use utile_kit::listing;
+use utile_kit::modbus;
 use utile_kit::rng::Rng;
 use utile_kit::sim::SimBoard;
 use utile_kit::simavr::{frame_cycles, RxPacing};
@@ -51,15 +52,11 @@ impl Master {
     }
 
     fn request(&mut self, pdu: &[u8], expect: usize) -> Vec<u8> {
-        let mut frame = vec![ADDRESS];
-        frame.extend_from_slice(pdu);
-        frame.extend_from_slice(&crc16(&frame).to_le_bytes());
-        let reply = self.exchange(&frame, expect);
+        let reply = self.exchange(&modbus::frame(ADDRESS, pdu), expect);
         assert_eq!(reply.len(), expect, "reply to {pdu:02X?}: {reply:02X?}");
-        let n = reply.len();
-        assert_eq!(reply[0], ADDRESS);
-        assert_eq!(crc16(&reply[..n - 2]).to_le_bytes(), [reply[n - 2], reply[n - 1]]);
-        reply[1..n - 2].to_vec()
+        modbus::reply_pdu(ADDRESS, &reply)
+            .unwrap_or_else(|e| panic!("{e}: {reply:02X?}"))
+            .to_vec()
     }
 
     /// A broken frame: random noise, another slave's request, or a bad CRC. No answer.
@@ -70,22 +67,19 @@ impl Master {
                 let len = 2 + self.rng.below(20) as usize;
                 (0..len).map(|_| self.rng.byte()).collect::<Vec<u8>>()
             }
-            1 => {
-                let mut f = vec![2 + self.rng.below(200) as u8, 0x03, 0, 0, 0, 4];
-                f.extend_from_slice(&crc16(&f).to_le_bytes());
-                f
-            }
+            1 => modbus::frame(2 + self.rng.below(200) as u8, &[0x03, 0, 0, 0, 4]),
             _ => {
                 let mut f = vec![ADDRESS, 0x04, 0, 0, 0, 8];
-                f.extend_from_slice(&(crc16(&f) ^ (1 + self.rng.below(0xFFFE) as u16)).to_le_bytes());
+                f.extend_from_slice(
+                    &(crc16_modbus(&f) ^ (1 + self.rng.below(0xFFFE) as u16)).to_le_bytes(),
+                );
                 f
             }
         };
         if kind == 0 && frame.len() > 3 {
             // Random bytes that happen to carry a good CRC would be a real frame: break it.
-            let n = frame.len();
-            let crc = crc16(&frame[..n - 2]).to_le_bytes();
-            if frame[n - 2..] == crc {
+            if modbus::crc_ok(&frame) {
+                let n = frame.len();
                 frame[n - 1] ^= 1;
             }
         }
@@ -97,7 +91,9 @@ impl Master {
 #[test]
 fn ten_minutes_of_polling_with_noise_keep_the_program_and_the_slave_right() {
     // Y0 follows CLKA (0.4 s period), Y1 is A0 inverted, Y2 is U0 (the master's coil 8).
-    let prog = listing::commands(&["CLKA.", ".Y0", "A0.", "!", ".Y1", "U0.", ".Y2", "KEY", "END"]);
+    let prog = listing::commands(&[
+        "CLKA.", ".Y0", "A0.", "!", ".Y1", "U0.", ".Y2", "KEY", "END",
+    ]);
     let mut b = SimBoard::new();
     store::store(&prog, &mut b).expect("STORE");
     let eeprom: &'static [u8] = Box::leak(b.eeprom.into_boxed_slice());
@@ -168,6 +164,9 @@ fn ten_minutes_of_polling_with_noise_keep_the_program_and_the_slave_right() {
     }
     println!("soak: {answered} answered, {broken} broken frames, Y0 changed {clka_changes} times");
     assert!(answered > 5_000, "{answered} requests answered");
-    assert!(clka_changes > 500, "Y0 kept following CLKA: {clka_changes} changes");
+    assert!(
+        clka_changes > 500,
+        "Y0 kept following CLKA: {clka_changes} changes"
+    );
     assert_eq!(m.nano.eeprom(), ee_before, "EEPROM unchanged");
 }

@@ -4,10 +4,10 @@
 
 mod common;
 use common::{contains, Board, Rig, RAMSTART, STACK_PAINT};
-use utile_kit::rng::Rng;
 use utile_core::engine::Program;
 use utile_core::opcodes::{self, NOP};
 use utile_core::{ihex, image, store};
+use utile_kit::rng::Rng;
 use utile_kit::sim::SimBoard;
 
 /// The program every fault test starts from: stored in EEPROM, different from FILL's.

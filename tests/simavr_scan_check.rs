@@ -26,8 +26,19 @@ const LIMIT_MS: u64 = 120_000;
 
 /// The coverage counters the PASS line must report, each non-zero.
 const COVERAGE: [&str; 13] = [
-    "py", "q", "tk", "retired", "edges", "views", "guard", "wraps", "bursts", "counted",
-    "counter_resets", "saturated", "cq",
+    "py",
+    "q",
+    "tk",
+    "retired",
+    "edges",
+    "views",
+    "guard",
+    "wraps",
+    "bursts",
+    "counted",
+    "counter_resets",
+    "saturated",
+    "cq",
 ];
 
 fn scan_check_elf() -> PathBuf {

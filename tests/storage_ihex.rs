@@ -363,7 +363,7 @@ fn a_version_1_file_is_whole_at_278_bytes_and_decodes() {
     prog.presets[1] = 3;
     let mut v1 = image::encode(&prog)[..image::COUNTER_PRESETS_OFFSET].to_vec();
     v1[image::VERSION_OFFSET] = image::VERSION_1;
-    let crc = image::crc16(&v1);
+    let crc = image::crc16_ccitt(&v1);
     v1.extend_from_slice(&crc.to_be_bytes());
     let (ev, r) = read(&hex_text(&v1));
     assert_eq!(ev, HexEvent::Done { len: 278 });

@@ -6,7 +6,7 @@ use utile_kit::rng::Rng;
 
 #[test]
 fn crc_check_value() {
-    assert_eq!(image::crc16(b"123456789"), 0x29B1);
+    assert_eq!(image::crc16_ccitt(b"123456789"), 0x29B1);
 }
 
 #[test]
@@ -19,8 +19,11 @@ fn layout_of_a_blank_program() {
         "blank lines are 0xFF"
     );
     assert!(img[260..276].iter().all(|&b| b == 0), "presets 0");
-    assert!(img[276..296].iter().all(|&b| b == 0), "counter presets, set-points 0");
-    let crc = image::crc16(&img[..296]);
+    assert!(
+        img[276..296].iter().all(|&b| b == 0),
+        "counter presets, set-points 0"
+    );
+    let crc = image::crc16_ccitt(&img[..296]);
     assert_eq!(
         &img[296..298],
         &crc.to_be_bytes(),
@@ -66,7 +69,11 @@ fn round_trip_many_programs() {
 fn length_errors() {
     let img = image::encode(&Program::blank());
     assert_eq!(image::decode(&img[..297]), Err(ImageError::Length));
-    assert_eq!(image::decode(&img[..IMAGE_LEN_V1]), Err(ImageError::Length), "v2 header, v1 length");
+    assert_eq!(
+        image::decode(&img[..IMAGE_LEN_V1]),
+        Err(ImageError::Length),
+        "v2 header, v1 length"
+    );
     assert_eq!(image::decode(&[]), Err(ImageError::Length));
     let mut long = img.to_vec();
     long.push(0);
@@ -91,7 +98,7 @@ fn magic_version_and_crc_errors() {
         let mut bad = img;
         bad[2] = v;
         // Even with a CRC that matches, an unknown version is refused as such.
-        let crc = image::crc16(&bad[..CRC_OFFSET]).to_be_bytes();
+        let crc = image::crc16_ccitt(&bad[..CRC_OFFSET]).to_be_bytes();
         bad[CRC_OFFSET..].copy_from_slice(&crc);
         assert_eq!(image::decode(&bad), Err(ImageError::Version(v)));
     }
@@ -123,7 +130,7 @@ fn erased_and_random_bytes_are_refused() {
         assert!(image::decode(&bytes).is_err());
         // Even with the right header, random contents fail the CRC.
         bytes[0..4].copy_from_slice(&[b'u', b'T', 2, 0]);
-        if image::crc16(&bytes[..CRC_OFFSET]).to_be_bytes() != bytes[CRC_OFFSET..] {
+        if image::crc16_ccitt(&bytes[..CRC_OFFSET]).to_be_bytes() != bytes[CRC_OFFSET..] {
             assert_eq!(image::decode(&bytes), Err(ImageError::Crc));
         }
     }
@@ -133,7 +140,7 @@ fn erased_and_random_bytes_are_refused() {
 fn version_1(prog: &Program) -> Vec<u8> {
     let mut v1 = image::encode(prog)[..image::COUNTER_PRESETS_OFFSET].to_vec();
     v1[image::VERSION_OFFSET] = 1;
-    let crc = image::crc16(&v1);
+    let crc = image::crc16_ccitt(&v1);
     v1.extend_from_slice(&crc.to_be_bytes());
     v1
 }

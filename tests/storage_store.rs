@@ -358,7 +358,7 @@ fn store_feeds_the_watchdog() {
 fn version_1_slot(b: &mut SimBoard, at: usize, seq: u16, prog: &Program) {
     let mut v1 = image::encode(prog)[..image::COUNTER_PRESETS_OFFSET].to_vec();
     v1[image::VERSION_OFFSET] = image::VERSION_1;
-    let crc = image::crc16(&v1);
+    let crc = image::crc16_ccitt(&v1);
     v1.extend_from_slice(&crc.to_be_bytes());
     b.eeprom[at..at + 2].copy_from_slice(&seq.to_le_bytes());
     b.eeprom[at + 2..at + 2 + v1.len()].copy_from_slice(&v1);
@@ -370,7 +370,11 @@ fn version_1_slots_load_and_the_next_store_writes_version_2_beside_them() {
     let old = rng.program();
     let mut b = SimBoard::new();
     version_1_slot(&mut b, 0, 7, &old);
-    assert_eq!(store::load(&mut b), Ok(old.clone()), "counter presets and set-points 0");
+    assert_eq!(
+        store::load(&mut b),
+        Ok(old.clone()),
+        "counter presets and set-points 0"
+    );
     // STORE goes to the other slot, as version 2; the version-1 slot stays as it was.
     let new = rng.program_v2();
     let slot0: Vec<u8> = b.eeprom[..280].to_vec();
@@ -394,8 +398,9 @@ fn a_stored_set_point_above_1023_makes_the_slot_invalid() {
     assert_eq!(store::load(&mut b), Ok(p.clone()));
     // 1024 with a CRC that matches (only a damaged or foreign EEPROM holds that).
     let mut img = image::encode(&p);
-    img[image::SET_POINTS_OFFSET..image::SET_POINTS_OFFSET + 2].copy_from_slice(&1024u16.to_be_bytes());
-    let crc = image::crc16(&img[..image::CRC_OFFSET]);
+    img[image::SET_POINTS_OFFSET..image::SET_POINTS_OFFSET + 2]
+        .copy_from_slice(&1024u16.to_be_bytes());
+    let crc = image::crc16_ccitt(&img[..image::CRC_OFFSET]);
     img[image::CRC_OFFSET..].copy_from_slice(&crc.to_be_bytes());
     b.eeprom[2..2 + image::IMAGE_LEN].copy_from_slice(&img);
     assert_eq!(store::load(&mut b), Err(store::LoadError::NoValidImage));

@@ -131,7 +131,10 @@ mod tests {
         assert!(threshold(true, 504, 512));
         assert!(!threshold(true, 503, 512));
         assert!(!threshold(false, 1023, 0), "set-point 0 disables");
-        assert!(threshold(true, 0, 5), "no underflow below a small set-point");
+        assert!(
+            threshold(true, 0, 5),
+            "no underflow below a small set-point"
+        );
     }
 
     #[test]

@@ -72,7 +72,7 @@ pub enum ImageError {
 /// (lets STORE/LOAD check an EEPROM slot without copying it to RAM). Out of line: inlined
 /// in the slot check and the image's CRC it cost 134 bytes more.
 #[inline(never)]
-pub const fn crc16_update(crc: u16, byte: u8) -> u16 {
+pub const fn crc16_ccitt_update(crc: u16, byte: u8) -> u16 {
     let mut crc = crc ^ ((byte as u16) << 8);
     let mut bit = 0u8;
     while bit < 8 {
@@ -87,8 +87,10 @@ pub const fn crc16_update(crc: u16, byte: u8) -> u16 {
 }
 
 /// CRC-16/CCITT-FALSE (poly 0x1021, init 0xFFFF).
-pub fn crc16(bytes: &[u8]) -> u16 {
-    bytes.iter().fold(0xFFFF, |crc, &b| crc16_update(crc, b))
+pub fn crc16_ccitt(bytes: &[u8]) -> u16 {
+    bytes
+        .iter()
+        .fold(0xFFFF, |crc, &b| crc16_ccitt_update(crc, b))
 }
 
 /// Byte `i` of `prog`'s image, where `crc` is [`image_crc`]`(prog)`. Lets STORE and WRITE
@@ -103,9 +105,7 @@ pub fn image_byte(prog: &Program, crc: u16, i: usize) -> u8 {
         _ if i < COUNTER_PRESETS_OFFSET => {
             prog.presets.get(i - PRESETS_OFFSET).copied().unwrap_or(0)
         }
-        _ if i < SET_POINTS_OFFSET => {
-            word_byte(&prog.counter_presets, i - COUNTER_PRESETS_OFFSET)
-        }
+        _ if i < SET_POINTS_OFFSET => word_byte(&prog.counter_presets, i - COUNTER_PRESETS_OFFSET),
         _ if i < CRC_OFFSET => word_byte(&prog.set_points, i - SET_POINTS_OFFSET),
         CRC_OFFSET => crc.to_be_bytes()[0],
         _ => crc.to_be_bytes()[1],
@@ -170,7 +170,9 @@ fn word_at(img: &[u8], at: usize) -> u16 {
 
 /// The CRC of `prog`'s image (over every byte before the CRC).
 pub fn image_crc(prog: &Program) -> u16 {
-    (0..CRC_OFFSET).fold(0xFFFF, |crc, i| crc16_update(crc, image_byte(prog, 0, i)))
+    (0..CRC_OFFSET).fold(0xFFFF, |crc, i| {
+        crc16_ccitt_update(crc, image_byte(prog, 0, i))
+    })
 }
 
 /// The image bytes of a program.
@@ -218,7 +220,7 @@ pub fn decode_into(img: &[u8], prog: &mut Program) -> Result<(), ImageError> {
     }
     let crc_at = len - 2;
     let body = img.get(..crc_at).ok_or(ImageError::Length)?;
-    if crc16(body) != word_at(img, crc_at) {
+    if crc16_ccitt(body) != word_at(img, crc_at) {
         return Err(ImageError::Crc);
     }
     let high = |k: usize| img.get(SET_POINTS_OFFSET + 2 * k).copied().unwrap_or(0);
@@ -227,7 +229,11 @@ pub fn decode_into(img: &[u8], prog: &mut Program) -> Result<(), ImageError> {
     }
     // A version-1 image ends at the counter presets: they and the set-points are 0.
     for i in UF_OFFSET..CRC_OFFSET {
-        let byte = if i < crc_at { img.get(i).copied().unwrap_or(0) } else { 0 };
+        let byte = if i < crc_at {
+            img.get(i).copied().unwrap_or(0)
+        } else {
+            0
+        };
         set_image_byte(prog, i, byte);
     }
     Ok(())
@@ -252,8 +258,14 @@ mod tests {
         let img = encode(&prog());
         assert_eq!(img.len(), IMAGE_LEN);
         assert_eq!(img[VERSION_OFFSET], 2);
-        assert_eq!(&img[COUNTER_PRESETS_OFFSET + 4..COUNTER_PRESETS_OFFSET + 6], &[0x01, 0x2C]);
-        assert_eq!(&img[SET_POINTS_OFFSET..SET_POINTS_OFFSET + 2], &[0x02, 0x00]);
+        assert_eq!(
+            &img[COUNTER_PRESETS_OFFSET + 4..COUNTER_PRESETS_OFFSET + 6],
+            &[0x01, 0x2C]
+        );
+        assert_eq!(
+            &img[SET_POINTS_OFFSET..SET_POINTS_OFFSET + 2],
+            &[0x02, 0x00]
+        );
         assert_eq!(decode(&img), Ok(prog()));
     }
 
@@ -262,7 +274,7 @@ mod tests {
         let v2 = encode(&prog());
         let mut v1 = v2[..PRESETS_OFFSET + UNITS].to_vec();
         v1[VERSION_OFFSET] = 1;
-        let crc = crc16(&v1);
+        let crc = crc16_ccitt(&v1);
         v1.extend_from_slice(&crc.to_be_bytes());
         assert_eq!(v1.len(), IMAGE_LEN_V1);
         let mut want = prog();
@@ -289,8 +301,8 @@ mod tests {
     }
 
     #[test]
-    fn crc16_check_value() {
+    fn crc16_ccitt_check_value() {
         // The catalogue check value of CRC-16/CCITT-FALSE.
-        assert_eq!(crc16(b"123456789"), 0x29B1);
+        assert_eq!(crc16_ccitt(b"123456789"), 0x29B1);
     }
 }

@@ -10,7 +10,12 @@
 // outside its tests it never unwraps or panics.
 #![cfg_attr(
     not(test),
-    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic, clippy::unreachable)
+    deny(
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::unreachable
+    )
 )]
 
 pub mod analog;
@@ -19,8 +24,8 @@ pub mod editor;
 pub mod engine;
 pub mod hex;
 pub mod ihex;
-pub mod modbus;
 pub mod image;
+pub mod modbus;
 pub mod opcodes;
 pub mod stats;
 pub mod store;

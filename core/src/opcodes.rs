@@ -569,8 +569,8 @@ mod tests {
     #[test]
     fn near_misses_are_rejected() {
         for w in [
-            "A6.", "A0", "AL6.", ".Y8", "Q0", "QG.", ".TK", "TQ10.", "", "NOPE", "A.", "Y0..", ".S",
-            "H0.", "H5.", "H8.", "CQ8.", ".CU8", ".CR8", "C0.", ".C0",
+            "A6.", "A0", "AL6.", ".Y8", "Q0", "QG.", ".TK", "TQ10.", "", "NOPE", "A.", "Y0..",
+            ".S", "H0.", "H5.", "H8.", "CQ8.", ".CU8", ".CR8", "C0.", ".C0",
         ] {
             assert_eq!(lookup(w.as_bytes()), None, "{w}");
         }

@@ -61,7 +61,12 @@ impl Default for ScanStats {
 impl ScanStats {
     /// No scans yet.
     pub const fn new() -> Self {
-        Self { min: u16::MAX, max: 0, count: 0, run_ms: 0 }
+        Self {
+            min: u16::MAX,
+            max: 0,
+            count: 0,
+            run_ms: 0,
+        }
     }
 
     /// Record one scan of `ticks` timer ticks. Kept to two compares and a count: it runs
@@ -116,8 +121,17 @@ mod tests {
     #[test]
     fn mean_of_a_very_long_run_matches_the_rounded_up_formula() {
         for count in [1u32, 1999, 2000, 2001, u32::MAX - 1, u32::MAX] {
-            let s = ScanStats { min: 0, max: 0, count, run_ms: u32::MAX - 7 };
-            assert_eq!(s.mean(), (u32::MAX - 7) / count.div_ceil(2000), "count {count}");
+            let s = ScanStats {
+                min: 0,
+                max: 0,
+                count,
+                run_ms: u32::MAX - 7,
+            };
+            assert_eq!(
+                s.mean(),
+                (u32::MAX - 7) / count.div_ceil(2000),
+                "count {count}"
+            );
         }
     }
 
@@ -133,8 +147,16 @@ mod tests {
         assert_eq!(per_1000(big, 1001), big / 2);
         assert_eq!(per_1000(u32::MAX, u32::MAX), u32::MAX / 4_294_968);
         // The mean in µs is the mean in ticks halved, as long as the run fits.
-        let s = ScanStats { min: 0, max: 0, count: 12_345, run_ms: 987_654 };
-        assert_eq!(per_1000(s.run_ms, s.count), ScanStats::ticks_to_us(s.mean()));
+        let s = ScanStats {
+            min: 0,
+            max: 0,
+            count: 12_345,
+            run_ms: 987_654,
+        };
+        assert_eq!(
+            per_1000(s.run_ms, s.count),
+            ScanStats::ticks_to_us(s.mean())
+        );
     }
 
     #[test]

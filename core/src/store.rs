@@ -17,7 +17,7 @@
 
 use super::board::Board;
 use super::engine::Program;
-use super::image::{self, crc16_update, IMAGE_LEN, SET_POINTS_OFFSET, UF_OFFSET};
+use super::image::{self, crc16_ccitt_update, IMAGE_LEN, SET_POINTS_OFFSET, UF_OFFSET};
 
 /// EEPROM address of each slot.
 pub const SLOT_ADDR: [u16; 2] = [0x000, 0x200];
@@ -98,7 +98,7 @@ fn slot_check<B: Board>(b: &mut B, slot: u16) -> Option<(u16, usize)> {
     let crc_at = len - 2;
     let mut crc: u16 = 0xFFFF;
     for i in 0..crc_at {
-        crc = crc16_update(crc, b.eeprom_read(image_addr(slot, i)));
+        crc = crc16_ccitt_update(crc, b.eeprom_read(image_addr(slot, i)));
     }
     let stored = u16::from_be_bytes([
         b.eeprom_read(image_addr(slot, crc_at)),
@@ -194,7 +194,11 @@ pub fn load_into<B: Board>(b: &mut B, prog: &mut Program) -> Result<(), LoadErro
     let (slot, _, len) = newest(b).ok_or(LoadError::NoValidImage)?;
     // A version-1 image ends at the counter presets: they and the set-points are 0.
     for i in UF_OFFSET..image::CRC_OFFSET {
-        let byte = if i < len - 2 { b.eeprom_read(image_addr(slot, i)) } else { 0 };
+        let byte = if i < len - 2 {
+            b.eeprom_read(image_addr(slot, i))
+        } else {
+            0
+        };
         image::set_image_byte(prog, i, byte);
     }
     b.feed_watchdog();

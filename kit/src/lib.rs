@@ -4,6 +4,7 @@
 //!   and editor;
 //! - [`listing`]: `.utl` listings and hex images;
 //! - [`simulate`] and [`diagram`]: timelines, simulation on the core, VCD and SVG;
+//! - [`modbus`]: Modbus RTU frames as a master makes and checks them;
 //! - [`rng`]: the one random generator of the host code;
 //! - [`fuzzing`]: the invariants of SPEC §12 and of the Modbus codec (SPEC §13), shared by
 //!   the fuzz targets and the tests;
@@ -13,6 +14,7 @@
 pub mod diagram;
 pub mod fuzzing;
 pub mod listing;
+pub mod modbus;
 pub mod rng;
 pub mod sim;
 pub mod simavr;

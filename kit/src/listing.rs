@@ -112,12 +112,18 @@ pub fn parse(file: &str, text: &str) -> Result<Program, FileErrors> {
                         continue;
                     }
                     Err(_) => {
-                        problem(at, format!("bad {label} value '{value}' for {name} (expected 0..{max})"));
+                        problem(
+                            at,
+                            format!("bad {label} value '{value}' for {name} (expected 0..{max})"),
+                        );
                         continue;
                     }
                 };
                 if let Some(first) = *src {
-                    problem(at, format!("{label} {name} given twice (first on line {first})"));
+                    problem(
+                        at,
+                        format!("{label} {name} given twice (first on line {first})"),
+                    );
                     continue;
                 }
                 *src = Some(at);

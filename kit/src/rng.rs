@@ -69,8 +69,12 @@ impl Rng {
     /// too: every field of image format 2.
     pub fn program_v2(&mut self) -> Program {
         let mut p = self.program();
-        p.counter_presets.iter_mut().for_each(|w| *w = self.next_u32() as u16);
-        p.set_points.iter_mut().for_each(|w| *w = (self.next_u32() % 1024) as u16);
+        p.counter_presets
+            .iter_mut()
+            .for_each(|w| *w = self.next_u32() as u16);
+        p.set_points
+            .iter_mut()
+            .for_each(|w| *w = (self.next_u32() % 1024) as u16);
         p
     }
 }

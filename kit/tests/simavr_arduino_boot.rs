@@ -3,7 +3,9 @@
 //! reset, and run the application after it. Skipped (with a message) when the package is
 //! missing, unless `CI` is set.
 
-use utile_kit::simavr::{ArduinoBoot, BootSection, Chip, FlashImage, Reset, RxPacing, CYCLES_PER_MS};
+use utile_kit::simavr::{
+    ArduinoBoot, BootSection, Chip, FlashImage, Reset, RxPacing, CYCLES_PER_MS,
+};
 
 /// STK500 v1: GET_SYNC, CRC_EOP; the answer INSYNC, OK.
 const SYNC: [u8; 2] = [0x30, 0x20];
@@ -81,8 +83,13 @@ fn optiboot_is_relinked_into_the_1k_section_with_its_version_word_on_top() {
 fn optiboot_built_as_the_readme_says(dir: &std::path::Path) -> std::path::PathBuf {
     let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../README.md"))
         .expect("README.md");
-    let from = readme.find("src=/usr/share/arduino").expect("the recipe in the README");
-    let to = from + readme[from..].find("avr-objcopy").expect("its avr-objcopy line");
+    let from = readme
+        .find("src=/usr/share/arduino")
+        .expect("the recipe in the README");
+    let to = from
+        + readme[from..]
+            .find("avr-objcopy")
+            .expect("its avr-objcopy line");
     let end = to + readme[to..].find('\n').expect("a line end");
     let script = &readme[from..end];
     let out = std::process::Command::new("bash")
@@ -113,7 +120,10 @@ fn optiboot_built_from_the_package_source_as_the_readme_says_fits_512_bytes_and_
     chip.load_boot_image(&image, BootSection::B512).unwrap();
     assert_eq!(chip.flash_word(0x7FFE), 0x0404, "version 4.4");
     // Code and version word apart: the code ends before 0x7FFE.
-    let code_end = (0x7E00..0x7FFE).step_by(2).rev().find(|&a| chip.flash_word(a) != 0xFFFF);
+    let code_end = (0x7E00..0x7FFE)
+        .step_by(2)
+        .rev()
+        .find(|&a| chip.flash_word(a) != 0xFFFF);
     assert!(code_end.is_some_and(|a| a < 0x7FFE), "{code_end:x?}");
     // A power-up goes straight to the application (here erased flash below the section).
     chip.run_for(CYCLES_PER_MS);

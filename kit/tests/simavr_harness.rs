@@ -203,7 +203,10 @@ fn with_interrupts_off_the_watchdog_interrupt_becomes_a_reset_at_the_next_time_o
     let (got, ms) = hang_until_reset(b'i', 200);
     assert_eq!(got, ["APP mcusr=08"], "WDRF after the reset");
     // Two time-outs of 16 ms (2048 cycles of simavr's 128 kHz), then the 7.3 ms boot line.
-    assert!((38.0..41.0).contains(&ms), "reset and boot line {ms} ms after the hang");
+    assert!(
+        (38.0..41.0).contains(&ms),
+        "reset and boot line {ms} ms after the hang"
+    );
 }
 
 #[test]
@@ -211,7 +214,10 @@ fn with_interrupts_on_the_watchdog_interrupt_runs_first_then_the_reset() {
     let (got, ms) = hang_until_reset(b'j', 200);
     assert_eq!(got, ["WDT", "APP mcusr=08"]);
     // The handler ran at the first time-out (clearing WDIE); the reset came at the second.
-    assert!((38.0..41.0).contains(&ms), "reset and boot line {ms} ms after the hang");
+    assert!(
+        (38.0..41.0).contains(&ms),
+        "reset and boot line {ms} ms after the hang"
+    );
 }
 
 #[test]
@@ -220,7 +226,10 @@ fn a_wdr_while_the_interrupt_waits_puts_the_reset_off() {
     // the boot line 7.3 ms later.
     let (got, ms) = hang_until_reset(b'k', 300);
     assert_eq!(got, ["APP mcusr=08"]);
-    assert!((70.0..77.0).contains(&ms), "reset and boot line {ms} ms after the hang");
+    assert!(
+        (70.0..77.0).contains(&ms),
+        "reset and boot line {ms} ms after the hang"
+    );
 }
 
 #[test]

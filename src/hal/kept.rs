@@ -50,7 +50,9 @@ pub fn take_engine<B: Board>(cold: bool, board: &mut B) -> &'static mut Engine {
         if !valid {
             // Cold start: every line blank, presets, set-points and counts 0.
             uf.cast::<u8>().write_bytes(BLANK, LINES);
-            addr_of_mut!((*kept).engine.prog.presets).cast::<u8>().write_bytes(0, UNITS);
+            addr_of_mut!((*kept).engine.prog.presets)
+                .cast::<u8>()
+                .write_bytes(0, UNITS);
             addr_of_mut!((*kept).engine.prog.counter_presets).write([0; COUNTERS]);
             addr_of_mut!((*kept).engine.prog.set_points).write([0; SET_POINTS]);
             addr_of_mut!((*kept).engine.count).write([0; COUNTERS]);
@@ -69,7 +71,10 @@ pub(super) const ENGINE_AT: usize = core::mem::offset_of!(Kept, engine);
 /// The engine that [`take_engine`] hands out (the only one the threaded scan may run).
 pub(super) fn engine_ptr() -> *const Engine {
     // Only the address is taken.
-    addr_of!(KEPT).cast::<Kept>().wrapping_byte_add(ENGINE_AT).cast::<Engine>()
+    addr_of!(KEPT)
+        .cast::<Kept>()
+        .wrapping_byte_add(ENGINE_AT)
+        .cast::<Engine>()
 }
 
 /// Fletcher-style checksum (two 16-bit running sums). A bitwise CRC-16 of the program
@@ -101,7 +106,8 @@ const _: () = assert!(
 fn seal_settings(prog: &Program) -> u32 {
     // SAFETY: `Program` is `repr(C)` with alignment 1 on the AVR; the assertion above shows
     // the three arrays are SETTINGS_LEN contiguous bytes of integers, valid as `u8`s.
-    let bytes = unsafe { core::slice::from_raw_parts(addr_of!(prog.presets).cast::<u8>(), SETTINGS_LEN) };
+    let bytes =
+        unsafe { core::slice::from_raw_parts(addr_of!(prog.presets).cast::<u8>(), SETTINGS_LEN) };
     seal(SEAL_START, bytes)
 }
 

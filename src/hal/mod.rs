@@ -38,14 +38,14 @@ mod stack;
 mod tick;
 mod watchdog;
 
+pub(crate) use adc::BITS as ANALOG_BITS;
 pub use board::{init, Nano};
 pub(crate) use isr_cell::IsrCell;
 #[cfg(feature = "scan-check")]
 pub(crate) use pins::drive_pins;
-#[cfg(feature = "scan-check")]
-pub(crate) use tick::publish;
 pub(crate) use pins::{LAST_PY, OUTPUTS, OUTPUTS_INVERT_AT, OUTPUTS_PY_AT};
 pub(crate) use regs::{regs, wr};
-pub(crate) use tick::{CLOCKS, LEVEL, TICKER, TOGGLES};
-pub(crate) use adc::BITS as ANALOG_BITS;
 pub use tick::on_tick;
+#[cfg(feature = "scan-check")]
+pub(crate) use tick::publish;
+pub(crate) use tick::{CLOCKS, LEVEL, TICKER, TOGGLES};

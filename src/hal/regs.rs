@@ -4,15 +4,13 @@ use avr_device::atmega328p;
 
 /// Write a whole register; every value this layer writes is a documented bit pattern.
 macro_rules! wr {
-    ($reg:expr, $v:expr) => {
-        {
-            let _ = $reg.write(|w| {
-                // SAFETY: the value is a valid bit pattern for this register (see the comment
-                // at the call).
-                unsafe { w.bits($v) }
-            });
-        }
-    };
+    ($reg:expr, $v:expr) => {{
+        let _ = $reg.write(|w| {
+            // SAFETY: the value is a valid bit pattern for this register (see the comment
+            // at the call).
+            unsafe { w.bits($v) }
+        });
+    }};
 }
 pub(crate) use wr;
 

@@ -7,8 +7,8 @@ use avr_device::interrupt::{self, CriticalSection};
 use utile_core::ticker::{Ticker, INPUT_MASK};
 
 use super::isr_cell::IsrCell;
-use super::{adc, pins};
 use super::regs::{regs, wr};
+use super::{adc, pins};
 
 /// The core's ticker, advanced by the tick interrupt.
 pub(crate) static TICKER: IsrCell<Ticker> = IsrCell::new(Ticker::new(INPUT_MASK));

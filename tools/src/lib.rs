@@ -2,9 +2,9 @@
 //! the benchmarks (`./x bench`). What the tools share with the tests is in `utile_kit`.
 #![deny(missing_docs)]
 
-/// Programs to and from a uTile over a serial port (`utile push`, `utile pull`).
-pub mod link;
 /// Benchmarks of the real firmware image in simavr (`bench` binary).
 pub mod bench;
+/// Programs to and from a uTile over a serial port (`utile push`, `utile pull`).
+pub mod link;
 /// The virtual Nano (`cargo nano`): firmware in simavr, UART on a terminal or pty.
 pub mod vnano;

@@ -10,7 +10,7 @@
 mod vnano_util;
 
 use utile_core::opcodes;
-use utile_kit::simavr::{CpuState, Chip, RX_FIXED_CYCLES_PER_BYTE};
+use utile_kit::simavr::{Chip, CpuState, RX_FIXED_CYCLES_PER_BYTE};
 
 /// CPU cycles per millisecond.
 const MS: u64 = 16_000;

@@ -88,9 +88,18 @@ fn preset_errors() {
     expect_errors(
         "TG = 5\nT10 = 5\nX = 1\n = 3\n",
         &[
-            (1, "bad setting name 'TG' (expected T0..TF, C0..C7, S6 or S7)"),
-            (2, "bad setting name 'T10' (expected T0..TF, C0..C7, S6 or S7)"),
-            (3, "bad setting name 'X' (expected T0..TF, C0..C7, S6 or S7)"),
+            (
+                1,
+                "bad setting name 'TG' (expected T0..TF, C0..C7, S6 or S7)",
+            ),
+            (
+                2,
+                "bad setting name 'T10' (expected T0..TF, C0..C7, S6 or S7)",
+            ),
+            (
+                3,
+                "bad setting name 'X' (expected T0..TF, C0..C7, S6 or S7)",
+            ),
             (4, "bad setting name '' (expected T0..TF, C0..C7, S6 or S7)"),
         ],
     );

@@ -34,7 +34,9 @@ fn ok(out: &Output, what: &str) {
 
 /// An example program from `examples/`, as a file and parsed.
 fn example(name: &str) -> (PathBuf, Program) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples").join(name);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../examples")
+        .join(name);
     let text = std::fs::read_to_string(&path).expect("example");
     let prog = listing::parse(name, &text).expect("example parses");
     (path, prog)
@@ -45,30 +47,63 @@ fn installed(boot: ArduinoBoot) -> bool {
     if boot.hex_path().is_file() {
         return true;
     }
-    assert!(std::env::var_os("CI").is_none(), "in CI: `./x setup` installs arduino-core-avr");
-    eprintln!("SKIPPED {}: {} missing", boot.name(), boot.hex_path().display());
+    assert!(
+        std::env::var_os("CI").is_none(),
+        "in CI: `./x setup` installs arduino-core-avr"
+    );
+    eprintln!(
+        "SKIPPED {}: {} missing",
+        boot.name(),
+        boot.hex_path().display()
+    );
     false
 }
 
 /// Push `file`, pull it back as a listing and as hex: both equal what was pushed.
 fn round_trip(nano: &PtyNano, file: &Path, prog: &Program, wait: &str, dir: &Path) {
     let port = nano.path.to_str().unwrap();
-    let (out, took) = utile(&["push", file.to_str().unwrap(), "--port", port, "--wait", wait]);
+    let (out, took) = utile(&[
+        "push",
+        file.to_str().unwrap(),
+        "--port",
+        port,
+        "--wait",
+        wait,
+    ]);
     ok(&out, "push");
     eprintln!("push {} in {:.1} s", file.display(), took.as_secs_f64());
-    assert!(stderr(&out).contains("is uTile's program now"), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("is uTile's program now"),
+        "{}",
+        stderr(&out)
+    );
 
     let utl = dir.join("back.utl");
-    let (out, took) = utile(&["pull", "--port", port, "--wait", wait, "-o", utl.to_str().unwrap()]);
+    let (out, took) = utile(&[
+        "pull",
+        "--port",
+        port,
+        "--wait",
+        wait,
+        "-o",
+        utl.to_str().unwrap(),
+    ]);
     ok(&out, "pull");
     eprintln!("pull in {:.1} s", took.as_secs_f64());
     let text = std::fs::read_to_string(&utl).unwrap();
     assert_eq!(text, listing::print(prog), "the listing pulled back");
-    assert!(!utl.with_extension("utile-tmp").exists(), "no temporary left");
+    assert!(
+        !utl.with_extension("utile-tmp").exists(),
+        "no temporary left"
+    );
 
     let (out, _) = utile(&["pull", "--port", port, "--wait", wait, "--hex"]);
     ok(&out, "pull --hex");
-    assert_eq!(out.stdout, listing::to_hex(prog), "the hex file pulled back");
+    assert_eq!(
+        out.stdout,
+        listing::to_hex(prog),
+        "the hex file pulled back"
+    );
 }
 
 #[test]
@@ -96,9 +131,21 @@ fn push_store_puts_the_program_in_the_eeprom() {
     ]);
     let (utl, prog) = example("parts-counter.utl");
     let port = nano.path.to_str().unwrap().to_string();
-    let (out, _) = utile(&["push", utl.to_str().unwrap(), "--port", &port, "--wait", "0.5", "--store"]);
+    let (out, _) = utile(&[
+        "push",
+        utl.to_str().unwrap(),
+        "--port",
+        &port,
+        "--wait",
+        "0.5",
+        "--store",
+    ]);
     ok(&out, "push --store");
-    assert!(stderr(&out).contains("stored in its EEPROM"), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("stored in its EEPROM"),
+        "{}",
+        stderr(&out)
+    );
     nano.key("q");
     assert!(nano.child.wait().unwrap().success());
     let mut board = utile_kit::sim::SimBoard::new();
@@ -114,7 +161,12 @@ fn push_and_pull_behind_each_boot_loader_with_the_port_open_reset() {
             continue;
         }
         let dir = scratch(&format!("push-pull-{}", boot.name()));
-        let nano = PtyNano::start(&["--elf", firmware_elf().to_str().unwrap(), "--bootloader", boot.name()]);
+        let nano = PtyNano::start(&[
+            "--elf",
+            firmware_elf().to_str().unwrap(),
+            "--bootloader",
+            boot.name(),
+        ]);
         // Every open resets the chip; the program pushed is kept over that warm reset.
         let (utl, prog) = example("tank-fill.utl");
         round_trip(&nano, &utl, &prog, "2.5", &dir);
@@ -143,8 +195,15 @@ fn a_running_program_is_refused_and_keeps_running_unless_stop_is_asked() {
     let port = nano.path.to_str().unwrap().to_string();
     let (utl, _) = example("11.2b-intrusion-alarm.utl");
     let (out, _) = utile(&["push", utl.to_str().unwrap(), "--port", &port]);
-    assert!(!out.status.success(), "push onto a running program must be refused");
-    assert!(stderr(&out).contains("is running its program"), "{}", stderr(&out));
+    assert!(
+        !out.status.success(),
+        "push onto a running program must be refused"
+    );
+    assert!(
+        stderr(&out).contains("is running its program"),
+        "{}",
+        stderr(&out)
+    );
     // Still scanning: Y1 follows the switch A0.
     let from = nano.console.seen.len();
     nano.key("0");
@@ -154,8 +213,15 @@ fn a_running_program_is_refused_and_keeps_running_unless_stop_is_asked() {
     // --stop stops it, and the program there is the stored one, unchanged.
     let (out, _) = utile(&["pull", "--port", &port, "--stop"]);
     ok(&out, "pull --stop");
-    assert!(stderr(&out).contains("stopping the running program"), "{}", stderr(&out));
-    assert_eq!(String::from_utf8_lossy(&out.stdout), listing::print(&running));
+    assert!(
+        stderr(&out).contains("stopping the running program"),
+        "{}",
+        stderr(&out)
+    );
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout),
+        listing::print(&running)
+    );
 }
 
 #[test]
@@ -185,7 +251,13 @@ fn no_utile_on_the_port_is_a_clear_error_in_bounded_time() {
     let mut slave = 0;
     // SAFETY: openpty fills two descriptors; name, termios and size may be null.
     let r = unsafe {
-        libc::openpty(&mut master, &mut slave, std::ptr::null_mut(), std::ptr::null(), std::ptr::null())
+        libc::openpty(
+            &mut master,
+            &mut slave,
+            std::ptr::null_mut(),
+            std::ptr::null(),
+            std::ptr::null(),
+        )
     };
     assert_eq!(r, 0, "openpty");
     // SAFETY: `slave` is the descriptor openpty just returned.
@@ -194,11 +266,19 @@ fn no_utile_on_the_port_is_a_clear_error_in_bounded_time() {
         .into_owned();
     let (out, took) = utile(&["pull", "--port", &name, "--wait", "1"]);
     assert!(!out.status.success());
-    assert!(stderr(&out).contains("no answer from uTile"), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("no answer from uTile"),
+        "{}",
+        stderr(&out)
+    );
     assert!(took < Duration::from_secs(10), "gave up after {took:?}");
     let (out, _) = utile(&["pull", "--port", "/nonexistent/tty"]);
     assert!(!out.status.success());
-    assert!(stderr(&out).contains("cannot open /nonexistent/tty"), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("cannot open /nonexistent/tty"),
+        "{}",
+        stderr(&out)
+    );
     // SAFETY: closing our own descriptors.
     unsafe {
         libc::close(slave);

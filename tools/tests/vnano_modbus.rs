@@ -22,14 +22,20 @@ const T: Duration = Duration::from_secs(30);
 fn have(what: &str, check: &mut Command) -> bool {
     let ok = check.output().map(|o| o.status.success()).unwrap_or(false);
     if !ok {
-        assert!(std::env::var_os("CI").is_none(), "{what} is missing (./x setup installs it)");
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "{what} is missing (./x setup installs it)"
+        );
         eprintln!("skipped: {what} is missing (./x setup installs it)");
     }
     ok
 }
 
 fn pymodbus() -> bool {
-    have("pymodbus", Command::new("python3").args(["-c", "import pymodbus, serial"]))
+    have(
+        "pymodbus",
+        Command::new("python3").args(["-c", "import pymodbus, serial"]),
+    )
 }
 
 /// An EEPROM file holding `prog` as STORE leaves it.
@@ -45,7 +51,13 @@ fn eeprom_file(name: &str, prog: &Program) -> PathBuf {
 fn nano(name: &str, prog: &Program, extra: &[&str]) -> PtyNano {
     let elf = firmware_elf();
     let ee = eeprom_file(name, prog);
-    let mut args = vec!["--elf", elf.to_str().unwrap(), "--eeprom", ee.to_str().unwrap(), "--d8-low"];
+    let mut args = vec![
+        "--elf",
+        elf.to_str().unwrap(),
+        "--eeprom",
+        ee.to_str().unwrap(),
+        "--d8-low",
+    ];
     args.extend_from_slice(extra);
     let nano = PtyNano::start(&args);
     // The RUN screen goes out first (about 0.6 s at 19200 baud): drain it.
@@ -153,20 +165,32 @@ fn mbpoll_reads_holding_registers_and_writes_a_coil() {
     let mut n = nano("mbpoll.eeprom", &prog, &[]);
     let port = n.path.to_str().unwrap().to_string();
     let out = Command::new("mbpoll")
-        .args(["-m", "rtu", "-b", "19200", "-P", "none", "-a", "1", "-t", "4", "-r", "1", "-c", "4", "-1"])
+        .args([
+            "-m", "rtu", "-b", "19200", "-P", "none", "-a", "1", "-t", "4", "-r", "1", "-c", "4",
+            "-1",
+        ])
         .arg(&port)
         .output()
         .expect("run mbpoll");
     let text = String::from_utf8_lossy(&out.stdout).into_owned();
     assert!(out.status.success(), "{text}");
-    assert!(text.contains("[2]: \t77") || text.contains("[2]:\t77") || text.contains("[2]: 77"), "{text}");
+    assert!(
+        text.contains("[2]: \t77") || text.contains("[2]:\t77") || text.contains("[2]: 77"),
+        "{text}"
+    );
     let out = Command::new("mbpoll")
-        .args(["-m", "rtu", "-b", "19200", "-P", "none", "-a", "1", "-t", "0", "-r", "9", "-1"])
+        .args([
+            "-m", "rtu", "-b", "19200", "-P", "none", "-a", "1", "-t", "0", "-r", "9", "-1",
+        ])
         .arg(&port)
         .arg("1")
         .output()
         .expect("run mbpoll");
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stdout));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
     wait_leds(&mut n, "--2-----");
 }
 
@@ -186,7 +210,11 @@ fn addr_moves_the_slave_and_a_lone_slash_still_stops_the_program() {
         return;
     }
     // Stored address 1; the user sets 7 at the terminal, then runs the program.
-    let n = nano("addr.eeprom", &listing::commands(&["U0.", ".Y2", "KEY", "END"]), &[]);
+    let n = nano(
+        "addr.eeprom",
+        &listing::commands(&["U0.", ".Y2", "KEY", "END"]),
+        &[],
+    );
     let (mut f, mut tty) = n.connect();
     use std::io::Write;
     f.write_all(b"/").unwrap();
@@ -225,7 +253,11 @@ fn the_terminal_stays_quiet_while_a_master_polls() {
         return;
     }
     // PPA every scan: without the muting, port displays would break the master's replies.
-    let n = nano("quiet.eeprom", &listing::commands(&["PPA", "KEY", "END"]), &[]);
+    let n = nano(
+        "quiet.eeprom",
+        &listing::commands(&["PPA", "KEY", "END"]),
+        &[],
+    );
     // The first request may meet a display on its way out; then every one is answered.
     let _ = Command::new("python3")
         .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/modbus_master.py"))
@@ -238,7 +270,11 @@ fn the_terminal_stays_quiet_while_a_master_polls() {
     let (_f, mut tty) = n.connect();
     std::thread::sleep(Duration::from_millis(3_500));
     tty.collect_for(Duration::from_millis(1_000));
-    assert!(tty.text().contains("\u{1b}["), "RUN displays resumed: {:?}", tty.text());
+    assert!(
+        tty.text().contains("\u{1b}["),
+        "RUN displays resumed: {:?}",
+        tty.text()
+    );
 }
 
 #[test]
@@ -253,5 +289,9 @@ fn three_nanos_on_one_line_are_polled_through_one_pty() {
     let out = master(&n.path, &["bus", "3"]);
     assert!(out.contains("ALL OK"), "{out}");
     n.console.collect_for(Duration::from_millis(200));
-    assert!(!n.console.text().contains("collisions"), "{}", n.console.text());
+    assert!(
+        !n.console.text().contains("collisions"),
+        "{}",
+        n.console.text()
+    );
 }

@@ -35,7 +35,10 @@ pub(super) const STEPS: u8 = 52;
 impl Editor {
     /// Put the terminal cursor where the next typed character goes.
     pub(super) fn park<B: Board>(&mut self, b: &mut B) {
-        if matches!(self.screen, Screen::Page | Screen::Ldt { .. } | Screen::Ldc { .. }) {
+        if matches!(
+            self.screen,
+            Screen::Page | Screen::Ldt { .. } | Screen::Ldc { .. }
+        ) {
             goto(b, ROW_PROMPT, COL_INPUT + self.len.min(LINE_MAX));
         }
     }
@@ -74,7 +77,10 @@ impl Editor {
         {
             return;
         }
-        let typing = matches!(self.screen, Screen::Page | Screen::Ldt { .. } | Screen::Ldc { .. });
+        let typing = matches!(
+            self.screen,
+            Screen::Page | Screen::Ldt { .. } | Screen::Ldc { .. }
+        );
         match i {
             S_CLEAR => {
                 term::clear(b);
@@ -191,7 +197,8 @@ impl Editor {
         }
         let (row, col) = entry_pos(line);
         goto(b, row, col);
-        let rev = line == self.cursor && !matches!(self.screen, Screen::Ldt { .. } | Screen::Ldc { .. });
+        let rev =
+            line == self.cursor && !matches!(self.screen, Screen::Ldt { .. } | Screen::Ldc { .. });
         if rev {
             reverse(b);
         }

@@ -50,7 +50,11 @@ enum State {
     EscInter,
     /// After `ESC [`: the first parameter so far; `more` once a separator or intermediate
     /// has come (later parameters are not kept); `any` once any byte has come.
-    Csi { param: u8, more: bool, any: bool },
+    Csi {
+        param: u8,
+        more: bool,
+        any: bool,
+    },
     /// After `ESC O`.
     Ss3,
     /// After `ESC [ [` (Linux console function keys).
@@ -300,7 +304,14 @@ mod tests {
 
     #[test]
     fn controls_break_a_sequence_off_and_are_handed_on() {
-        for cut in [&b"\x1b"[..], b"\x1b[", b"\x1b[1", b"\x1b[12;", b"\x1bO", b"\x1b[["] {
+        for cut in [
+            &b"\x1b"[..],
+            b"\x1b[",
+            b"\x1b[1",
+            b"\x1b[12;",
+            b"\x1bO",
+            b"\x1b[[",
+        ] {
             for ctl in [b'\r', b'\n', 0x18, 0x08, 0x7F, 0x0C, 0x00, 0x80, 0xFF] {
                 let mut d = KeyDecoder::new();
                 let mut bytes = cut.to_vec();

@@ -91,7 +91,11 @@ impl Editor {
         for i in 0..CELLS {
             let (row, col) = cell_pos(i);
             goto(b, row - 1, col + 2);
-            let (letter, n) = if i < COUNTERS as u8 { (b'C', i) } else { (b'S', i - 2) };
+            let (letter, n) = if i < COUNTERS as u8 {
+                (b'C', i)
+            } else {
+                (b'S', i - 2)
+            };
             b.tx(letter);
             b.tx(b'0' + n);
             Self::ldc_cell(eng, b, i, i == sel);
@@ -118,7 +122,11 @@ impl Editor {
         let readings = b.analog_readings();
         for i in 0..shown.len() {
             // Masks, not checks: the indices are in range by construction.
-            let v = if i < COUNTERS { eng.count[i & 7] } else { readings[i & 1] };
+            let v = if i < COUNTERS {
+                eng.count[i & 7]
+            } else {
+                readings[i & 1]
+            };
             if all || v != shown[i] {
                 shown[i] = v;
                 let (row, col) = cell_pos(i as u8);

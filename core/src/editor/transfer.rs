@@ -62,11 +62,20 @@ impl Editor {
         let p = &eng.prog;
         for i in 0..(UNITS + COUNTERS + SET_POINTS) as u8 {
             let (name, v) = if i < 16 {
-                ([b'T', term::hex_digit(i)], p.presets.get(usize::from(i)).map(|&t| u16::from(t)))
+                (
+                    [b'T', term::hex_digit(i)],
+                    p.presets.get(usize::from(i)).map(|&t| u16::from(t)),
+                )
             } else if i < 24 {
-                ([b'C', b'0' + i - 16], p.counter_presets.get(usize::from(i - 16)).copied())
+                (
+                    [b'C', b'0' + i - 16],
+                    p.counter_presets.get(usize::from(i - 16)).copied(),
+                )
             } else {
-                ([b'S', b'6' + i - 24], p.set_points.get(usize::from(i - 24)).copied())
+                (
+                    [b'S', b'6' + i - 24],
+                    p.set_points.get(usize::from(i - 24)).copied(),
+                )
             };
             raw(b, &name);
             text::PRESET_EQ.send(b);

@@ -115,8 +115,16 @@ impl Engine {
             }
         } else if op < 0xB8 {
             // In the 16-wide families, numbers 0..7 have bit 3 set (0x98, 0xA8, ...).
-            let mask16 = if op & 0x08 != 0 { u16::from(mask) } else { u16::from(mask) << 8 };
-            let word = if op < 0xA8 { &mut self.set } else { &mut self.reset };
+            let mask16 = if op & 0x08 != 0 {
+                u16::from(mask)
+            } else {
+                u16::from(mask) << 8
+            };
+            let word = if op < 0xA8 {
+                &mut self.set
+            } else {
+                &mut self.reset
+            };
             if v {
                 *word |= mask16;
             } else {
@@ -137,7 +145,11 @@ impl Engine {
     /// clears the count and CQm at once (END then keeps it 0 whatever the order).
     #[inline(never)]
     fn counter_pop(&mut self, op: u8, v: bool, mask: u8) {
-        let latch = if op < POP_CR { &mut self.cu } else { &mut self.cr };
+        let latch = if op < POP_CR {
+            &mut self.cu
+        } else {
+            &mut self.cr
+        };
         if v {
             *latch |= mask;
         } else {

@@ -361,5 +361,4 @@ impl Engine {
         }
         b.write_outputs(self.py);
     }
-
 }

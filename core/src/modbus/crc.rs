@@ -40,7 +40,7 @@ impl Default for Crc16 {
 }
 
 /// The CRC of `bytes`.
-pub fn crc16(bytes: &[u8]) -> u16 {
+pub fn crc16_modbus(bytes: &[u8]) -> u16 {
     let mut crc = Crc16::new();
     for &b in bytes {
         crc.update(b);

@@ -3,7 +3,6 @@
 use super::main_loop::{deleted, inserted};
 use super::*;
 
-
 /// A program with some of everything, for harnesses that start from a non-blank UF.
 pub fn sample_program() -> Program {
     let mut p = Program::blank();
@@ -245,7 +244,9 @@ pub fn keys(data: &[u8]) -> Verdict {
             }
             Event::None => {
                 if !was_pending && b != 0x1B {
-                    return Err(format!("byte {b:#04x} outside a sequence was not handed on"));
+                    return Err(format!(
+                        "byte {b:#04x} outside a sequence was not handed on"
+                    ));
                 }
                 if b != 0x1B && !printable {
                     return Err(format!("control byte {b:#04x} swallowed by a sequence"));

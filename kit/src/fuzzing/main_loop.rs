@@ -2,7 +2,6 @@
 
 use super::*;
 
-
 pub(super) fn txt_bytes(t: text::Txt) -> Vec<u8> {
     let mut v = Vec::new();
     t.each(|c| v.push(c));

@@ -10,7 +10,7 @@ use std::format;
 use std::string::String;
 use std::vec::Vec;
 
-use utile_core::modbus::crc::crc16;
+use utile_core::modbus::crc::crc16_modbus;
 use utile_core::modbus::frame::{Receiver, Verdict as FrameVerdict};
 use utile_core::modbus::map::{Map, Table};
 use utile_core::modbus::reply::Reply;
@@ -98,7 +98,7 @@ impl Map for ShapedMap {
 /// Check one reply as a master would.
 fn check_reply(reply: &[u8], pdu: &[u8], answer: Answer) -> Verdict {
     let function = pdu.first().copied().unwrap_or(0);
-    if reply.len() < 5 || crc16(reply) != 0 || reply[0] != ADDRESS {
+    if reply.len() < 5 || crc16_modbus(reply) != 0 || reply[0] != ADDRESS {
         return Err(format!(
             "reply {reply:02X?} to {pdu:02X?} is not a valid frame"
         ));
@@ -162,7 +162,7 @@ fn line_events(data: &[u8]) -> Vec<Line> {
                 };
                 let mut frame = std::vec![to];
                 frame.extend(pairs.by_ref().take(usize::from(value % 40)).map(|p| p[1]));
-                frame.extend_from_slice(&crc16(&frame).to_le_bytes());
+                frame.extend_from_slice(&crc16_modbus(&frame).to_le_bytes());
                 events.extend(frame.into_iter().map(|b| Line::Byte(b, false)));
                 events.push(Line::End);
             }
@@ -185,7 +185,7 @@ pub fn modbus(data: &[u8]) -> Verdict {
         match rx.end() {
             FrameVerdict::Frame { len } => {
                 let frame = rx.frame().to_vec();
-                if frame.len() != usize::from(len) || crc16(&frame) != 0 {
+                if frame.len() != usize::from(len) || crc16_modbus(&frame) != 0 {
                     return Err(format!("frame {frame:02X?} taken with a bad CRC"));
                 }
                 let pdu = &frame[1..frame.len() - 2];
@@ -270,7 +270,7 @@ pub fn modbus_plc(data: &[u8]) -> Verdict {
         }
         match event {
             Event::Reply => {
-                if reply.len() < 5 || crc16(&reply) != 0 || reply[0] != ADDRESS {
+                if reply.len() < 5 || crc16_modbus(&reply) != 0 || reply[0] != ADDRESS {
                     return Err(format!("reply {reply:02X?} is not a valid frame"));
                 }
                 if reply[1] & 0x80 != 0 && eng != before {

@@ -2,7 +2,6 @@
 
 use super::*;
 
-
 /// An independent, whole-text Intel HEX parser with the rules of `docs/FORMAT.md`: the
 /// image if the text (up to its end-of-file record) is a valid file, else `None`.
 pub(super) fn reference_hex(text: &[u8]) -> Option<(Vec<u8>, usize)> {
@@ -134,9 +133,11 @@ pub(super) fn reference_image_valid(data: &[u8]) -> bool {
         return false;
     }
     let set_points_ok = len == 278
-        || [292, 294].iter().all(|&at| u16::from_be_bytes([data[at], data[at + 1]]) <= 1023);
+        || [292, 294]
+            .iter()
+            .all(|&at| u16::from_be_bytes([data[at], data[at + 1]]) <= 1023);
     data[..2] == *b"uT"
-        && image::crc16(&data[..len - 2]).to_be_bytes() == data[len - 2..]
+        && image::crc16_ccitt(&data[..len - 2]).to_be_bytes() == data[len - 2..]
         && set_points_ok
 }
 
@@ -153,11 +154,18 @@ pub fn image_decode(data: &[u8]) -> Verdict {
             let same = if data.len() == IMAGE_LEN {
                 again.as_slice() == data
             } else {
-                again[..image::COUNTER_PRESETS_OFFSET] == data[..image::COUNTER_PRESETS_OFFSET]
-                    .iter()
-                    .enumerate()
-                    .map(|(i, &b)| if i == image::VERSION_OFFSET { image::VERSION } else { b })
-                    .collect::<Vec<u8>>()[..]
+                again[..image::COUNTER_PRESETS_OFFSET]
+                    == data[..image::COUNTER_PRESETS_OFFSET]
+                        .iter()
+                        .enumerate()
+                        .map(|(i, &b)| {
+                            if i == image::VERSION_OFFSET {
+                                image::VERSION
+                            } else {
+                                b
+                            }
+                        })
+                        .collect::<Vec<u8>>()[..]
                     && p.counter_presets == [0; 8]
                     && p.set_points == [0; 2]
             };

@@ -21,9 +21,7 @@ use avr_device::interrupt;
 use avr_progmem::wrapper::ProgMem;
 
 use super::scan::{self, Exit, RunState};
-use super::{
-    drive_pins, publish, regs, serial, wr, Nano, ANALOG_BITS, LAST_PY, OUTPUTS, TICKER,
-};
+use super::{drive_pins, publish, regs, serial, wr, Nano, ANALOG_BITS, LAST_PY, OUTPUTS, TICKER};
 use utile_core::engine::{offsets, Engine, Flow, Program, COUNTERS, LINES, SET_POINTS, UNITS};
 use utile_core::opcodes::{is_valid, BLANK, END, NOP, POP_TK, SET};
 use utile_core::ticker::{Ticker, INPUT_MASK};

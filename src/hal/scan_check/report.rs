@@ -44,7 +44,14 @@ pub(super) fn tx_hex_bytes(bytes: &[u8]) {
 
 /// Print the failing case: the world, the runtime state before, both engines' differing
 /// bytes, the edge bits and outputs after, and the program.
-pub(super) fn report(trial: u16, scan: u8, w: &World, m: &Mismatch, eng: &Engine, reference: &Engine) {
+pub(super) fn report(
+    trial: u16,
+    scan: u8,
+    w: &World,
+    m: &Mismatch,
+    eng: &Engine,
+    reference: &Engine,
+) {
     say!(b"\r\nscan-check FAIL trial ");
     tx_dec(u32::from(trial));
     say!(b" scan ");

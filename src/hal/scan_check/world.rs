@@ -243,7 +243,12 @@ pub(super) fn new_trial(eng: &mut Engine, board: &mut Nano, rng: &mut Rng, w: &m
     eng.q = rng.word();
     eng.tq = if rng.one_in(3) { 0 } else { rng.word() };
     // Counters: small presets and counts so that outputs change; sometimes at the top.
-    for (p, c) in eng.prog.counter_presets.iter_mut().zip(eng.count.iter_mut()) {
+    for (p, c) in eng
+        .prog
+        .counter_presets
+        .iter_mut()
+        .zip(eng.count.iter_mut())
+    {
         *p = match rng.below(8) {
             0..=4 => rng.below(4),
             5 => u16::MAX,
@@ -258,7 +263,11 @@ pub(super) fn new_trial(eng: &mut Engine, board: &mut Nano, rng: &mut Rng, w: &m
     }
     eng.cu = rng.byte();
     eng.cu_prev = if rng.one_in(4) { eng.cu } else { rng.byte() };
-    eng.cr = if rng.one_in(2) { 0 } else { rng.byte() & rng.byte() };
+    eng.cr = if rng.one_in(2) {
+        0
+    } else {
+        rng.byte() & rng.byte()
+    };
     eng.refresh_counter_outputs();
     if rng.one_in(8) {
         eng.cq = rng.byte();

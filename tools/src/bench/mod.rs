@@ -87,12 +87,24 @@ pub fn all_counters_program() -> Program {
             6 => "CLKA.".into(),
             _ => "CLKB.".into(),
         };
-        words.extend([input, format!(".CU{m}"), "A5.".into(), "!".into(), format!(".CR{m}")]);
+        words.extend([
+            input,
+            format!(".CU{m}"),
+            "A5.".into(),
+            "!".into(),
+            format!(".CR{m}"),
+        ]);
     }
     for m in 0..8 {
         words.extend([format!("CQ{m}."), format!(".Y{m}")]);
     }
-    words.extend(["H6.".into(), ".U0".into(), "H7.".into(), ".U1".into(), "END".into()]);
+    words.extend([
+        "H6.".into(),
+        ".U0".into(),
+        "H7.".into(),
+        ".U1".into(),
+        "END".into(),
+    ]);
     let refs: Vec<&str> = words.iter().map(String::as_str).collect();
     let mut prog = program(&refs);
     prog.counter_presets = [3, 5, 10, 100, 1000, 10_000, 2, 4];
@@ -534,13 +546,6 @@ pub fn measure_uart(elf: &Path) -> Result<UartBytes, String> {
     })
 }
 
-/// A Modbus RTU frame: `body` and its CRC-16/MODBUS, low byte first.
-fn modbus_frame(body: &[u8]) -> Vec<u8> {
-    let mut f = body.to_vec();
-    f.extend_from_slice(&utile_core::modbus::crc::crc16(body).to_le_bytes());
-    f
-}
-
 /// Stack use: (bytes of stack used at the deepest point, free bytes never touched).
 pub fn measure_stack(elf: &Path) -> Result<(usize, usize, Vec<String>), String> {
     let heap = symbol(elf, "__heap_start").ok_or("no __heap_start symbol")?;
@@ -575,12 +580,30 @@ pub fn measure_stack(elf: &Path) -> Result<(usize, usize, Vec<String>), String> 
         ("LOAD", b"LOAD\r".to_vec()),
         ("RUN", b"EX0\r".to_vec()),
         // Modbus requests to slave 7 while the program runs: the deepest map paths.
-        ("Modbus FC03 x 26", modbus_frame(&[7, 0x03, 0, 0, 0, 26])),
-        ("Modbus FC16", modbus_frame(&[7, 0x10, 0, 14, 0, 4, 8, 0, 9, 0, 10, 0x12, 0x34, 0x01, 0x00])),
-        ("Modbus FC04 time left", modbus_frame(&[7, 0x04, 0, 32, 0, 16])),
-        ("Modbus FC02", modbus_frame(&[7, 0x02, 0, 8, 0, 42])),
-        ("Modbus FC15", modbus_frame(&[7, 0x0F, 0, 0, 0, 24, 3, 0xFF, 0, 0xFF])),
-        ("Modbus FC17", modbus_frame(&[7, 0x11])),
+        (
+            "Modbus FC03 x 26",
+            utile_kit::modbus::frame(7, &[0x03, 0, 0, 0, 26]),
+        ),
+        (
+            "Modbus FC16",
+            utile_kit::modbus::frame(
+                7,
+                &[0x10, 0, 14, 0, 4, 8, 0, 9, 0, 10, 0x12, 0x34, 0x01, 0x00],
+            ),
+        ),
+        (
+            "Modbus FC04 time left",
+            utile_kit::modbus::frame(7, &[0x04, 0, 32, 0, 16]),
+        ),
+        (
+            "Modbus FC02",
+            utile_kit::modbus::frame(7, &[0x02, 0, 8, 0, 42]),
+        ),
+        (
+            "Modbus FC15",
+            utile_kit::modbus::frame(7, &[0x0F, 0, 0, 0, 24, 3, 0xFF, 0, 0xFF]),
+        ),
+        ("Modbus FC17", utile_kit::modbus::frame(7, &[0x11])),
         ("break", b"/".to_vec()),
         ("strike", b" ".to_vec()),
         ("STAT", b"STAT\r".to_vec()),

@@ -5,7 +5,6 @@
 
 use std::path::Path;
 
-use utile_core::modbus::crc::crc16;
 use utile_kit::simavr::{frame_cycles, Chip, RxPacing};
 
 use super::chip::{BenchRun, CYCLES_PER_MS};
@@ -25,9 +24,7 @@ pub struct ModbusFigures {
 
 /// FC03 for holding registers 0..15 of slave 1, CRC included.
 fn fc03_16() -> Vec<u8> {
-    let mut request = vec![1u8, 0x03, 0, 0, 0, 16];
-    request.extend_from_slice(&crc16(&request).to_le_bytes());
-    request
+    utile_kit::modbus::frame(1, &[0x03, 0, 0, 0, 16])
 }
 
 /// The image autostarting `prog` with its line timed as a wire, the RUN screen gone out
@@ -113,7 +110,8 @@ pub fn measure_latency_served(elf: &Path, presses: usize) -> Result<Spread, Stri
         on.push((c1 - c0) as f64 / CYCLES_PER_MS as f64);
         chip.run_rig(30 * CYCLES_PER_MS);
         chip.hold_low(utile_kit::simavr::RigPin::Switch(0), false);
-        chip.run_until(100 * CYCLES_PER_MS, |ch| !ch.y(0)).ok_or("Y0 never went off")?;
+        chip.run_until(100 * CYCLES_PER_MS, |ch| !ch.y(0))
+            .ok_or("Y0 never went off")?;
     }
     Spread::of(&on).ok_or_else(|| "no presses".into())
 }

@@ -194,11 +194,21 @@ fn opcode_rows(rows: &mut Vec<Row>, elf: &Path) {
         ("DUP", &["DUP"], 0, "n/a"),
         ("KEY (nothing received)", &["KEY"], 0, "n/a"),
         ("PPA", &["PPA"], 0, "n/a"),
-        ("A0. + .CU0 (the pair; issue 15's budget: ≤ 24)", &["A0.", ".CU0"], 0, "n/a"),
+        (
+            "A0. + .CU0 (the pair; issue 15's budget: ≤ 24)",
+            &["A0.", ".CU0"],
+            0,
+            "n/a",
+        ),
         ("CQ0.", &["CQ0."], 0, "n/a"),
         ("H6.", &["H6."], 0, "n/a"),
         ("CLR + .CR0 (a 0 popped)", &["CLR", ".CR0"], 0, "n/a"),
-        ("SET + .CR0 (count cleared every line)", &["SET", ".CR0"], 0, "n/a"),
+        (
+            "SET + .CR0 (count cleared every line)",
+            &["SET", ".CR0"],
+            0,
+            "n/a",
+        ),
     ];
     for (what, words, preset, orig) in cases {
         let mut list: Vec<&str> = Vec::new();
@@ -544,6 +554,12 @@ fn modbus_rows(rows: &mut Vec<Row>, elf: &Path) {
             "8.3–12.5 ms",
             "≤ 5.1 ms",
         ),
-        Err(e) => row(rows, "press → Y0 latency while served", format!("not measurable: {e}"), "—", "—"),
+        Err(e) => row(
+            rows,
+            "press → Y0 latency while served",
+            format!("not measurable: {e}"),
+            "—",
+            "—",
+        ),
     }
 }

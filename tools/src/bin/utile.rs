@@ -179,7 +179,11 @@ fn push(words: &[String]) -> Result<(), Failure> {
     say(&format!(
         "{} is uTile's program now{}",
         input.display(),
-        if args.flag("--store").is_some() { " and stored in its EEPROM" } else { " (STORE keeps it over a power cycle)" }
+        if args.flag("--store").is_some() {
+            " and stored in its EEPROM"
+        } else {
+            " (STORE keeps it over a power cycle)"
+        }
     ));
     Ok(())
 }
@@ -191,7 +195,11 @@ fn pull(words: &[String]) -> Result<(), Failure> {
     }
     let mut session = link::Session::connect(port_of(&args)?, link_options(&args)?, &mut say)?;
     let (prog, hex) = session.pull(&mut say)?;
-    let out = if args.flag("--hex").is_some() { hex } else { listing::print(&prog).into_bytes() };
+    let out = if args.flag("--hex").is_some() {
+        hex
+    } else {
+        listing::print(&prog).into_bytes()
+    };
     match args.flag("-o") {
         Some(path) => {
             // Never a half-written file: a temporary beside it, then a rename.

@@ -31,7 +31,10 @@ impl Port {
             .timeout(POLL)
             .open()
             .map_err(|e| format!("cannot open {path}: {e}"))?;
-        Ok(Port { port, seen: Vec::new() })
+        Ok(Port {
+            port,
+            seen: Vec::new(),
+        })
     }
 
     /// Sends `bytes` and waits until the system has taken them.

@@ -70,7 +70,13 @@ fn shown(seen: &[u8], from: usize) -> String {
         .get(from..)
         .unwrap_or(&[])
         .iter()
-        .map(|&b| if (0x20..0x7F).contains(&b) { b as char } else { ' ' })
+        .map(|&b| {
+            if (0x20..0x7F).contains(&b) {
+                b as char
+            } else {
+                ' '
+            }
+        })
         .collect();
     let words: Vec<&str> = text.split_whitespace().collect();
     let joined = words.join(" ");
@@ -84,12 +90,18 @@ impl Session {
     /// running program unless `opts.stop`, and says so when nothing answers.
     pub fn connect(path: &str, opts: Options, progress: Progress) -> Result<Session, String> {
         let port = Port::open(path)?;
-        progress(&format!("{path}: waiting for uTile (a Nano resets when its port opens)"));
-        let mut s = Session { port, path: path.to_string() };
+        progress(&format!(
+            "{path}: waiting for uTile (a Nano resets when its port opens)"
+        ));
+        let mut s = Session {
+            port,
+            path: path.to_string(),
+        };
         let first = s.port.wait_for(0, &[TITLE], opts.boot_wait)?.is_some();
         if first {
             // The rest of the first screen (about 0.7 s at 19200 baud).
-            s.port.settle(Duration::from_millis(300), Duration::from_secs(3))?;
+            s.port
+                .settle(Duration::from_millis(300), Duration::from_secs(3))?;
             if find(&s.port.seen, RUNNING).is_some() {
                 if !opts.stop {
                     return Err(format!(
@@ -108,11 +120,21 @@ impl Session {
     fn find_page(&mut self, opts: Options, progress: Progress) -> Result<(), String> {
         let from = self.port.seen.len();
         self.port.send(&[REDRAW])?;
-        if self.port.wait_for(from, &[TITLE], Duration::from_millis(1500))?.is_none() {
+        if self
+            .port
+            .wait_for(from, &[TITLE], Duration::from_millis(1500))?
+            .is_none()
+        {
             if opts.stop {
                 // A program running since before the port opened keeps the terminal quiet.
                 self.stop(progress)?;
-                return self.find_page(Options { stop: false, ..opts }, progress);
+                return self.find_page(
+                    Options {
+                        stop: false,
+                        ..opts
+                    },
+                    progress,
+                );
             }
             return Err(format!(
                 "no answer from uTile on {}: is it connected and powered? A running program \
@@ -120,7 +142,8 @@ impl Session {
                 self.path
             ));
         }
-        self.port.settle(Duration::from_millis(300), Duration::from_secs(3))?;
+        self.port
+            .settle(Duration::from_millis(300), Duration::from_secs(3))?;
         let redraw = &self.port.seen[from..];
         if find(redraw, PAGE).is_none() {
             return Err(format!(
@@ -138,17 +161,23 @@ impl Session {
         progress("stopping the running program (--stop)");
         let from = self.port.seen.len();
         self.port.send(b"/")?;
-        if self.port.wait_for(from, &[STRIKE], Duration::from_secs(2))?.is_none() {
+        if self
+            .port
+            .wait_for(from, &[STRIKE], Duration::from_secs(2))?
+            .is_none()
+        {
             return Err(format!(
                 "uTile on {} did not stop its program on `/`: only a program with KEY can be \
                  stopped from the terminal; otherwise remove the D8 jumper and reset",
                 self.path
             ));
         }
-        self.port.settle(Duration::from_millis(200), Duration::from_secs(2))?;
+        self.port
+            .settle(Duration::from_millis(200), Duration::from_secs(2))?;
         // The key returns to the page (redrawn by the Ctrl-L that follows).
         self.port.send(b" ")?;
-        self.port.settle(Duration::from_millis(300), Duration::from_secs(3))?;
+        self.port
+            .settle(Duration::from_millis(300), Duration::from_secs(3))?;
         Ok(())
     }
 
@@ -156,9 +185,14 @@ impl Session {
     fn command(&mut self, cmd: &str, expect: &[u8]) -> Result<(), String> {
         let from = self.port.seen.len();
         self.port.send(format!("{cmd}\r").as_bytes())?;
-        match self.port.wait_for(from, &[expect, UNRECOGNIZED], Duration::from_secs(3))? {
+        match self
+            .port
+            .wait_for(from, &[expect, UNRECOGNIZED], Duration::from_secs(3))?
+        {
             Some((0, _)) => Ok(()),
-            Some(_) => Err(format!("uTile did not take {cmd} (\"Unrecognized Input\"): is this uTile?")),
+            Some(_) => Err(format!(
+                "uTile did not take {cmd} (\"Unrecognized Input\"): is this uTile?"
+            )),
             None => Err(format!(
                 "uTile did not answer {cmd} (it shows: \"{}\")",
                 shown(&self.port.seen, from)
@@ -170,10 +204,15 @@ impl Session {
     fn back_to_page(&mut self) -> Result<(), String> {
         let from = self.port.seen.len();
         self.port.send(b"\r")?;
-        if self.port.wait_for(from, &[PAGE], Duration::from_secs(3))?.is_none() {
+        if self
+            .port
+            .wait_for(from, &[PAGE], Duration::from_secs(3))?
+            .is_none()
+        {
             return Err("uTile did not return to its page after the transfer".into());
         }
-        self.port.settle(Duration::from_millis(300), Duration::from_secs(3))?;
+        self.port
+            .settle(Duration::from_millis(300), Duration::from_secs(3))?;
         Ok(())
     }
 
@@ -181,10 +220,14 @@ impl Session {
     /// READ's answer is checked; then the program is read back through WRITE and compared.
     pub fn push(&mut self, prog: &Program, progress: Progress) -> Result<(), String> {
         let hex = listing::to_hex(prog);
-        let records: Vec<&[u8]> = hex.split(|&b| b == b'\n').filter(|l| !l.is_empty()).collect();
+        let records: Vec<&[u8]> = hex
+            .split(|&b| b == b'\n')
+            .filter(|l| !l.is_empty())
+            .collect();
         self.command("READ", READ_PROMPT)?;
         // The rest of READ's screen, then the records as fast as the line takes them.
-        self.port.settle(Duration::from_millis(150), Duration::from_secs(2))?;
+        self.port
+            .settle(Duration::from_millis(150), Duration::from_secs(2))?;
         let from = self.port.seen.len();
         for (i, rec) in records.iter().enumerate() {
             self.port.send(rec)?;
@@ -194,7 +237,10 @@ impl Session {
             }
         }
         // READ checks the file, drains 200 ms of quiet, then shows its result.
-        let Some((_, end)) = self.port.wait_for(from, &[FOR_MENU], Duration::from_secs(6))? else {
+        let Some((_, end)) = self
+            .port
+            .wait_for(from, &[FOR_MENU], Duration::from_secs(6))?
+        else {
             return Err(format!(
                 "uTile did not confirm the transfer (it shows: \"{}\")",
                 shown(&self.port.seen, from)
@@ -226,10 +272,14 @@ impl Session {
     /// that does not check (record checksums, image CRC) is refused.
     pub fn pull(&mut self, progress: Progress) -> Result<(Program, Vec<u8>), String> {
         self.command("WRITE", WRITE_PROMPT)?;
-        self.port.settle(Duration::from_millis(150), Duration::from_secs(2))?;
+        self.port
+            .settle(Duration::from_millis(150), Duration::from_secs(2))?;
         let from = self.port.seen.len();
         self.port.send(b"\r")?;
-        let Some((_, end)) = self.port.wait_for(from, &[EOF_RECORD], Duration::from_secs(5))? else {
+        let Some((_, end)) = self
+            .port
+            .wait_for(from, &[EOF_RECORD], Duration::from_secs(5))?
+        else {
             return Err(format!(
                 "uTile's WRITE sent no end-of-file record (it shows: \"{}\")",
                 shown(&self.port.seen, from)
@@ -246,7 +296,10 @@ impl Session {
                 hex.extend_from_slice(b"\r\n");
             }
         }
-        progress(&format!("received {} records", hex.split(|&b| b == b'\n').count() - 1));
+        progress(&format!(
+            "received {} records",
+            hex.split(|&b| b == b'\n').count() - 1
+        ));
         let prog = listing::from_hex(&hex)
             .map_err(|e| format!("uTile's WRITE sent a file that does not check: {e}"))?;
         self.back_to_page()?;
@@ -258,7 +311,11 @@ impl Session {
         progress("STORE");
         let from = self.port.seen.len();
         self.port.send(b"STORE\r")?;
-        match self.port.wait_for(from, &[STORED, STORE_FAILED, UNRECOGNIZED], Duration::from_secs(5))? {
+        match self.port.wait_for(
+            from,
+            &[STORED, STORE_FAILED, UNRECOGNIZED],
+            Duration::from_secs(5),
+        )? {
             Some((0, _)) => Ok(()),
             Some((1, _)) => Err("uTile's STORE failed (EEPROM verify error)".into()),
             _ => Err(format!(

@@ -89,6 +89,10 @@ pub fn run(o: &Options, n: usize, elf: &Path) -> Result<(), String> {
             }
         }
     }
-    let _ = writeln!(out, "vnano: bus stopped after {:.1} s", bus.cycle() as f64 / F_CPU as f64);
+    let _ = writeln!(
+        out,
+        "vnano: bus stopped after {:.1} s",
+        bus.cycle() as f64 / F_CPU as f64
+    );
     Ok(())
 }
