@@ -11,7 +11,9 @@
 //!   reply buffer exists;
 //! - [`slave`]: one slave on the line: frames in, requests carried out, replies out, drops
 //!   counted, whether a master is active;
-//! - [`plc`]: §13's map on top of the engine.
+//! - [`plc`]: §13's map on top of the engine;
+//! - [`snapshot`]: §17's snapshot and program windows, their layout shared by the firmware
+//!   and the host.
 //!
 //! Words are the Modbus specification's: coil, discrete input, holding register, input
 //! register, function code, exception.
@@ -23,6 +25,7 @@ pub mod plc;
 pub mod reply;
 pub mod request;
 pub mod slave;
+pub mod snapshot;
 
 /// Function code 01: read coils.
 pub const READ_COILS: u8 = 0x01;
