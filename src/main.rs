@@ -69,7 +69,7 @@ mod firmware {
 
         loop {
             if mode == Mode::Run {
-                run(eng, editor, &mut board, boot.mcusr);
+                run(eng, editor, &mut board, boot.by_watchdog());
                 mode = Mode::Edit;
             }
             board.feed_watchdog();
@@ -94,10 +94,10 @@ mod firmware {
     /// scan) and each 65,536th scan; STAT's figures come from its bookkeeping. The line is a
     /// Modbus slave's meanwhile (`modbus.rs`); while a master is active the terminal is quiet.
     #[inline(always)]
-    fn run(eng: &mut Engine, editor: &mut Editor, board: &mut hal::Nano, mcusr: u8) {
+    fn run(eng: &mut Engine, editor: &mut Editor, board: &mut hal::Nano, by_watchdog: bool) {
         let mut st = RunState::new(board.stats_ticks());
         let mut wraps: u16 = 0;
-        let mut server = modbus::Server::begin(eng, board, mcusr, editor.stored);
+        let mut server = modbus::Server::begin(eng, board, by_watchdog, editor.stored);
         loop {
             board.feed_watchdog();
             let quiet = server.master_active(board);
@@ -154,13 +154,13 @@ mod firmware {
     #[avr_device::interrupt(atmega328p)]
     fn TIMER1_COMPB() {
         // SAFETY: see above.
-        hal::serial::on_silence(unsafe { CriticalSection::new() });
+        hal::line::on_silence(unsafe { CriticalSection::new() });
     }
 
     #[avr_device::interrupt(atmega328p)]
     fn USART_TX() {
         // SAFETY: see above.
-        hal::serial::on_tx_complete(unsafe { CriticalSection::new() });
+        hal::line::on_tx_complete(unsafe { CriticalSection::new() });
     }
 
     #[avr_device::interrupt(atmega328p)]

@@ -1,8 +1,9 @@
-//! RUN mode's Modbus RTU slave (SPEC §13), between scans: judge a frame once its silence has
-//! passed, carry the request out on the engine (the core's `PlcMap`), and feed the reply to
-//! the transmitter a few bytes per visit, so no visit holds the scan up for long.
+//! RUN mode's Modbus RTU slave (SPEC §13, §17), between scans: judge a frame once its silence
+//! has passed, carry the request out on the engine (the core's `PlcMap`), and feed the reply
+//! to the transmitter a few bytes per visit, so no visit holds the scan up for long. The
+//! line's timing and the slave itself are the hardware layer's (`hal/line.rs`); this file
+//! has no `unsafe`.
 
-use avr_device::interrupt;
 use utile_core::board::Board;
 use utile_core::engine::Engine;
 use utile_core::modbus::plc::{PlcMap, Status, STATUS_OVERRUN, STATUS_RUNNING};
@@ -12,7 +13,7 @@ use utile_core::stats::ScanStats;
 use utile_core::store;
 
 use crate::hal::scan::RunState;
-use crate::hal::{serial, Nano};
+use crate::hal::{line, serial, Nano};
 
 /// Reply bytes made per visit at most (a map read and the CRC each), so a visit stays below
 /// the 0.5 ms a scan may wait.
@@ -49,12 +50,12 @@ pub struct Server {
 }
 
 impl Server {
-    /// RUN starts: the address from EEPROM, the status bits (`stored`: EEPROM holds a valid
-    /// program, as the editor knows it), the line switched to Modbus.
-    pub fn begin(eng: &Engine, board: &mut Nano, mcusr: u8, stored: bool) -> Self {
+    /// RUN starts: the address from EEPROM, the status bits (`by_watchdog`: the last reset
+    /// was the watchdog's; `stored`: EEPROM holds a valid program, as the editor knows it),
+    /// the program's fingerprint, the line switched to Modbus.
+    pub fn begin(eng: &Engine, board: &mut Nano, by_watchdog: bool, stored: bool) -> Self {
         let mut flags = STATUS_RUNNING;
-        // WDRF: the last reset was the watchdog's (0 after a boot loader that clears MCUSR).
-        if mcusr & 0x08 != 0 {
+        if by_watchdog {
             flags |= STATUS_WATCHDOG;
         }
         if stored {
@@ -72,22 +73,18 @@ impl Server {
             started: false,
             reseal: false,
         };
-        serial::serve_modbus(true);
+        line::serve(true);
         server
     }
 
     /// RUN ends: the line goes back to the terminal.
     pub fn end(&mut self) {
-        serial::serve_modbus(false);
+        line::serve(false);
     }
 
     /// Whether a master talked to this slave within the last 3 s (the terminal is quiet).
     pub fn master_active(&self, board: &mut Nano) -> bool {
-        let now = board.now_ms();
-        interrupt::free(|cs| {
-            // SAFETY: the closure does not re-enter LINE.
-            unsafe { serial::LINE.with(cs, |l| l.slave.master_active(now)) }
-        })
+        line::master_active(board.now_ms())
     }
 
     /// One visit between scans, one job per visit so that none holds the scan up for long:
@@ -101,21 +98,15 @@ impl Server {
         wraps: u16,
     ) -> After {
         let mut after = After::Nothing;
-        if serial::take_frame_end() {
+        if line::take_frame_end() {
             self.refresh(eng, board, st, wraps);
             let now = board.now_ms();
-            let (address, status) = (self.address, &self.status);
-            let event = interrupt::free(|cs| {
-                let mut map = PlcMap {
-                    eng: &mut *eng,
-                    b: &mut *board,
-                    status,
-                };
-
-                // SAFETY: the map reaches the ticker, the ADC and EEPROM, never LINE.
-                unsafe { serial::LINE.with(cs, |l| l.slave.end(address, &mut map, now)) }
-            });
-            match event {
+            let mut map = PlcMap {
+                eng: &mut *eng,
+                b: &mut *board,
+                status: &self.status,
+            };
+            match line::judge(self.address, &mut map, now) {
                 Event::Slash => {
                     serial::inject(b'/');
                     after = After::BreakKey;
@@ -145,30 +136,24 @@ impl Server {
     fn send(&mut self, eng: &mut Engine, board: &mut Nano) {
         // A RUN display still going out must leave the line before the driver enable rises.
         if !self.started {
-            if !serial::reply_start() {
+            if !line::reply_start() {
                 return;
             }
             self.started = true;
         }
-        let status = &self.status;
+        let mut map = PlcMap {
+            eng: &mut *eng,
+            b: &mut *board,
+            status: &self.status,
+        };
         for _ in 0..BYTES_PER_VISIT {
             if serial::tx_room() <= serial::TX_SIZE as u8 - AHEAD {
                 return;
             }
-            let byte = interrupt::free(|cs| {
-                let mut map = PlcMap {
-                    eng: &mut *eng,
-                    b: &mut *board,
-                    status,
-                };
-
-                // SAFETY: the map never reaches LINE.
-                unsafe { serial::LINE.with(cs, |l| l.slave.next_byte(&mut map)) }
-            });
-            match byte {
+            match line::reply_byte(&mut map) {
                 Some(b) => serial::tx(b),
                 None => {
-                    serial::reply_queued();
+                    line::reply_queued();
                     self.pending = false;
                     return;
                 }
@@ -183,17 +168,14 @@ impl Server {
         if overruns != self.overruns_at_start {
             self.flags |= STATUS_OVERRUN;
         }
-        let dropped = interrupt::free(|cs| {
-            // SAFETY: the closure does not re-enter LINE.
-            unsafe { serial::LINE.with(cs, |l| l.slave.dropped()) }
-        });
         let stats = ScanStats {
             min: st.min,
             max: st.max,
             count: (u32::from(wraps) << 16) | u32::from(st.scans),
             run_ms: board.now_ms().wrapping_sub(self.start_ms),
         };
-        self.status.refresh(self.flags, &stats, overruns, dropped);
+        self.status
+            .refresh(self.flags, &stats, overruns, line::dropped());
         self.status.take_scan(eng, board);
     }
 }

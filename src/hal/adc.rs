@@ -11,7 +11,7 @@ use avr_device::interrupt::{self, CriticalSection};
 use utile_core::analog::{Analog, CHANNELS};
 
 use super::isr_cell::IsrCell;
-use super::regs::{regs, wr};
+use super::regs::{bit, regs, wr};
 
 /// The sampler, fed by the ADC interrupt.
 static ANALOG: IsrCell<Analog> = IsrCell::new(Analog::new());
@@ -22,13 +22,13 @@ pub(crate) static BITS: AtomicU8 = AtomicU8::new(0);
 
 /// ADMUX: REFS0 (AVcc with the Nano's capacitor on AREF), right-adjusted, channel `ch`.
 const fn admux(ch: u8) -> u8 {
-    0x40 | (ch & 0x0F)
+    bit::REFS0 | (ch & bit::MUX)
 }
 
 /// ADCSRA: ADEN, ADIE, prescaler 128 (125 kHz ADC clock at 16 MHz).
-const ADCSRA_ON: u8 = 0x8F;
+const ADCSRA_ON: u8 = bit::ADEN | bit::ADIE | bit::ADPS_128;
 /// [`ADCSRA_ON`] with ADSC: start a conversion.
-const ADCSRA_START: u8 = ADCSRA_ON | 0x40;
+const ADCSRA_START: u8 = ADCSRA_ON | bit::ADSC;
 
 /// Enable the ADC on A6 with its interrupt (no conversion yet: the tick starts them).
 #[inline(always)]
