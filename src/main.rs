@@ -90,9 +90,10 @@ mod firmware {
     }
 
     /// RUN mode until KEY breaks out. The threaded scan (`hal::scan`) runs scan after scan
-    /// and comes back only for KEY's break key, pending displays and Modbus work (every 16th
-    /// scan) and each 65,536th scan; STAT's figures come from its bookkeeping. The line is a
-    /// Modbus slave's meanwhile (`modbus.rs`); while a master is active the terminal is quiet.
+    /// and comes back only for KEY's break key, pending displays (every 16th scan), Modbus
+    /// work (after the scan in which it arose) and each 65,536th scan; STAT's figures come
+    /// from its bookkeeping. The line is a Modbus slave's meanwhile (`modbus.rs`); while a
+    /// master is active, or a frame is on its way, the terminal is quiet.
     #[inline(always)]
     fn run(eng: &mut Engine, editor: &mut Editor, board: &mut hal::Nano, by_watchdog: bool) {
         let mut st = RunState::new(board.stats_ticks());
@@ -100,7 +101,7 @@ mod firmware {
         let mut server = modbus::Server::begin(eng, board, by_watchdog, editor.stored);
         loop {
             board.feed_watchdog();
-            let quiet = server.master_active(board);
+            let quiet = server.quiet(board);
             let want = !quiet && editor.has_output(eng);
             match scan::run(eng, &mut st, want) {
                 Exit::Key => {
@@ -113,8 +114,8 @@ mod firmware {
                     if server.visit(eng, board, &st, wraps) == modbus::After::Written {
                         hal::kept::reseal(&eng.prog);
                     }
-                    // As before the scans: a master that has just appeared is seen next time.
-                    if quiet {
+                    // As the visit left the line: a reply it started goes out alone.
+                    if server.quiet(board) {
                         // The terminal waits: displays requested meanwhile are dropped.
                         eng.take_port_view();
                         eng.take_bs_view();

@@ -462,3 +462,40 @@ fn a_reply_streamed_over_many_scans_shows_the_bits_of_one_scan() {
         );
     }
 }
+
+#[test]
+fn the_longest_programs_still_answer_within_the_spec_and_without_gaps() {
+    // 256 lines scanned (no END), and 255 of the slowest lines there are (each restarts
+    // TF: a 32-bit deadline), about 0.5 ms a scan.
+    let no_end = listing::commands(&["Y0.", "!", ".Y0"]);
+    let slowest = data_listing("slowest_scan.utl");
+    let mut write = vec![0x10, 0, 0, 0, 16, 32];
+    for _ in 0..16 {
+        write.extend_from_slice(&[0, 10]);
+    }
+    let c = char_cycles();
+    for (name, prog) in [("no END", no_end), ("127 x SET .TKF", slowest)] {
+        let mut line = Line::new(&prog);
+        for _ in 0..3 {
+            for req in [&[0x03, 0, 0, 0, 16][..], &[0x04, 0, 64, 0, 40], &write] {
+                let (end, reply) = line.transact(req);
+                assert_eq!(pdu(&reply)[0], req[0], "{name}: reply to {req:02X?}");
+                let latency_ms = (reply[0].1 - c - end) as f64 / CYCLES_PER_MS as f64;
+                assert!(
+                    latency_ms <= 5.0,
+                    "{name}: SPEC §13, a reply within 5 ms ({latency_ms:.2} ms)"
+                );
+                for w in reply.windows(2) {
+                    assert!(
+                        w[1].1 - w[0].1 < c * 3 / 2,
+                        "{name}: a gap inside the reply to {req:02X?}: {:?}",
+                        reply
+                            .iter()
+                            .map(|r| (r.1 - reply[0].1) / 100)
+                            .collect::<Vec<_>>()
+                    );
+                }
+            }
+        }
+    }
+}

@@ -25,7 +25,7 @@ const SCANS: u64 = 6;
 const LIMIT_MS: u64 = 120_000;
 
 /// The coverage counters the PASS line must report, each non-zero.
-const COVERAGE: [&str; 13] = [
+const COVERAGE: [&str; 14] = [
     "py",
     "q",
     "tk",
@@ -35,6 +35,7 @@ const COVERAGE: [&str; 13] = [
     "guard",
     "wraps",
     "bursts",
+    "by_line",
     "counted",
     "counter_resets",
     "saturated",

@@ -1,7 +1,8 @@
 //! The serial line as a Modbus RTU slave's in RUN mode (SPEC §13): its timing and the driver
 //! enable. Received bytes go to the core's [`Slave`], stamped with Timer1 to find gaps inside
-//! a frame; Timer1's compare B marks the 3.5-character silence that ends a frame; both want
-//! the main loop (`want.rs`); a reply raises the driver enable D10 and the transmit-complete
+//! a frame; Timer1's compare B marks the 3.5-character silence that ends a frame and wants
+//! the main loop at the next END (`want.rs`); a reply raises the driver enable D10, wants the
+//! main loop again after each byte while it is being made, and the transmit-complete
 //! interrupt lowers D10 after the last stop bit. The main loop (`src/modbus.rs`) reaches the
 //! slave only through the safe functions here.
 
@@ -68,7 +69,6 @@ pub(crate) fn on_byte(cs: CriticalSection, byte: u8) -> bool {
     wr!(dp.TC1.tifr1(), bit::OCF1B);
     // TIMSK1: OCIE1B.
     wr!(dp.TC1.timsk1(), bit::OCIE1B);
-    want::want_cpu();
     // SAFETY: TCNT1H written alone sets TEMP only (TCNT1 changes with the low byte).
     unsafe { temp.add(1).write_volatile(saved) };
     true
@@ -76,11 +76,18 @@ pub(crate) fn on_byte(cs: CriticalSection, byte: u8) -> bool {
 
 /// Timer1 compare B: 3.5 characters of silence after the last byte, the frame is complete.
 #[inline(always)]
-pub fn on_silence(_cs: CriticalSection) {
+pub fn on_silence(cs: CriticalSection) {
     // TIMSK1: compare B off until the next byte.
     wr!(regs().TC1.timsk1(), 0);
     FRAME_END.store(1, Ordering::Relaxed);
-    want::want_cpu();
+    want::now(cs);
+}
+
+/// From the data-register-empty interrupt: the transmitter took a byte of a reply; the main
+/// loop makes more at the next END.
+#[inline(always)]
+pub(crate) fn on_sent(cs: CriticalSection) {
+    want::now(cs);
 }
 
 /// USART transmit complete: the line went idle. After the last byte of a reply, the driver
@@ -122,21 +129,20 @@ pub(crate) fn serve(on: bool) {
     });
 }
 
-/// Whether a frame's closing silence has passed (taken: it is reported once).
+/// The main loop is back between two scans: whether a frame's closing silence has passed
+/// (reported once). A wish of the line from now on wants the main loop at the next END.
 pub(crate) fn take_frame_end() -> bool {
-    interrupt::free(|_| {
+    interrupt::free(|cs| {
+        want::taken(cs);
         let end = FRAME_END.load(Ordering::Relaxed) != 0;
         FRAME_END.store(0, Ordering::Relaxed);
         end
     })
 }
 
-/// Whether the Modbus side needs the CPU soon: a frame is coming in or ended, or a reply is
-/// going out. Call with interrupts off, so that no interrupt's wish is lost.
-pub(crate) fn busy(cs: CriticalSection) -> bool {
-    // SAFETY: the closure does not re-enter LINE.
-    FRAME_END.load(Ordering::Relaxed) != 0
-        || unsafe { LINE.with(cs, |l| l.slave.receiving() || l.slave.replying()) }
+/// The main loop has more to do for the line: back at the next END.
+pub(crate) fn again() {
+    interrupt::free(want::now);
 }
 
 /// Judge the frame that has ended and, for a request to `address` or a broadcast, carry it
@@ -157,10 +163,11 @@ pub(crate) fn reply_byte(map: &mut PlcMap<'_, Nano>) -> Option<u8> {
     })
 }
 
-/// Whether a master talked to this slave within the last 3 s.
-pub(crate) fn master_active(now_ms: u32) -> bool {
+/// Whether the terminal must wait: a frame on its way or its reply, or a master that
+/// talked to this slave within the last 3 s (the core's `Slave::line_busy`).
+pub(crate) fn busy(now_ms: u32) -> bool {
     // SAFETY: the closure does not re-enter LINE.
-    interrupt::free(|cs| unsafe { LINE.with(cs, |l| l.slave.master_active(now_ms)) })
+    interrupt::free(|cs| unsafe { LINE.with(cs, |l| l.slave.line_busy(now_ms)) })
 }
 
 /// Frames dropped since RUN.

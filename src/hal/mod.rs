@@ -11,7 +11,7 @@
 //! | `eeprom.rs` | EEPROM bytes |
 //! | `serial.rs`, `ring.rs` | USART0 and its receive/transmit rings (the terminal's side) |
 //! | `line.rs` | the line as a Modbus slave's in RUN mode: frame timing, D10, the replies |
-//! | `want.rs` | when the scan gives the CPU back (every 16th scan) |
+//! | `want.rs` | when the scan gives the CPU back (every 16th scan, or now for Modbus) |
 //! | `kept.rs` | the program kept over a warm reset (`.noinit`) |
 //! | `scan.rs`, `scan.S` | the threaded RUN-mode scan |
 //! | `scan_check/` | the `scan-check` build: `scan.S` against `Engine::scan` on the chip |

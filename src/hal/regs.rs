@@ -53,8 +53,8 @@ pub(crate) fn regs() -> Regs {
     }
 }
 
-/// GPIOR0's I/O address (data address 0x3E): the watchdog's restart flag (`watchdog.rs`),
-/// set with `sbi`.
+/// GPIOR0's I/O address (data address 0x3E): bit-addressable flags (`sbi`, `sbic`) for the
+/// watchdog's restart (`watchdog.rs`) and the scan's "main loop wanted now" (`want.rs`).
 pub(crate) const GPIOR0_IO: u8 = 0x1E;
 
 /// Register bits by the datasheet's names (ATmega328P, "Register Description" of each

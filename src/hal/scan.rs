@@ -8,7 +8,7 @@
 //! stays in assembly too. BENCHMARKS.md has the figures; `--features scan-check` builds a
 //! firmware that compares it with the core on random programs (tests/simavr_scan_check.rs).
 
-use super::{kept, line, serial, want};
+use super::{kept, regs, serial, want};
 use utile_core::engine::{offsets as eng, Engine, VIEW_BS, VIEW_PORT};
 use utile_core::ticker::offsets as tick;
 
@@ -18,8 +18,8 @@ pub enum Exit {
     /// KEY found a received byte: take it (a `/` stops the program), then call [`run`]
     /// again to go on with the line after KEY.
     Key,
-    /// Sixteen more scans ran and the main loop asked for the CPU (`want`, the Modbus
-    /// line) or a PPx/PBS display waits.
+    /// A scan ended and the main loop is wanted: every 16th scan by the editor (`want`) or
+    /// a PPx/PBS display, after any scan by the Modbus line (`want.rs`).
     Scans,
     /// The 16-bit scan count wrapped to 0: 65,536 more scans.
     Wrap,
@@ -69,8 +69,7 @@ pub fn run(eng: &mut Engine, st: &mut RunState, want: bool) -> Exit {
     if !core::ptr::eq(eng, kept::engine_ptr()) {
         return Exit::Refused;
     }
-    // With interrupts off: a Modbus interrupt's wish set just before would be lost.
-    avr_device::interrupt::free(|cs| want::every_16th(want || line::busy(cs)));
+    want::every_16th(want);
     match enter(eng, st) {
         EXIT_KEY => Exit::Key,
         EXIT_WRAP => Exit::Wrap,
@@ -136,6 +135,8 @@ fn enter(eng: *mut Engine, st: *mut RunState) -> u8 {
         ".set U_RX_HEAD, {rx} + {rx_head}",
         ".set U_RX_TAIL, {rx} + {rx_tail}",
         ".set U_WANT, {want}",
+        ".set GPIOR0_IO, {gpior0}",
+        ".set NOW_BIT, {now_bit}",
         ".set ST_NEXT, {st_next}",
         ".set ST_LAST, {st_last}",
         ".set ST_MIN, {st_min}",
@@ -198,6 +199,8 @@ fn enter(eng: *mut Engine, st: *mut RunState) -> u8 {
         rx_head = const serial::RX_HEAD_AT,
         rx_tail = const serial::RX_TAIL_AT,
         want = sym want::WANT,
+        gpior0 = const regs::GPIOR0_IO,
+        now_bit = const want::NOW_BIT,
         st_next = const core::mem::offset_of!(RunState, next),
         st_last = const core::mem::offset_of!(RunState, last),
         st_min = const core::mem::offset_of!(RunState, min),

@@ -86,7 +86,13 @@ pub fn on_udre(cs: CriticalSection) {
     let dp = regs();
     // SAFETY: the closure does not re-enter TX.
     match unsafe { TX.with(cs, |tx| tx.pop()) } {
-        Some(byte) => wr!(dp.USART0.udr0(), byte),
+        Some(byte) => {
+            wr!(dp.USART0.udr0(), byte);
+            // A byte of a Modbus reply (transmit complete is on for it): make more.
+            if txcie(cs) != 0 {
+                line::on_sent(cs);
+            }
+        }
         // UCSR0B without UDRIE0: nothing more to send (TXCIE0 kept while a reply goes out).
         None => wr!(dp.USART0.ucsr0b(), UCSR0B_ON | txcie(cs)),
     }

@@ -1,23 +1,47 @@
-//! When the threaded scan gives the CPU back to the main loop: every 16th scan while
-//! [`WANT`] is nonzero, set by the main loop for the editor's drawing and by the Modbus
-//! line's interrupts for a frame coming in, ended or being answered. A leaf: the scan reads
-//! the flag; the line and the main loop set it.
+//! When the threaded scan gives the CPU back to the main loop: every 16th scan while the
+//! editor has something to draw ([`WANT`]), and after the very next END whenever the Modbus
+//! line has work, a frame to judge or reply bytes to make ([`now`]: GPIOR0's [`NOW_BIT`], so
+//! that `scan.S` tests it in one cycle). A leaf: the scan reads these flags; the line's
+//! interrupts and the main loop set them.
 
 use core::sync::atomic::{AtomicU8, Ordering};
 
-/// Nonzero while the main loop wants the CPU every 16th scan (`scan.S` reads it there).
+use avr_device::interrupt::CriticalSection;
+
+use super::regs::regs;
+
+/// Nonzero while the editor wants the CPU every 16th scan (`scan.S` reads it there).
 pub(crate) static WANT: AtomicU8 = AtomicU8::new(0);
 
-/// The main loop wants the CPU every 16th scan, or not. With interrupts off when an
-/// interrupt's wish must not be lost.
+/// GPIOR0's bit for "the main loop is wanted at the next END" (bit 0 is the watchdog's).
+pub(crate) const NOW_BIT: u8 = 1;
+
+/// The editor wants the CPU every 16th scan, or not.
 #[inline(always)]
 pub(crate) fn every_16th(on: bool) {
     WANT.store(u8::from(on), Ordering::Relaxed);
 }
 
-/// An interrupt wants the main loop soon (a Modbus byte or frame end): the scan comes back
-/// at its next 16th END.
+/// The main loop is wanted at the next END. With interrupts off (an interrupt handler, or
+/// the main loop inside a critical section): GPIOR0's other bit is the watchdog's.
 #[inline(always)]
-pub(crate) fn want_cpu() {
-    WANT.store(1, Ordering::Relaxed);
+pub(crate) fn now(_cs: CriticalSection) {
+    // GPIOR0: NOW_BIT set, the rest kept.
+    regs()
+        .CPU
+        .gpior0()
+        // SAFETY: GPIOR0 is a general-purpose register: any bit pattern is valid.
+        .modify(|r, w| unsafe { w.bits(r.bits() | (1 << NOW_BIT)) });
+}
+
+/// The main loop is back: call (interrupts off) before it looks at what it was wanted for,
+/// so that a wish made after that is kept for the next END.
+#[inline(always)]
+pub(crate) fn taken(_cs: CriticalSection) {
+    // GPIOR0: NOW_BIT cleared, the rest kept.
+    regs()
+        .CPU
+        .gpior0()
+        // SAFETY: as in `now`.
+        .modify(|r, w| unsafe { w.bits(r.bits() & !(1 << NOW_BIT)) });
 }

@@ -25,6 +25,8 @@ pub const STATUS_OVERRUN: u16 = 1 << 3;
 pub const HR_COUNTER_PRESETS: u16 = UNITS as u16;
 /// First holding register of the set-points.
 pub const HR_SET_POINTS: u16 = HR_COUNTER_PRESETS + COUNTERS as u16;
+/// Input register of the mean scan time.
+const IR_MEAN: u16 = 2;
 /// First input register of the counts.
 pub const IR_COUNTS: u16 = 8;
 /// First input register of the analog readings.
@@ -38,8 +40,11 @@ pub const IR_TIME_LEFT: u16 = 32;
 /// program's fingerprint.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Status {
-    /// Input registers 0..7, in address order.
+    /// Input registers 0..7, in address order, but the mean scan time (2), which is worked
+    /// out when it is read: a division is too long to make at every request.
     pub regs: [u16; 8],
+    /// Milliseconds since RUN, for the mean.
+    pub run_ms: u32,
     /// Input registers 64..71 (status, every bit, the scan count) as [`Status::take_scan`]
     /// took them: one scan's, however late in a reply they are read.
     pub scan: [u16; 8],
@@ -70,10 +75,11 @@ impl Status {
     pub fn refresh(&mut self, flags: u16, st: &ScanStats, overruns: u16, dropped: u16) {
         // No scan yet shows 0.
         let us = |ticks: u16| if st.count == 0 { 0 } else { ticks >> 1 };
+        self.run_ms = st.run_ms;
         self.regs = [
             flags,
             us(st.min),
-            stats::per_1000(st.run_ms, st.count).min(0xFFFF) as u16,
+            0,
             us(st.max),
             (st.count >> 16) as u16,
             st.count as u16,
@@ -144,6 +150,26 @@ fn bit16(word: u16, n: u16) -> u16 {
     (word >> (n & 15)) & 1
 }
 
+/// The window of `table` that holds `addr`, by its first address. The map's addresses are
+/// runs with gaps between them, so a range lies in the map when both its ends lie in one
+/// window.
+fn window(table: Table, addr: u16) -> Option<u16> {
+    let first = match table {
+        Table::Coils if addr < 24 => 0,
+        Table::DiscreteInputs if addr < 6 => 0,
+        Table::DiscreteInputs if (8..50).contains(&addr) => 8,
+        Table::HoldingRegisters if addr < HR_SET_POINTS + SET_POINTS as u16 => 0,
+        Table::InputRegisters if addr < IR_READINGS + SET_POINTS as u16 => 0,
+        Table::InputRegisters if (IR_TIME_LEFT..IR_TIME_LEFT + UNITS as u16).contains(&addr) => {
+            IR_TIME_LEFT
+        }
+        Table::InputRegisters if (SNAPSHOT..SNAPSHOT + SNAPSHOT_LEN).contains(&addr) => SNAPSHOT,
+        Table::InputRegisters if (PROGRAM..PROGRAM + PROGRAM_LEN).contains(&addr) => PROGRAM,
+        _ => return None,
+    };
+    Some(first)
+}
+
 impl<B: Board> PlcMap<'_, B> {
     /// The port byte that coil `addr` (0..23) lives in.
     fn port(&mut self, addr: u16) -> &mut u8 {
@@ -184,8 +210,12 @@ impl<B: Board> PlcMap<'_, B> {
             };
             a = usize::from(addr);
         }
-        if addr < IR_COUNTS {
-            self.status.regs[a & 7]
+        let s = self.status;
+        if addr == IR_MEAN {
+            let scans = u32::from(s.regs[4]) << 16 | u32::from(s.regs[5]);
+            stats::per_1000(s.run_ms, scans).min(0xFFFF) as u16
+        } else if addr < IR_COUNTS {
+            s.regs[a & 7]
         } else if addr < IR_READINGS {
             self.eng.count[a & 7]
         } else if addr < IR_TIME_LEFT {
@@ -201,17 +231,13 @@ impl<B: Board> PlcMap<'_, B> {
 
 impl<B: Board> Map for PlcMap<'_, B> {
     fn contains(&self, table: Table, addr: u16) -> bool {
-        match table {
-            Table::Coils => addr < 24,
-            Table::DiscreteInputs => addr < 6 || (8..50).contains(&addr),
-            Table::HoldingRegisters => addr < HR_SET_POINTS + SET_POINTS as u16,
-            Table::InputRegisters => {
-                addr < IR_READINGS + SET_POINTS as u16
-                    || (IR_TIME_LEFT..IR_TIME_LEFT + UNITS as u16).contains(&addr)
-                    || (SNAPSHOT..SNAPSHOT + SNAPSHOT_LEN).contains(&addr)
-                    || (PROGRAM..PROGRAM + PROGRAM_LEN).contains(&addr)
-            }
-        }
+        window(table, addr).is_some()
+    }
+
+    fn covers(&self, table: Table, start: u16, qty: u16) -> bool {
+        // One check for any length: a read of 125 registers is judged between two scans.
+        let first = window(table, start);
+        first.is_some() && first == window(table, start.wrapping_add(qty - 1))
     }
 
     fn read(&mut self, table: Table, addr: u16) -> u16 {
@@ -268,20 +294,21 @@ impl<B: Board> Map for PlcMap<'_, B> {
                     *byte &= !mask;
                 }
             }
-            // Masks instead of checks: `contains` has kept the address in range. Outputs
-            // and thresholds follow the new values at once, as after LDT or LDC.
+            // Masks instead of checks: `contains` has kept the address in range. Counter
+            // outputs and thresholds follow new presets and set-points at once, as after
+            // LDC (only theirs: a write of 16 timer presets stays short between two scans).
             Table::HoldingRegisters => {
                 let (p, a) = (&mut self.eng.prog, usize::from(addr));
                 if addr < HR_COUNTER_PRESETS {
                     p.presets[a & 15] = value as u8;
                 } else if addr < HR_SET_POINTS {
                     p.counter_presets[a & 7] = value;
+                    self.eng.refresh_counter_outputs();
                 } else {
                     p.set_points[a & 1] = value;
+                    let sp = p.set_points;
+                    self.b.set_points(sp);
                 }
-                self.eng.refresh_counter_outputs();
-                let sp = self.eng.prog.set_points;
-                self.b.set_points(sp);
             }
             // Read-only tables: the codec never writes them.
             Table::DiscreteInputs | Table::InputRegisters => {}

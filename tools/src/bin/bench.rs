@@ -512,7 +512,7 @@ fn main() {
 }
 
 /// Issue 16's budgets: polls per second at line rate, reply start, scan gap and press → Y0
-/// latency while served.
+/// latency while served; issue 24's: reply start and time between scans for every program.
 fn modbus_rows(rows: &mut Vec<Row>, elf: &Path) {
     match bench::modbus::measure_modbus(elf, 200) {
         Ok(m) => {
@@ -561,5 +561,52 @@ fn modbus_rows(rows: &mut Vec<Row>, elf: &Path) {
             "—",
             "—",
         ),
+    }
+    match bench::modbus::measure_first_during_screen(elf) {
+        Ok(t) => row(
+            rows,
+            "Modbus reply start of a first request while the autostart's RUN screen is drawn",
+            format!("{t:.2} ms"),
+            "n/a",
+            "—",
+        ),
+        Err(e) => row(
+            rows,
+            "Modbus first request during the RUN screen",
+            format!("not measurable: {e}"),
+            "n/a",
+            "—",
+        ),
+    }
+    for (name, prog) in bench::modbus::timing_programs() {
+        let timing = prog.and_then(|p| bench::modbus::measure_program(elf, &p, 20));
+        match timing {
+            Ok(t) => row(
+                rows,
+                format!("Modbus timing with {name}: reply start (median / max) and added between two scans"),
+                format!(
+                    "first {:.2}; FC03 × 16 {:.2} / {:.2}; snapshot and program {:.2} / {:.2}; \
+                     FC03 + FC16 {:.2} / {:.2} ms; added {:.2} reading, {:.2} writing ms",
+                    t.first,
+                    t.fc03.median,
+                    t.fc03.max,
+                    t.snapshot.median,
+                    t.snapshot.max,
+                    t.write.median,
+                    t.write.max,
+                    t.added_reads,
+                    t.added_writes
+                ),
+                "n/a",
+                "≤ 2.5 ms; ≤ 0.45 ms",
+            ),
+            Err(e) => row(
+                rows,
+                format!("Modbus timing with {name}"),
+                format!("not measurable: {e}"),
+                "n/a",
+                "—",
+            ),
+        }
     }
 }
