@@ -15,6 +15,7 @@ use utile_core::modbus::snapshot::{self, Snapshot, PROGRAM, SNAPSHOT, SNAPSHOT_L
 use utile_core::store;
 use utile_kit::listing;
 use utile_kit::modbus;
+use utile_kit::rng::Rng;
 use utile_kit::sim::SimBoard;
 use utile_kit::simavr::{frame_cycles, RxPacing};
 
@@ -236,6 +237,74 @@ fn a_lone_slash_breaks_key_and_a_frame_with_0x2f_does_not() {
     assert!(
         String::from_utf8_lossy(&line.nano.chip.take_output()).contains("Strike any key"),
         "the break key stopped the program"
+    );
+}
+
+/// `n` random bytes, none a `/`.
+fn noise(n: usize, seed: u64) -> Vec<u8> {
+    let mut rng = Rng::new(seed);
+    let mut bytes = Vec::with_capacity(n);
+    while bytes.len() < n {
+        let b = rng.byte();
+        if b != b'/' {
+            bytes.push(b);
+        }
+    }
+    bytes
+}
+
+#[test]
+fn a_lone_slash_breaks_key_after_line_noise_on_the_wire() {
+    // SPEC §12, §13 (issue 24): noise changes nothing, and a lone `/` after a silence
+    // breaks KEY, however much noise came first.
+    for (n, seed) in [(8, 1), (64, 2), (500, 3)] {
+        let mut line = Line::new(&listing::commands(&["PA.", ".PY", "KEY", "END"]));
+        line.send(0, &noise(n, seed));
+        line.send(20 * CYCLES_PER_MS, b"/");
+        let bytes_ms = n as u64 * char_cycles() / CYCLES_PER_MS;
+        line.run((bytes_ms + 100) * CYCLES_PER_MS);
+        let text = String::from_utf8_lossy(&line.nano.chip.take_output()).into_owned();
+        assert!(
+            text.contains("Strike any key"),
+            "{n} noise bytes, 20 ms, `/`: {text:?}"
+        );
+    }
+}
+
+#[test]
+fn a_lone_slash_typed_after_line_noise_breaks_key_in_the_virtual_nano_too() {
+    // The virtual Nano's terminal (`RxPacing::AfterRead`) once fed the line at 11 bits a
+    // byte: a writer at the true 19200 baud ran ahead of it, and after 500 bytes its 20 ms
+    // of silence was gone: the `/` joined the noise's frame and KEY never saw it alone.
+    let prog = listing::commands(&["PA.", ".PY", "KEY", "END"]);
+    let mut b = SimBoard::new();
+    store::store(&prog, &mut b).expect("STORE");
+    let eeprom: &'static [u8] = Box::leak(b.eeprom.into_boxed_slice());
+    let mut nano = Board::boot_with(Rig {
+        d8: false,
+        d9: false,
+        eeprom: Some(eeprom),
+    });
+    nano.chip.set_rx_pacing(RxPacing::AfterRead);
+    assert!(nano.wait_for("User File", 2_000));
+    // Started from the terminal, as the issue's user did.
+    for line in ["LOAD", "EX0"] {
+        nano.enter(line, 500);
+    }
+    assert!(nano.wait_for("Running", 1_000));
+    nano.run_ms(500);
+    nano.take_output();
+    // A writer at the line rate: one byte every character time, whatever the chip does.
+    for byte in noise(500, 4) {
+        nano.chip.send(&[byte]);
+        nano.run_cycles(char_cycles());
+    }
+    nano.run_ms(20);
+    nano.type_bytes(b"/");
+    assert!(
+        nano.wait_for("Strike any key", 300),
+        "500 noise bytes, 20 ms, `/`: {:?}",
+        String::from_utf8_lossy(&nano.take_output())
     );
 }
 

@@ -25,9 +25,10 @@ const IOCTL_UART0_GET_FLAGS: u32 = ioctl_def(b'u', b'a', b'g', b'0');
 /// How queued UART input goes down the line into the firmware.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum RxPacing {
-    /// One byte per frame time at 19200 baud, and only once the firmware has read the
-    /// previous one: no byte is ever lost (about 17.5 kbaud of simulated time). What a user
-    /// sees.
+    /// One byte per frame time at 19200 baud (10 bits, as on the line), and only once the
+    /// firmware has read the previous one: no byte is ever lost. What a user sees. (It once
+    /// took 11 bits a byte, simavr's count: a sender at the true baud ran ahead of it, and
+    /// the silences it left, such as before a lone `/`, were lost in the backlog.)
     #[default]
     AfterRead,
     /// One byte every [`RX_FIXED_CYCLES_PER_BYTE`], whatever the firmware does: a steady
@@ -190,9 +191,13 @@ impl Chip {
     /// Puts the next input byte on the line when its turn has come (see [`RxPacing`]).
     #[inline]
     pub(crate) fn feed_uart(&mut self) {
-        if let RxPacing::Line { .. } = self.rx.pacing {
-            self.line_frame_time();
-            return self.feed_line();
+        match self.rx.pacing {
+            RxPacing::Line { .. } => {
+                self.line_frame_time();
+                return self.feed_line();
+            }
+            RxPacing::AfterRead => self.line_frame_time(),
+            RxPacing::Fixed | RxPacing::Fifo => {}
         }
         if self.rx.queue.is_empty() {
             return;
@@ -225,9 +230,9 @@ impl Chip {
         }
     }
 
-    /// [`RxPacing::Line`]: simavr's UART counts 11 bits per 8N1 frame (it always counts a
-    /// parity bit), so the firmware could send only one byte per 11 bit times; on the real
-    /// line a frame is 10 bits. Kept right after every change of the baud rate.
+    /// [`RxPacing::Line`] and [`RxPacing::AfterRead`]: simavr's UART counts 11 bits per 8N1
+    /// frame (it always counts a parity bit), so bytes came one per 11 bit times both ways;
+    /// on the real line a frame is 10 bits. Kept right after every change of the baud rate.
     fn line_frame_time(&mut self) {
         if self.rx.uart.is_null() {
             return;
