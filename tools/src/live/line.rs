@@ -38,6 +38,12 @@ const DEAD_FOR: Duration = Duration::from_secs(1);
 const SCAN_SLACK: Duration = Duration::from_millis(30);
 /// Window of the line's busy figure.
 const BUSY_WINDOW: Duration = Duration::from_secs(2);
+/// The most the gap between frames is stretched (see `Line::pace`).
+const MAX_PACE: f64 = 20.0;
+/// The longest silence inside a reply that is on its way.
+const INTER_BYTE: Duration = Duration::from_millis(100);
+/// The most a reply may be late before it counts as missing.
+const SLACK_MAX: Duration = Duration::from_millis(1500);
 
 /// How the line starts.
 #[derive(Clone, Debug)]
@@ -88,6 +94,17 @@ struct Line {
     dead: HashMap<u8, Instant>,
     /// Line time used, by when.
     busy: VecDeque<(Instant, Duration)>,
+    /// How late a reply may be (beyond its time on the line) before it is missing: learnt
+    /// from the replies (a USB adapter's latency, a simulated Nano slower than the clock).
+    slack: Duration,
+    /// The latest reply's lateness, a slowly falling maximum.
+    late: Duration,
+    /// When a reply last came.
+    answered: Option<Instant>,
+    /// How much slower than the line's own time replies come (1 on a real line; more on a
+    /// simulated Nano running behind the clock): the gap between frames is stretched by it,
+    /// so every Nano on a bus hears the 3.5 characters of silence in its own time.
+    pace: f64,
 }
 
 /// Starts the line's owner on its own thread.
@@ -113,6 +130,10 @@ pub fn spawn(
                 quiet: now,
                 dead: HashMap::new(),
                 busy: VecDeque::new(),
+                slack: rtu::ANSWER_SLACK,
+                late: Duration::ZERO,
+                answered: None,
+                pace: 1.0,
             }
             .run()
         })
@@ -283,7 +304,12 @@ impl Line {
             live.message = format!("looking for uTiles: address {addr} of 1..247");
         }
         self.shared.touch();
-        if let Ok((pdu, _)) = self.transact(addr, &[17], SCAN_SLACK) {
+        let slack = if self.answered.is_some() {
+            self.slack
+        } else {
+            SCAN_SLACK
+        };
+        if let Ok((pdu, _)) = self.transact(addr, &[17], slack) {
             if pdu.first() == Some(&17) {
                 let mut live = self.shared.lock();
                 live.units.push(Unit::new(addr, Instant::now()));
@@ -379,7 +405,7 @@ impl Line {
 
     /// Writes `bytes` after the 3.5-character gap.
     fn write(&mut self, bytes: &[u8]) -> bool {
-        let gap = rtu::frame_gap();
+        let gap = rtu::frame_gap().mul_f64(self.pace.min(MAX_PACE));
         let since = self.quiet.elapsed();
         if since < gap {
             std::thread::sleep(gap - since);
@@ -461,7 +487,10 @@ impl Line {
             return Err(Miss::Port);
         }
         let t0 = Instant::now();
-        let deadline = t0 + rtu::reply_timeout(&frame, slack);
+        let mut deadline = t0 + rtu::reply_timeout(&frame, slack);
+        // A reply on its way is waited for while its bytes keep coming (a slow adapter or
+        // simulation), never longer than this: a request sent into it would collide.
+        let last_chance = t0 + rtu::reply_timeout(&frame, SLACK_MAX * 2);
         let mut got = Vec::new();
         let mut buf = [0u8; 512];
         loop {
@@ -471,7 +500,8 @@ impl Line {
                 let reply = got[start + 1..end - 2].to_vec();
                 self.stray(&got[..start]);
                 self.stray(&got[end..]);
-                self.used(frame.len() + end - start);
+                let on_line = self.used(frame.len() + end - start);
+                self.learn(now - t0, on_line, now);
                 return Ok((reply, now - t0));
             }
             if now >= deadline {
@@ -482,7 +512,12 @@ impl Line {
             };
             let _ = p.set_timeout((deadline - now).min(Duration::from_millis(20)));
             match p.read(&mut buf) {
-                Ok(n) => got.extend_from_slice(&buf[..n]),
+                Ok(n) => {
+                    got.extend_from_slice(&buf[..n]);
+                    if n > 0 {
+                        deadline = deadline.max(Instant::now() + INTER_BYTE).min(last_chance);
+                    }
+                }
                 Err(e)
                     if matches!(
                         e.kind(),
@@ -507,6 +542,22 @@ impl Line {
         Err(Miss::Timeout { crc })
     }
 
+    /// A reply came `rtt` after the request went out, for `on_line` of bytes on the line:
+    /// the slack follows the latest replies' lateness (three times the recent worst, at least
+    /// [`rtu::ANSWER_SLACK`]), the pace their slowness.
+    fn learn(&mut self, rtt: Duration, on_line: Duration, now: Instant) {
+        self.answered = Some(now);
+        let late = rtt.saturating_sub(on_line);
+        let ratio = rtt.as_secs_f64() / on_line.as_secs_f64().max(1e-3);
+        self.pace = (self.pace * 0.8 + ratio * 0.2).max(1.0);
+        self.late = late.max(self.late.mul_f64(0.98));
+        self.slack =
+            (self.late * 3 + Duration::from_millis(30)).clamp(rtu::ANSWER_SLACK, SLACK_MAX);
+        let mut live = self.shared.lock();
+        live.slack = self.slack;
+        live.pace = self.pace;
+    }
+
     /// Bytes that were not a reply: the editor's screen when they carry its text, else
     /// noise (counted); the terminal shows them either way.
     fn stray(&mut self, bytes: &[u8]) {
@@ -529,7 +580,7 @@ impl Line {
             u.next_read(now)
         };
         let pdu = read.pdu();
-        let result = self.transact(addr, &pdu, rtu::ANSWER_SLACK);
+        let result = self.transact(addr, &pdu, self.slack);
         let now = Instant::now();
         let mut live = self.shared.lock();
         let busy = self.busy.back().map(|(_, d)| *d).unwrap_or_default();
@@ -564,7 +615,7 @@ impl Line {
             job.finish(Err(Failure::NoAnswer));
             return;
         }
-        let result = self.transact(job.addr, &job.pdu, rtu::ANSWER_SLACK);
+        let result = self.transact(job.addr, &job.pdu, self.slack);
         let now = Instant::now();
         let outcome = match result {
             Ok((pdu, rtt)) => {

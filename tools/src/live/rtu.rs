@@ -106,6 +106,21 @@ pub fn find_reply(got: &[u8], address: u8, request: &[u8]) -> Scan {
     Scan::Incomplete
 }
 
+/// Whether `got` holds a whole frame from `address` for `request`'s function (or its
+/// exception), of the length its head announces, whose CRC is wrong: a damaged reply, not
+/// one that is late or cut short.
+pub fn bad_crc(got: &[u8], address: u8, request: &[u8]) -> bool {
+    let f = request.get(1).copied().unwrap_or(0);
+    (0..got.len()).any(|start| {
+        let head = &got[start..];
+        head.len() >= 2
+            && head[0] == address
+            && head[1] & 0x7F == f
+            && reply_len(head, request.len())
+                .is_some_and(|len| head.len() >= len && !modbus::crc_ok(&head[..len]))
+    })
+}
+
 /// A Modbus exception code in words, as the page shows a refusal.
 pub fn exception_text(code: u8) -> String {
     let what = match code {
@@ -147,6 +162,8 @@ mod tests {
         let last = bad.len() - 1;
         bad[last] ^= 0x55;
         assert_eq!(find_reply(&bad, 1, &request), Scan::Incomplete);
+        assert!(bad_crc(&bad, 1, &request));
+        assert!(!bad_crc(&got[..got.len() - 1], 1, &request));
         // Another function's frame from that address is not this request's reply.
         let other = modbus::frame(1, &[3, 2, 0, 9]);
         assert_eq!(find_reply(&other, 1, &request), Scan::Incomplete);

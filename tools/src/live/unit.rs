@@ -12,7 +12,7 @@ use utile_kit::modbus::registers;
 use super::signals::{Holdings, HOLDINGS};
 
 /// Misses in a row after which a uTile is shown offline.
-const OFFLINE_AFTER: u32 = 2;
+const OFFLINE_AFTER: u32 = 3;
 /// The longest back-off of an address that does not answer: one poll a second.
 const BACK_OFF_MAX: Duration = Duration::from_secs(1);
 /// Presets and set-points are read again this often (LDC on the chip, another master).
