@@ -66,7 +66,8 @@ class Page:
         return f'.card[data-unit="{unit}"] [data-signal="{signal}"]'
 
     def value(self, unit, signal):
-        return self.page.get_attribute(self.sel(unit, signal), "data-value")
+        e = self.page.query_selector(self.sel(unit, signal))
+        return e.get_attribute("data-value") if e else None
 
     def wait(self, unit, signal, want, timeout=T):
         """Waits until the card of `unit` shows `want` for `signal`."""

@@ -21,7 +21,7 @@ use super::queue::{Done, Failure, Job, Next, Origin, Queue};
 use super::rtu::{self, Scan};
 use super::screen::{Mode, Screen};
 use super::state::{Input, Shared};
-use super::unit::{Read, Unit};
+use super::unit::Unit;
 
 /// Ctrl-L: the editor redraws its screen (how a silent line is asked which mode it is in).
 const REDRAW: u8 = 0x0C;
@@ -63,8 +63,6 @@ enum Phase {
     Closed(Instant),
     /// Open, waiting for uTile's first screen until this time (`asked`: Ctrl-L sent).
     Booting { until: Instant, asked: bool },
-    /// Looking for uTiles, next address.
-    Scanning(u8),
     /// Open and served.
     Open,
 }
@@ -101,6 +99,11 @@ struct Line {
     late: Duration,
     /// When a reply last came.
     answered: Option<Instant>,
+    /// `--scan` under way: the next address and this pass's reply slack. Its requests take
+    /// turns with the polls of the uTiles found so far.
+    scan: Option<(u8, Duration)>,
+    /// The last turn went to the scan.
+    scan_turn: bool,
     /// How much slower than the line's own time replies come (1 on a real line; more on a
     /// simulated Nano running behind the clock): the gap between frames is stretched by it,
     /// so every Nano on a bus hears the 3.5 characters of silence in its own time.
@@ -133,6 +136,8 @@ pub fn spawn(
                 slack: rtu::ANSWER_SLACK,
                 late: Duration::ZERO,
                 answered: None,
+                scan: None,
+                scan_turn: false,
                 pace: 1.0,
             }
             .run()
@@ -161,10 +166,6 @@ impl Line {
                     self.boot_step(until, asked);
                     continue;
                 }
-                Phase::Scanning(addr) => {
-                    self.scan_step(addr);
-                    continue;
-                }
                 Phase::Open => {}
             }
             self.send_keys();
@@ -176,6 +177,15 @@ impl Line {
                 self.queue.fail_all(&Failure::Editing);
                 self.listen(IDLE);
                 continue;
+            }
+            if let Some((addr, slack)) = self.scan {
+                // The scan takes every other turn (all of them while nothing is found).
+                let others = self.queue.len() > 0 || self.due_unit(now).is_some();
+                self.scan_turn = !self.scan_turn;
+                if self.scan_turn || !others {
+                    self.scan_step(addr, slack);
+                    continue;
+                }
             }
             let due = self.due_unit(now);
             match self.queue.next(due.is_some()) {
@@ -288,43 +298,42 @@ impl Line {
         if self.port.is_none() {
             return;
         }
-        let scan = self.opts.scan && self.shared.lock().units.is_empty();
-        self.phase = if scan && self.mode == Mode::Run {
-            Phase::Scanning(1)
-        } else {
-            Phase::Open
-        };
+        if self.opts.scan && self.scan.is_none() && self.shared.lock().units.is_empty() {
+            self.scan = Some((1, SCAN_SLACK));
+        }
+        self.phase = Phase::Open;
         self.status_message();
     }
 
-    /// One address of `--scan`: report server ID with a short time-out.
-    fn scan_step(&mut self, addr: u8) {
+    /// One address of `--scan`: report server ID with a short time-out (doubled after a
+    /// pass that found nothing: a simulated line may run behind the clock).
+    fn scan_step(&mut self, addr: u8, slack: Duration) {
         {
             let mut live = self.shared.lock();
             live.message = format!("looking for uTiles: address {addr} of 1..247");
         }
         self.shared.touch();
-        let slack = if self.answered.is_some() {
-            self.slack
-        } else {
-            SCAN_SLACK
-        };
+        self.scan = None;
+        // After the first answer, what the line has shown of its lateness.
+        let slack = slack.max(self.late * 3 + Duration::from_millis(10));
         if let Ok((pdu, _)) = self.transact(addr, &[17], slack) {
             if pdu.first() == Some(&17) {
                 let mut live = self.shared.lock();
-                live.units.push(Unit::new(addr, Instant::now()));
+                if live.unit_mut(addr).is_none() {
+                    live.units.push(Unit::new(addr, Instant::now()));
+                    live.units.sort_by_key(|u| u.addr);
+                }
             }
         }
         if self.port.is_none() {
             return;
         }
         if addr < 247 {
-            self.phase = Phase::Scanning(addr + 1);
+            self.scan = Some((addr + 1, slack));
             return;
         }
         let found = !self.shared.lock().units.is_empty();
         if found {
-            self.phase = Phase::Open;
             self.status_message();
         } else {
             let mut live = self.shared.lock();
@@ -333,8 +342,7 @@ impl Line {
                 .into();
             drop(live);
             self.shared.touch();
-            std::thread::sleep(Duration::from_secs(1));
-            self.phase = Phase::Scanning(1);
+            self.scan = Some((1, (slack * 2).min(SLACK_MAX)));
         }
     }
 
@@ -592,8 +600,16 @@ impl Line {
                 }
                 Err(Miss::Timeout { crc }) => {
                     u.missed(crc, now);
-                    if read == Read::Snapshot && !u.online {
+                    if !u.online {
                         self.dead.insert(addr, now);
+                    }
+                    if self
+                        .answered
+                        .is_none_or(|t| now.duration_since(t) > BUSY_WINDOW)
+                    {
+                        // Nothing answers at all: perhaps everything is slower than thought.
+                        self.slack = (self.slack * 2).min(SLACK_MAX);
+                        live.slack = self.slack;
                     }
                 }
                 Err(Miss::Port) => {}

@@ -46,6 +46,8 @@ pub fn longest_reply(request: &[u8]) -> usize {
         Some(3) | Some(4) => 5 + 2 * quantity().min(125),
         Some(5) | Some(6) | Some(15) | Some(16) => 8,
         Some(8) => request.len(),
+        // Report server ID: uTile's text and version are a few bytes.
+        Some(17) => 5 + 32,
         _ => MAX_FRAME,
     }
 }
