@@ -470,7 +470,9 @@ impl Line {
             self.busy.pop_front();
         }
         let sum: Duration = self.busy.iter().map(|(_, d)| *d).sum();
-        self.shared.lock().busy = (sum.as_secs_f64() / BUSY_WINDOW.as_secs_f64()).min(1.0);
+        let mut live = self.shared.lock();
+        live.busy = (sum.as_secs_f64() / BUSY_WINDOW.as_secs_f64()).min(1.0);
+        live.line_bytes += bytes as u64;
         t
     }
 

@@ -104,6 +104,7 @@ pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Ru
         units: opts.units.iter().map(|&a| Unit::new(a, now)).collect(),
         busy: 0.0,
         stray: 0,
+        line_bytes: 0,
         file,
         slack: rtu::ANSWER_SLACK,
         pace: 1.0,

@@ -55,6 +55,8 @@ pub struct Live {
     pub busy: f64,
     /// Bytes on the line that were neither a reply nor the editor's screen.
     pub stray: u64,
+    /// Bytes of requests and replies on the line since the start.
+    pub line_bytes: u64,
     /// `--program`.
     pub file: Option<ProgramFile>,
     /// How late a reply may be before it is missing, as the line has learnt it.

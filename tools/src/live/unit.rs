@@ -113,6 +113,8 @@ pub struct Unit {
     pub trend: VecDeque<(Instant, [u16; 10])>,
     /// What went wrong last, for the card.
     pub reason: Option<String>,
+    /// Pictures taken since the start.
+    pub pictures: u64,
 }
 
 impl Unit {
@@ -137,6 +139,7 @@ impl Unit {
             scans_per_s: 0.0,
             trend: VecDeque::new(),
             reason: None,
+            pictures: 0,
         }
     }
 
@@ -339,6 +342,7 @@ impl Unit {
             }
         }
         self.snap = Some((s, now));
+        self.pictures += 1;
         self.online = true;
         self.reason = None;
         self.refreshes.push_back(now);

@@ -59,7 +59,7 @@ export class Trend {
       if (this.plot) this.plot.destroy();
       const series = [{}];
       NAMES.forEach((n, i) => {
-        if (used[i]) series.push({ label: n, stroke: COLOURS[i], width: 1.5, scale: i < 2 ? "adc" : "count" });
+        if (used[i]) series.push({ label: n, stroke: COLOURS[i], width: 1.5, scale: i < 2 ? "adc" : "count", points: { show: false } });
       });
       this.idx = NAMES.map((n, i) => i).filter((i) => used[i]);
       this.plot = new uPlot({
@@ -69,7 +69,7 @@ export class Trend {
         scales: { x: { time: true }, adc: { range: [0, 1023] }, count: { auto: true } },
         axes: [
           { stroke: "#8b949e", grid: { stroke: "#30363d" } },
-          { scale: "adc", stroke: "#8b949e", grid: { stroke: "#30363d" }, size: 40 },
+          { scale: "adc", stroke: "#8b949e", grid: { stroke: "#30363d" }, size: 50 },
           { scale: "count", side: 1, stroke: "#8b949e", grid: { show: false }, size: 40 },
         ],
         legend: { live: false },
