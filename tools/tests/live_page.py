@@ -80,9 +80,11 @@ class Page:
         except Exception:
             state = api(self.url, "/api/state")
             u = [x for x in state["units"] if x["addr"] == unit]
+            refusal = self.page.text_content(f'.card[data-unit="{unit}"] .refusal')
             fail(
                 f"uTile {unit}: {signal} is {self.value(unit, signal)!r}, not {want!r} after "
-                f"{timeout} ms; line: {state['mode']} {state['message']!r}; unit: "
+                f"{timeout} ms; the card says {refusal!r}; line: {state['mode']} "
+                f"{state['message']!r} {json.dumps(state['line'])}; unit: "
                 f"{json.dumps({k: v for k, v in (u[0] if u else {}).items() if k != 'values'})}"
             )
 

@@ -633,7 +633,12 @@ impl Line {
             job.finish(Err(Failure::NoAnswer));
             return;
         }
-        let result = self.transact(job.addr, &job.pdu, self.slack);
+        let mut result = self.transact(job.addr, &job.pdu, self.slack);
+        if job.origin == Origin::Page && matches!(result, Err(Miss::Timeout { .. })) {
+            // The page's writes set a coil or a register to a value: sending one again is
+            // harmless, and the user sees the outcome instead of a lost click.
+            result = self.transact(job.addr, &job.pdu, self.slack);
+        }
         let now = Instant::now();
         let outcome = match result {
             Ok((pdu, rtt)) => {
