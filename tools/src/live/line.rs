@@ -180,7 +180,7 @@ impl Line {
             }
             if let Some((addr, slack)) = self.scan {
                 // The scan takes every other turn (all of them while nothing is found).
-                let others = self.queue.len() > 0 || self.due_unit(now).is_some();
+                let others = !self.queue.is_empty() || self.due_unit(now).is_some();
                 self.scan_turn = !self.scan_turn;
                 if self.scan_turn || !others {
                     self.scan_step(addr, slack);
@@ -558,7 +558,9 @@ impl Line {
     fn learn(&mut self, rtt: Duration, on_line: Duration, now: Instant) {
         self.answered = Some(now);
         let late = rtt.saturating_sub(on_line);
-        let ratio = rtt.as_secs_f64() / on_line.as_secs_f64().max(1e-3);
+        // A uTile starts its reply within 5 ms: only what is beyond that is slowness.
+        let allowed = on_line + Duration::from_millis(5);
+        let ratio = rtt.as_secs_f64() / allowed.as_secs_f64();
         self.pace = (self.pace * 0.8 + ratio * 0.2).max(1.0);
         self.late = late.max(self.late.mul_f64(0.98));
         self.slack =
@@ -641,7 +643,7 @@ impl Line {
         }
         let now = Instant::now();
         let outcome = match result {
-            Ok((pdu, rtt)) => {
+            Ok((pdu, _)) => {
                 self.dead.remove(&job.addr);
                 let wrote = job.writes() && pdu.first().is_some_and(|f| f & 0x80 == 0);
                 let mut live = self.shared.lock();
@@ -653,10 +655,12 @@ impl Line {
                     }
                 }
                 drop(live);
+                // Its time on the line: the silence before the request, the request, the
+                // uTile's turnaround and the reply.
                 Ok(Done {
                     pdu,
                     waited: start.duration_since(job.queued),
-                    on_line: rtt,
+                    on_line: now.duration_since(start),
                 })
             }
             Err(Miss::Timeout { .. }) => {
