@@ -8,7 +8,8 @@ use std::path::Path;
 use utile_kit::simavr::{frame_cycles, Chip, RxPacing};
 
 use super::chip::{BenchRun, CYCLES_PER_MS};
-use super::{autostarting, program, Spread};
+use super::programs::{autostarting, program};
+use super::stats::Spread;
 
 /// What serving at full rate measured.
 pub struct ModbusFigures {

@@ -22,6 +22,8 @@ mod size;
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 
+use utile_tools::elf;
+
 /// A region length from `memory.x` (`__NAME__ = 1152;` or `= 30K;`), so the printed budgets
 /// are the ones the linker enforces.
 fn budget(symbol: &str) -> Result<u64, String> {
@@ -123,7 +125,7 @@ fn fw(args: &[String]) -> Result<(), String> {
         return Err("firmware build failed".into());
     }
     let root = root();
-    let elf = root.join("target/avr-atmega328p/release/utile-fw.elf");
+    let built = root.join("target/avr-atmega328p/release/utile-fw.elf");
     let out = root.join("out");
     std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
     let stem = match &features {
@@ -132,7 +134,7 @@ fn fw(args: &[String]) -> Result<(), String> {
     };
     let out_elf = out.join(format!("{stem}.elf"));
     let out_hex = out.join(format!("{stem}.hex"));
-    std::fs::copy(&elf, &out_elf).map_err(|e| format!("cannot copy {}: {e}", elf.display()))?;
+    std::fs::copy(&built, &out_elf).map_err(|e| format!("cannot copy {}: {e}", built.display()))?;
     // Only flash contents: .text and the initial values of .data (never .noinit/.eeprom).
     let status = Command::new("avr-objcopy")
         .args(["-O", "ihex", "-j", ".text", "-j", ".data"])
@@ -143,11 +145,14 @@ fn fw(args: &[String]) -> Result<(), String> {
     if !status.success() {
         return Err("avr-objcopy failed".into());
     }
-    let sizes = section_sizes(&out_elf)?;
-    let get = |name: &str| sizes.iter().find(|(n, _)| n == name).map_or(0, |(_, s)| *s);
-    let (text, data, bss, noinit) = (get(".text"), get(".data"), get(".bss"), get(".noinit"));
-    let flash = text + data;
-    let ram = data + bss + noinit;
+    let sections = elf::sections(&out_elf)?;
+    let elf::Sections {
+        text,
+        data,
+        bss,
+        noinit,
+    } = sections;
+    let (flash, ram) = (sections.flash(), sections.ram());
     let flash_budget = budget("__TEXT_REGION_LENGTH__")?;
     let static_budget = budget("__DATA_REGION_LENGTH__")?;
     println!("firmware: {}", rel(&out_hex));
@@ -181,19 +186,10 @@ fn fw(args: &[String]) -> Result<(), String> {
 
 /// Address of the threaded scan's dispatch table (src/hal/scan.S) and the bytes of padding
 /// its 512-byte alignment left after the cold code in front of it.
-fn scan_table_gap(elf: &Path) -> Option<(u64, u64)> {
-    let out = Command::new("avr-nm").arg(elf).output().ok()?;
-    let text = String::from_utf8_lossy(&out.stdout);
-    let addr = |name: &str| {
-        text.lines().find_map(|l| {
-            let mut w = l.split_whitespace();
-            let a = w.next()?;
-            let _kind = w.next()?;
-            (w.next()? == name).then(|| u64::from_str_radix(a, 16).ok())?
-        })
-    };
-    let table = addr("utile_scan_table")?;
-    let cold_end = addr("utile_scan_cold_end")?;
+fn scan_table_gap(out_elf: &Path) -> Option<(u64, u64)> {
+    let syms = elf::symbols(out_elf).ok()?;
+    let table = elf::address(&syms, "utile_scan_table")?;
+    let cold_end = elf::address(&syms, "utile_scan_cold_end")?;
     Some((table, table.saturating_sub(cold_end)))
 }
 
@@ -205,28 +201,6 @@ fn percent(used: u64, budget: u64) -> f64 {
 fn rel(p: &Path) -> String {
     let root = root();
     p.strip_prefix(&root).unwrap_or(p).display().to_string()
-}
-
-/// `(section, size)` from `avr-size -A`.
-fn section_sizes(elf: &Path) -> Result<Vec<(String, u64)>, String> {
-    let out = Command::new("avr-size")
-        .arg("-A")
-        .arg(elf)
-        .output()
-        .map_err(|e| format!("cannot run avr-size (binutils-avr): {e}"))?;
-    if !out.status.success() {
-        return Err("avr-size failed".into());
-    }
-    let text = String::from_utf8_lossy(&out.stdout);
-    Ok(text
-        .lines()
-        .filter_map(|l| {
-            let mut w = l.split_whitespace();
-            let name = w.next()?;
-            let size = w.next()?.parse().ok()?;
-            name.starts_with('.').then(|| (name.to_string(), size))
-        })
-        .collect())
 }
 
 /// A linker message saying that a section does not fit its memory region.
