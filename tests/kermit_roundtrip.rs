@@ -6,9 +6,6 @@
 //!
 //! Needs `kermit` (Debian package ckermit) and `socat`; without them the test prints
 //! SKIPPED and why. The same scripts against the virtual Nano are the README's test.
-//!
-//! Long (about 470 lines) on purpose: the fake uTile (the SPEC §10 protocol side) and the
-//! C-Kermit runs that talk to it belong together; the fake is used by no other test.
 
 use std::fs;
 use std::io::{Read, Write};

@@ -18,9 +18,6 @@
 //! random point between two samples.
 //!
 //! Needs `out/m328-nano-utile.elf` (`cargo fw`). About 90 s of simulated time in all.
-//!
-//! Long (about 510 lines) on purpose: the same ch. 11 programs as tests/scenarios_apps.rs, on
-//! the real image; each test is a timeline and its checks, in the manual's order.
 
 mod common;
 mod common_scenario;

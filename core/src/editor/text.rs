@@ -3,8 +3,8 @@
 //! A text is named by a [`Txt`] (bit offset and symbol count in the blob), computed at compile
 //! time, so RAM holds no strings and no per-text pointers.
 //!
-//! Long (about 410 lines) on purpose: the `texts!` list is every string the editor sends, one
-//! per line; the coder lives in `huffman.rs`.
+//! The `texts!` list is every string the editor sends, one per line; the coder lives in
+//! `huffman.rs`.
 
 use avr_progmem::progmem;
 
@@ -134,14 +134,28 @@ macro_rules! build_date {
     };
 }
 
-/// Declares the texts: each becomes a public [`Txt`] constant; all go into one blob.
+/// Declares the texts: each becomes a public [`Txt`] constant, and its words a `&str` of
+/// the same name in [`source`]; all go into one blob.
 macro_rules! texts {
     (
         plain { $($(#[$pm:meta])* $pname:ident = $ps:expr;)* }
         $($(#[$m:meta])* $name:ident = $s:expr;)*
     ) => {
-        const PLAIN: &[&str] = &[$($ps),*];
-        const PARTS: &[&str] = &[$($s),*];
+        /// Every text as written, for host code that looks for it on the screen (the
+        /// `utile` tool's push and pull, tests). The firmware sends the texts from the blob;
+        /// these constants are only the compiler's input to it, so they cost no flash.
+        pub mod source {
+            $(
+                $(#[$pm])*
+                pub const $pname: &str = $ps;
+            )*
+            $(
+                $(#[$m])*
+                pub const $name: &str = $s;
+            )*
+        }
+        const PLAIN: &[&str] = &[$(source::$pname),*];
+        const PARTS: &[&str] = &[$(source::$name),*];
         #[allow(non_camel_case_types, clippy::upper_case_acronyms, dead_code)]
         enum PlainIndex { $($pname),* }
         #[allow(non_camel_case_types, clippy::upper_case_acronyms, dead_code)]
@@ -162,7 +176,7 @@ macro_rules! texts {
         )*
         /// Every text with its source, for the unpacking test.
         #[cfg(test)]
-        const ALL: &[(Txt, &str)] = &[$(($pname, $ps),)* $(($name, $s)),*];
+        const ALL: &[(Txt, &str)] = &[$(($pname, source::$pname),)* $(($name, source::$name)),*];
     };
 }
 
