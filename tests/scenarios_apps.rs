@@ -4,8 +4,8 @@
 //! Inputs: a normally-open push-button pulls its input low while pressed (`press`), so
 //! "pressing" a switch is a falling level and releasing it a rising one (the leading edge).
 
-mod common_scenario;
-use common_scenario::*;
+mod support;
+use support::scenario::*;
 use utile_core::opcodes::{self, END};
 
 const ALL_HIGH: u8 = 0x3F;

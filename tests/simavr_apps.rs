@@ -19,11 +19,10 @@
 //!
 //! Needs `out/m328-nano-utile.elf` (`cargo fw`). About 90 s of simulated time in all.
 
-mod common;
-mod common_scenario;
+mod support;
 
-use common::{Board, Rig, CYCLES_PER_MS};
-use common_scenario::{changes, clock, listing, parse_timeline, Act, DEBOUNCE_MS};
+use support::chip::{Board, Rig, CYCLES_PER_MS};
+use support::scenario::{changes, clock, listing, parse_timeline, Act, DEBOUNCE_MS};
 use utile_core::engine::Program;
 use utile_core::ihex::{HexEvent, HexReader};
 use utile_core::image;

@@ -5,9 +5,9 @@
 //!
 //! Needs `out/m328-nano-utile.elf` (`cargo fw`).
 
-mod common;
+mod support;
 
-use common::{Board, Rig};
+use support::chip::{Board, Rig};
 use utile_core::engine::Program;
 use utile_core::ihex::{self, HexEvent, HexReader};
 use utile_core::{image, store};

@@ -5,9 +5,9 @@
 //!
 //! Needs `out/m328-nano-utile.elf` (`cargo fw`). About four minutes of wall time.
 
-mod common;
+mod support;
 
-use common::{Board, Rig, CYCLES_PER_MS};
+use support::chip::{Board, Rig, CYCLES_PER_MS};
 use utile_core::store;
 use utile_kit::listing;
 use utile_kit::modbus;

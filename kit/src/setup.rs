@@ -6,6 +6,7 @@
 //! fails, so a broken setup never passes as a green run.
 
 use std::path::{Path, PathBuf};
+use std::process::Command;
 
 use crate::simavr::ArduinoBoot;
 
@@ -30,6 +31,20 @@ pub fn firmware_elf() -> PathBuf {
         return local;
     }
     workspace_root().join(FIRMWARE_ELF)
+}
+
+/// [`firmware_elf`], which must be there.
+///
+/// # Panics
+/// When the image is missing, saying to run `cargo fw`.
+pub fn built_firmware_elf() -> PathBuf {
+    let elf = firmware_elf();
+    assert!(
+        elf.is_file(),
+        "{} is missing: run `cargo fw` first",
+        elf.display()
+    );
+    elf
 }
 
 /// True when running in CI (`CI` is set), where every test must run.
@@ -70,4 +85,26 @@ pub fn boot_loader_installed(boot: ArduinoBoot) -> bool {
     let hex = boot.hex_path();
     let what = format!("the {} boot loader ({})", boot.name(), hex.display());
     installed(&what, hex.is_file())
+}
+
+/// Compiles the C program `src` with avr-gcc for the ATmega328P at 16 MHz (`-Os`, extra
+/// `flags`) into `elf`: the stand-in firmware some harness and tool tests run.
+///
+/// # Panics
+/// When avr-gcc (Debian's gcc-avr) is missing or the program does not compile.
+pub fn avr_gcc(src: &Path, elf: &Path, flags: &[&str]) {
+    let out = Command::new("avr-gcc")
+        .args(["-mmcu=atmega328p", "-Os", "-DF_CPU=16000000UL"])
+        .args(flags)
+        .arg("-o")
+        .arg(elf)
+        .arg(src)
+        .output()
+        .expect("avr-gcc (package gcc-avr) must be installed");
+    assert!(
+        out.status.success(),
+        "avr-gcc failed on {}: {}",
+        src.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
 }

@@ -1,6 +1,5 @@
 //! Helpers shared by the `utile` tool tests: run the binary, scratch files, example paths,
 //! the output table, SVG and VCD checks.
-#![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

@@ -8,7 +8,6 @@
 //! [`utile_kit::simulate::parse_timeline`]): `100ms press A0`, `1.5s release A0`,
 //! `2s set A3 low`, one event per line. `press` pulls the input low (a normally-open
 //! push-button to GND).
-#![allow(dead_code)]
 
 use utile_core::engine::{Engine, Program};
 use utile_core::opcodes;
