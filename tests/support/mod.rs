@@ -7,7 +7,7 @@
 //! - [`editor`]: the editor on a simulated board with a VT100 screen (`editor_*`).
 //!
 //! Each test binary uses only part of it.
-#![allow(dead_code, clippy::new_without_default)]
+#![allow(dead_code, unused_imports, clippy::new_without_default)]
 
 pub mod chip;
 pub mod editor;

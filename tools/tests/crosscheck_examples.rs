@@ -133,18 +133,7 @@ impl Chip {
 
 /// Per output bit, its changes (ms, new level) in an output log that starts all off.
 fn bit_changes(log: &[(u32, u8)]) -> [Vec<(u32, bool)>; 8] {
-    let mut out: [Vec<(u32, bool)>; 8] = Default::default();
-    let mut last = 0u8;
-    for &(ms, py) in log {
-        for (n, ch) in out.iter_mut().enumerate() {
-            let bit = 1u8 << n;
-            if (py ^ last) & bit != 0 {
-                ch.push((ms, py & bit != 0));
-            }
-        }
-        last = py;
-    }
-    out
+    std::array::from_fn(|n| simulate::edges(log, n as u8))
 }
 
 /// The millivolts that simavr's ADC (`mV × 1023 / 5000`, rounded down) turns into `counts`.

@@ -25,7 +25,7 @@ pub mod run;
 pub mod signal;
 pub mod timeline;
 
-pub use output::{output_table, vcd};
+pub use output::{edges, output_table, vcd};
 pub use run::{
     simulate, simulate_after_boot, simulate_timeline, simulate_timeline_after_boot, SimResult,
     Trace,

@@ -1,5 +1,5 @@
 //! What `utile sim` writes from a result: the table of output changes and a Value Change
-//! Dump for GTKWave (the SVG diagram is [`crate::diagram`]).
+//! Dump for GTKWave (the SVG diagram is [`crate::diagram`]), and the edges of one output.
 
 use std::fmt::Write as _;
 use std::string::String;
@@ -18,6 +18,21 @@ pub fn output_table(log: &[(u32, u8)]) -> String {
             let _ = write!(out, "  {}", (py >> n) & 1);
         }
         out.push('\n');
+    }
+    out
+}
+
+/// The edges of output Yn in an output log of (ms, Y0..Y7 image) changes, as the host
+/// run and the chip record them: (ms, new level) each time bit `n` changes, from low.
+pub fn edges(log: &[(u32, u8)], n: u8) -> Vec<(u32, bool)> {
+    let mut last = false;
+    let mut out = Vec::new();
+    for &(ms, py) in log {
+        let level = py & (1 << n) != 0;
+        if level != last {
+            out.push((ms, level));
+            last = level;
+        }
     }
     out
 }

@@ -32,30 +32,19 @@ pub fn size_rows(rows: &mut Report, elf: &Path) {
 pub fn uart_rows(rows: &mut Report, elf: &Path) {
     match measure_uart(elf) {
         Ok(u) => {
-            rows.row(
-                "UART bytes: power-up screen",
-                u.power_up.to_string(),
-                "1238",
-                "≤ 1300",
-            );
-            rows.row(
-                "UART bytes: one command entry (`A0.` CR)",
-                u.command.to_string(),
-                "n/a",
-                "≤ 120",
-            );
-            rows.row(
-                "UART bytes: page flip (ESC [ C)",
-                u.page_flip.to_string(),
-                "n/a",
-                "≤ 700",
-            );
-            rows.row(
-                "UART bytes: full redraw (`/` CR)",
-                u.redraw.to_string(),
-                "1238",
-                "≤ 1300",
-            );
+            for (what, bytes, original, goal) in [
+                ("power-up screen", u.power_up, "1238", "≤ 1300"),
+                ("one command entry (`A0.` CR)", u.command, "n/a", "≤ 120"),
+                ("page flip (ESC [ C)", u.page_flip, "n/a", "≤ 700"),
+                ("full redraw (`/` CR)", u.redraw, "1238", "≤ 1300"),
+            ] {
+                rows.row(
+                    format!("UART bytes: {what}"),
+                    bytes.to_string(),
+                    original,
+                    goal,
+                );
+            }
         }
         Err(e) => rows.row(
             "UART bytes",

@@ -44,6 +44,18 @@ impl Report {
         self.rows.push(r);
     }
 
+    /// Adds the row of one measurement: its figure, or why there is none.
+    pub fn measured(
+        &mut self,
+        what: impl Into<String>,
+        figure: Result<String, String>,
+        original: &str,
+        goal: &str,
+    ) {
+        let ours = figure.unwrap_or_else(|e| format!("not measurable: {e}"));
+        self.row(what, ours, original, goal);
+    }
+
     /// The report as a Markdown table.
     pub fn markdown(&self) -> String {
         let mut out = String::from("| measurement | uTile in Rust | original (asm) | goal |\n");

@@ -36,13 +36,9 @@ pub fn latency_rows(rows: &mut Report, elf: &Path) {
             "≤ 8 ms",
         ),
     }
-    let gap = match measure_run_gap(elf) {
-        Ok(g) => format!("{g:.2} ms"),
-        Err(e) => format!("not measurable: {e}"),
-    };
-    rows.row(
+    rows.measured(
         "longest time between two scans while RUN mode draws its screen (`Y0. ! .Y0 END`)",
-        gap,
+        measure_run_gap(elf).map(|g| format!("{g:.2} ms")),
         "n/a",
         "≤ 1 ms",
     );
@@ -96,13 +92,9 @@ pub fn timer_rows(rows: &mut Report, elf: &Path, limit_ms: u64) {
 
 /// Reset → first output with autostart, bare and behind each boot loader.
 pub fn autostart_rows(rows: &mut Report, elf: &Path) {
-    let text = match measure_autostart(elf) {
-        Ok(t) => format!("{t:.2} ms"),
-        Err(e) => format!("not yet measurable: {e}"),
-    };
-    rows.row(
+    rows.measured(
         "reset → first output with autostart (`SET .Y0 END`)",
-        text,
+        measure_autostart(elf).map(|t| format!("{t:.2} ms")),
         "~540 ms",
         "≤ 100 ms",
     );
@@ -121,16 +113,15 @@ fn autostart_boot_rows(rows: &mut Report, elf: &Path) {
                     ArduinoBoot::Optiboot => "Optiboot",
                 }
             );
-            let text = match measure_autostart_boot(elf, boot, port_open) {
-                Ok(t) => format!(
+            let figure = measure_autostart_boot(elf, boot, port_open).map(|t| {
+                format!(
                     "{:.1} ms ({:.2} ms boot loader + {:.2} ms uTile)",
                     t.output_ms,
                     t.boot_ms,
                     t.output_ms - t.boot_ms
-                ),
-                Err(e) => format!("not measurable: {e}"),
-            };
-            rows.row(what, text, "—", "≤ boot loader's wait + 10 ms");
+                )
+            });
+            rows.measured(what, figure, "—", "≤ boot loader's wait + 10 ms");
         }
     }
 }
