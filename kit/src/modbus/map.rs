@@ -1,18 +1,23 @@
-//! A map of SPEC §13's shape without an engine behind it: what the codec's tests
+//! A map of SPEC §13's shape, with §17's windows, without an engine behind it: what the
+//! codec's tests
 //! (tests/modbus_codec.rs) and its fuzz harness ([`crate::fuzzing::modbus`]) run requests
 //! against. The real map over the engine is the core's `utile_core::modbus::plc`.
 //!
 //! Its tables: coils 0..23; discrete inputs 0..5 and 8..49; holding registers 0..15 (timer
 //! presets, 0..255), 16..23 (counter presets, any value), 24..25 (set-points, 0..1023); input
-//! registers 0..17 and 32..47. It does not trust the codec: a read or write outside the map,
+//! registers 0..17, 32..47 and §17's snapshot (64..103) and program (256..383) windows. It
+//! does not trust the codec: a read or write outside the map,
 //! or a write of a value the map refuses, is recorded in [`TestMap::outside`].
 
 use utile_core::modbus::map::{Map, Table};
+use utile_core::modbus::snapshot::{PROGRAM, PROGRAM_LEN, SNAPSHOT, SNAPSHOT_LEN};
 
 /// Coils 0..23.
 pub const COILS: usize = 24;
 /// Holding registers 0..25.
 pub const HOLDING: usize = 26;
+/// Input register addresses up to the end of §17's program window.
+pub const INPUT: usize = (PROGRAM + PROGRAM_LEN) as usize;
 
 /// §13's map as plain tables; see the module's documentation.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -23,8 +28,9 @@ pub struct TestMap {
     pub discrete: [bool; 50],
     /// Holding registers 0..25.
     pub holding: [u16; HOLDING],
-    /// Input registers by address (18..31 are outside the map): 0x1000 + the address.
-    pub input: [u16; 48],
+    /// Input registers by address (only the map's windows are in the map): 0x1000 + the
+    /// address.
+    pub input: [u16; INPUT],
     /// Whether the program runs (FC17's run indicator).
     pub running: bool,
     /// The first access outside the map, if the codec made one.
@@ -44,7 +50,7 @@ impl TestMap {
             coils: [false; COILS],
             discrete: [false; 50],
             holding: [0; HOLDING],
-            input: [0; 48],
+            input: [0; INPUT],
             running: true,
             outside: None,
         };
@@ -71,7 +77,12 @@ impl Map for TestMap {
             Table::Coils => usize::from(addr) < COILS,
             Table::DiscreteInputs => addr < 6 || (8..50).contains(&addr),
             Table::HoldingRegisters => usize::from(addr) < HOLDING,
-            Table::InputRegisters => addr < 18 || (32..48).contains(&addr),
+            Table::InputRegisters => {
+                addr < 18
+                    || (32..48).contains(&addr)
+                    || (SNAPSHOT..SNAPSHOT + SNAPSHOT_LEN).contains(&addr)
+                    || (PROGRAM..PROGRAM + PROGRAM_LEN).contains(&addr)
+            }
         }
     }
 
