@@ -248,7 +248,7 @@ struct Judged<'a> {
 /// 103 the fingerprint of its program, 256..383 its lines, two per register.
 fn check_windows(request: &[u8], reply: &[u8], j: &Judged<'_>) -> Verdict {
     use utile_core::analog::FIRST_CHANNEL;
-    use utile_core::modbus::snapshot::{at, fingerprint};
+    use utile_core::modbus::snapshot::{at, fingerprint, PROGRAM, PROGRAM_LEN, SNAPSHOT};
 
     let word = |i: usize| u16::from_be_bytes([request[i], request[i + 1]]);
     let start = word(2);
