@@ -6,17 +6,15 @@
 
 mod support;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 use std::time::{Duration, Instant};
 
 use support::vnano::*;
 use utile_core::engine::Program;
 use utile_core::modbus::snapshot;
-use utile_core::store;
 use utile_kit::listing;
 use utile_kit::setup;
-use utile_kit::sim::SimBoard;
 
 const T: Duration = Duration::from_secs(30);
 
@@ -31,15 +29,6 @@ fn pymodbus() -> bool {
         "pymodbus",
         Command::new("python3").args(["-c", "import pymodbus, serial"]),
     )
-}
-
-/// An EEPROM file holding `prog` as STORE leaves it.
-fn eeprom_file(name: &str, prog: &Program) -> PathBuf {
-    let mut b = SimBoard::new();
-    store::store(prog, &mut b).expect("STORE");
-    let path = scratch(name).join("eeprom.bin");
-    std::fs::write(&path, &b.eeprom).expect("write EEPROM file");
-    path
 }
 
 /// The virtual Nano autostarting `prog`, plus extra options; waits out the RUN screen.

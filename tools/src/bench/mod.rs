@@ -1,17 +1,20 @@
 //! Benchmarks of the real firmware image in simavr (`cargo run -p utile-tools --release
 //! --bin bench`, `./x bench`): scan cycles, press-to-output latency, timer error,
-//! reset-to-running, flash/RAM/stack, UART bytes of the editor, STORE duration, Modbus.
+//! reset-to-running, flash/RAM/stack, UART bytes of the editor, STORE duration, Modbus, the
+//! live view.
 //! Results are reported, never asserted; BENCHMARKS.md explains each row.
 //!
 //! One job a file: [`chip`] (the harness as the benchmarks run it), [`programs`] (what they
 //! run), [`stats`] (the spread of a sample), [`isr`] (interrupt handlers' cycles), then the
-//! measurements — [`scan`], [`timing`], [`editor`], [`modbus`] — and [`report`], the rows
+//! measurements — [`scan`], [`timing`], [`editor`], [`modbus`], [`live`] (`utile live` on
+//! the virtual Nano) — and [`report`], the rows
 //! of the `bench` binary's table with the original's figures beside them. Section sizes and
 //! symbols come from [`crate::elf`].
 
 pub mod chip;
 pub mod editor;
 pub mod isr;
+pub mod live;
 pub mod modbus;
 pub mod programs;
 pub mod report;

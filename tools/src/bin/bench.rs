@@ -3,7 +3,8 @@
 //!
 //! Usage: `bench [--quick | --long] [--scans N] [SECTION...]` with sections `scan`,
 //! `opcodes` (cycles per command line), `latency`, `timers`, `autostart` (also behind each
-//! Arduino boot loader), `size`, `stack`, `uart`, `store`, `modbus` (default: all).
+//! Arduino boot loader), `size`, `stack`, `uart`, `store`, `modbus`, `live` (`utile live` on
+//! the release `vnano` binary beside this one; default: all).
 //! Timer runs up to 60 s of simulated time run in simavr, longer ones on the host core;
 //! `--quick` lowers that to 10 s and uses 1000 scans, `--long` raises it to 600 s.
 //! Not a test: nothing is asserted; an unmeasurable row says why. The measurements are in
@@ -12,7 +13,7 @@
 use std::time::Instant;
 
 use utile_kit::setup;
-use utile_tools::bench::report::{editor, modbus, scan, timing, Report};
+use utile_tools::bench::report::{editor, live, modbus, scan, timing, Report};
 
 fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
@@ -51,6 +52,9 @@ fn main() {
     }
     if want("autostart") {
         timing::autostart_rows(&mut rows, &elf);
+    }
+    if want("live") {
+        live::live_rows(&mut rows, if quick { 5 } else { 20 });
     }
     if want("uart") {
         editor::uart_rows(&mut rows, &elf);

@@ -13,13 +13,13 @@ use utile_kit::listing;
 use super::port::{find, Port};
 
 /// The editor's title, on every full screen.
-const TITLE: &[u8] = text::TITLE.as_bytes();
+pub const TITLE: &[u8] = text::TITLE.as_bytes();
 /// On the editor's page.
-const PAGE: &[u8] = text::USER_FILE.as_bytes();
+pub const PAGE: &[u8] = text::USER_FILE.as_bytes();
 /// On the RUN screen.
-const RUNNING: &[u8] = text::RUNNING.as_bytes();
+pub const RUNNING: &[u8] = text::RUNNING.as_bytes();
 /// After `/` has stopped a program.
-const STRIKE: &[u8] = text::STRIKE.as_bytes();
+pub const STRIKE: &[u8] = text::STRIKE.as_bytes();
 /// READ's and WRITE's screens.
 const READ_PROMPT: &[u8] = text::READ_PROMPT.as_bytes();
 const WRITE_PROMPT: &[u8] = text::WRITE_PROMPT.as_bytes();

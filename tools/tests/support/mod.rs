@@ -5,10 +5,13 @@
 //!   firmware (`vnano_*`, `terminals`, `utile_push_pull`, `kermit_roundtrip`, the
 //!   cross-checks);
 //! - [`utile`]: running the `utile` tool, scratch files, examples, its table, SVG and VCD
-//!   (`utile_*`, `crosscheck_examples`).
+//!   (`utile_*`, `crosscheck_examples`);
+//! - [`live`]: `utile live` on the virtual Nano, an HTTP client for its API, a raw Modbus
+//!   TCP client (`live_*`).
 //!
 //! Each test binary uses only part of it.
 #![allow(dead_code, unused_imports)]
 
+pub mod live;
 pub mod utile;
 pub mod vnano;
