@@ -168,15 +168,7 @@ impl Keys {
                 _ => continue,
             }
             let chip = bus.chip(self.selected);
-            let view = RigView {
-                switches: (0..6u8)
-                    .filter(|&n| chip.is_held_low(RigPin::Switch(n)))
-                    .fold(0, |m, n| m | 1 << n),
-                d8_low: chip.is_held_low(RigPin::D8),
-                d9_low: chip.is_held_low(RigPin::D9),
-                outputs: chip.outputs(),
-                analog_mv: self.analog_mv[self.selected],
-            };
+            let view = RigView::of(chip, self.analog_mv[self.selected]);
             let _ = writeln!(out, "Nano {}: {}", self.selected + 1, view.status_line(""));
             let _ = out.flush();
         }

@@ -3,7 +3,7 @@
 
 use std::time::{Duration, Instant};
 
-use utile_kit::simavr::{Chip, RigPin};
+use utile_kit::simavr::Chip;
 
 use super::io::{self, STDOUT};
 use super::rig::{self, RigView};
@@ -25,15 +25,7 @@ impl Session {
         if self.notice.as_ref().is_some_and(|(_, until)| now >= *until) {
             self.notice = None;
         }
-        let view = RigView {
-            switches: (0..6u8)
-                .filter(|&n| nano.is_held_low(RigPin::Switch(n)))
-                .fold(0, |m, n| m | 1 << n),
-            d8_low: nano.is_held_low(RigPin::D8),
-            d9_low: nano.is_held_low(RigPin::D9),
-            outputs: nano.outputs(),
-            analog_mv: self.analog_mv,
-        };
+        let view = RigView::of(nano, self.analog_mv);
         let text = match &self.notice {
             Some((msg, _)) => msg.clone(),
             None => {
