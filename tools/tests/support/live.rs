@@ -51,55 +51,36 @@ pub struct NanoSpec {
 }
 
 impl NanoSpec {
+    /// The Nano (or the `extra`-described bus) running `prog` from its EEPROM, A6 = A7 =
+    /// 2.0 V, on a pty link of its own.
+    fn with(name: &str, prog: &Program, extra: &[&str]) -> NanoSpec {
+        let ee = eeprom_file(name, prog);
+        let link = scratch(&format!("{name}-link")).join("tty");
+        let elf = firmware_elf();
+        let mut args: Vec<String> = ["--elf", elf.to_str().unwrap(), "--eeprom"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        args.push(ee.to_str().unwrap().to_string());
+        args.extend(extra.iter().map(|s| s.to_string()));
+        args.extend(["--a6", "2.0", "--a7", "2.0", "--link"].map(String::from));
+        args.push(link.to_str().unwrap().to_string());
+        NanoSpec { args, link }
+    }
+
     /// One Nano autostarting `prog` (D8 fitted), A6 = A7 = 2.0 V; `dtr`: opening the port
     /// resets it, as a Nano's DTR does.
     pub fn single(name: &str, prog: &Program, dtr: bool) -> NanoSpec {
-        let ee = eeprom_file(name, prog);
-        let link = scratch(&format!("{name}-link")).join("tty");
-        let mut args: Vec<String> = [
-            "--elf",
-            firmware_elf().to_str().unwrap(),
-            "--eeprom",
-            ee.to_str().unwrap(),
-            "--d8-low",
-            "--a6",
-            "2.0",
-            "--a7",
-            "2.0",
-            "--link",
-            link.to_str().unwrap(),
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
+        let mut spec = Self::with(name, prog, &["--d8-low"]);
         if dtr {
-            args.push("--dtr-reset".into());
+            spec.args.push("--dtr-reset".into());
         }
-        NanoSpec { args, link }
+        spec
     }
 
     /// `n` Nanos on one RS-485 line, each running `prog`, A6 = A7 = 2.0 V.
     pub fn bus(name: &str, n: usize, prog: &Program) -> NanoSpec {
-        let ee = eeprom_file(name, prog);
-        let link = scratch(&format!("{name}-link")).join("tty");
-        let args = [
-            "--elf",
-            firmware_elf().to_str().unwrap(),
-            "--bus",
-            &n.to_string(),
-            "--eeprom",
-            ee.to_str().unwrap(),
-            "--a6",
-            "2.0",
-            "--a7",
-            "2.0",
-            "--link",
-            link.to_str().unwrap(),
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
-        NanoSpec { args, link }
+        Self::with(name, prog, &["--bus", &n.to_string()])
     }
 
     /// Starts it.
