@@ -45,6 +45,7 @@ mod firmware {
         if !board.autostart_jumper() {
             return Mode::Edit;
         }
+        hal::adc::wait_ready();
         let mode = editor.autostart(eng, board);
         hal::kept::reseal(&eng.prog);
         mode
