@@ -2,7 +2,8 @@
 //!
 //! `cargo fw [--features F]` builds the release firmware for the ATmega328P, writes
 //! `out/m328-nano-utile.hex` and `out/m328-nano-utile.elf` (with features: `m328-nano-utile-F.*`)
-//! and prints flash and RAM use against the budgets of `memory.x`.
+//! and prints flash and RAM use against the budgets of `memory.x`, and the flash left under
+//! each boot loader (old: 30,720 B; Optiboot in 1 KB: 31,744 B; Optiboot in 512 B: 32,256 B).
 //!
 //! `cargo fw --size` adds the flash of each room (scan, engine, each editor file, storage,
 //! hal, main loop, runtime, progmem tables …), largest first (`tools/src/xtask/size.rs`).
@@ -40,6 +41,15 @@ fn budget(symbol: &str) -> Result<u64, String> {
 }
 /// RAM of the ATmega328P.
 const RAM_TOTAL: u64 = 2048;
+/// Flash left to the application under each boot loader (32 KB less its boot section): the
+/// old Nano boot loader (2 KB at 0x7800, the budget of `memory.x`), Optiboot as the virtual
+/// Nano and `./x` install it (relinked into the 1 KB section at 0x7C00), and the 496-byte
+/// Optiboot of the README's recipe (512 B section at 0x7E00).
+const BOOT_LOADERS: [(&str, u64); 3] = [
+    ("the old Nano boot loader (2 KB at 0x7800)", 30_720),
+    ("Optiboot as installed (1 KB at 0x7C00)", 31_744),
+    ("the README's 512 B Optiboot (0x7E00)", 32_256),
+];
 /// Static data plus worst-case stack must stay within this (SPEC §11).
 const RAM_BUDGET: u64 = 1536;
 
@@ -156,6 +166,11 @@ fn fw(args: &[String]) -> Result<(), String> {
         "flash: {flash:>6} bytes = .text {text} + .data {data}   budget {flash_budget} ({:.1} % used)",
         percent(flash, flash_budget)
     );
+    for (k, (loader, room)) in BOOT_LOADERS.into_iter().enumerate() {
+        let free = room as i64 - flash as i64;
+        let label = if k == 0 { "free:" } else { "" };
+        println!("{label:<6} {free:>6} bytes of {room} under {loader}");
+    }
     println!(
         "RAM:   {ram:>6} bytes = .data {data} + .bss {bss} + .noinit {noinit}   static budget {static_budget} ({:.1} % used)",
         percent(ram, static_budget)
