@@ -101,7 +101,7 @@ mod firmware {
     fn run(eng: &mut Engine, editor: &mut Editor, board: &mut hal::Nano, mcusr: u8) {
         let mut st = RunState::new(board.stats_ticks());
         let mut wraps: u16 = 0;
-        let mut server = modbus::Server::begin(board, mcusr, editor.stored);
+        let mut server = modbus::Server::begin(eng, board, mcusr, editor.stored);
         loop {
             board.feed_watchdog();
             let quiet = server.master_active(board);

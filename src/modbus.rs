@@ -51,7 +51,7 @@ pub struct Server {
 impl Server {
     /// RUN starts: the address from EEPROM, the status bits (`stored`: EEPROM holds a valid
     /// program, as the editor knows it), the line switched to Modbus.
-    pub fn begin(board: &mut Nano, mcusr: u8, stored: bool) -> Self {
+    pub fn begin(eng: &Engine, board: &mut Nano, mcusr: u8, stored: bool) -> Self {
         let mut flags = STATUS_RUNNING;
         // WDRF: the last reset was the watchdog's (0 after a boot loader that clears MCUSR).
         if mcusr & 0x08 != 0 {
@@ -60,10 +60,12 @@ impl Server {
         if stored {
             flags |= STATUS_STORED;
         }
+        let mut status = Status::default();
+        status.start(&eng.prog.uf);
         let server = Server {
             address: store::slave_address(board),
             flags,
-            status: Status::default(),
+            status,
             start_ms: board.now_ms(),
             overruns_at_start: board.rx_overruns(),
             pending: false,
@@ -100,7 +102,7 @@ impl Server {
     ) -> After {
         let mut after = After::Nothing;
         if serial::take_frame_end() {
-            self.refresh(board, st, wraps);
+            self.refresh(eng, board, st, wraps);
             let now = board.now_ms();
             let (address, status) = (self.address, &self.status);
             let event = interrupt::free(|cs| {
@@ -174,8 +176,9 @@ impl Server {
         }
     }
 
-    /// The figures the input registers report, as they are now.
-    fn refresh(&mut self, board: &mut Nano, st: &RunState, wraps: u16) {
+    /// The figures the input registers report, as they are now, and the snapshot's
+    /// registers of this scan (SPEC §17).
+    fn refresh(&mut self, eng: &Engine, board: &mut Nano, st: &RunState, wraps: u16) {
         let overruns = board.rx_overruns();
         if overruns != self.overruns_at_start {
             self.flags |= STATUS_OVERRUN;
@@ -190,6 +193,7 @@ impl Server {
             count: (u32::from(wraps) << 16) | u32::from(st.scans),
             run_ms: board.now_ms().wrapping_sub(self.start_ms),
         };
-        self.status = Status::new(self.flags, &stats, overruns, dropped);
+        self.status.refresh(self.flags, &stats, overruns, dropped);
+        self.status.take_scan(eng, board);
     }
 }

@@ -1,7 +1,7 @@
-//! The Modbus RTU slave of SPEC §13 on the REAL firmware image in simavr, with the line
-//! timed as a wire at 19200 8N1 in both directions (`RxPacing::Line`): a master in this test
-//! sends requests with the silences it chooses and reads the replies with the cycle of each
-//! stop bit; D10, the RS-485 driver enable, is sampled all along.
+//! The Modbus RTU slave of SPEC §13 and §17 on the REAL firmware image in simavr, with the
+//! line timed as a wire at 19200 8N1 in both directions (`RxPacing::Line`): a master in this
+//! test sends requests with the silences it chooses and reads the replies with the cycle of
+//! each stop bit; D10, the RS-485 driver enable, is sampled all along.
 //!
 //! Needs `out/m328-nano-utile.elf` (`cargo fw`).
 
@@ -10,6 +10,8 @@ mod common;
 use common::{Board, Rig, CYCLES_PER_MS};
 use utile_core::engine::Program;
 use utile_core::modbus::crc::crc16_modbus;
+use utile_core::modbus::plc::{STATUS_RUNNING, STATUS_STORED};
+use utile_core::modbus::snapshot::{self, Snapshot, PROGRAM, SNAPSHOT, SNAPSHOT_LEN};
 use utile_core::store;
 use utile_kit::listing;
 use utile_kit::modbus;
@@ -353,4 +355,110 @@ fn store_keeps_presets_and_set_points_written_over_modbus() {
             && p.set_points == [500, 0]),
         "a stored image holds the values written over Modbus"
     );
+}
+
+/// FC04 of `qty` input registers from `start` through the real image.
+fn read_input(line: &mut Line, start: u16, qty: u16) -> Vec<u16> {
+    let [s0, s1] = start.to_be_bytes();
+    let [q0, q1] = qty.to_be_bytes();
+    let (_, reply) = line.transact(&[0x04, s0, s1, q0, q1]);
+    let pdu = pdu(&reply);
+    assert_eq!(pdu[0], 0x04, "FC04 {start} x {qty}: {pdu:02X?}");
+    modbus::registers(&pdu)
+}
+
+#[test]
+fn the_snapshot_and_the_program_of_a_listing_are_read_whole_and_its_fingerprint_agrees() {
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/tank-fill.utl"),
+    )
+    .expect("the tank example");
+    let prog = listing::parse("tank-fill", &text).expect("the tank listing");
+    let mut line = Line::new(&prog);
+    // The level at 1.0 V (204 counts): under the low mark, the pump and the alarm are on.
+    line.nano.chip.set_analog_mv(6, 1000);
+    line.nano.chip.set_analog_mv(7, 1000);
+    line.run(200 * CYCLES_PER_MS);
+    let regs = read_input(&mut line, SNAPSHOT, SNAPSHOT_LEN);
+    let s = Snapshot::from_registers(&regs.clone().try_into().expect("40 registers"));
+    assert_eq!(
+        s.fingerprint,
+        snapshot::fingerprint(&prog.uf),
+        "the running program is the listing's"
+    );
+    assert_eq!(
+        s.status & (STATUS_RUNNING | STATUS_STORED),
+        STATUS_RUNNING | STATUS_STORED
+    );
+    assert_eq!(s.inputs, 0x3F, "A0..A5 open");
+    assert_eq!(
+        (s.thresholds, s.outputs, s.q),
+        (0, 0b11, 1),
+        "pump, alarm, Q0"
+    );
+    assert!(
+        s.readings.iter().all(|r| (190..=220).contains(r)),
+        "{:?}",
+        s.readings
+    );
+    assert!(s.scans > 1000, "scans since RUN: {}", s.scans);
+    assert!(
+        s.scan_us[0] > 0 && s.scan_us[0] <= s.scan_us[2],
+        "{:?}",
+        s.scan_us
+    );
+    // The same figures as §13's registers (read a little later: the scan count grew).
+    let ir = read_input(&mut line, 0, 8);
+    assert_eq!(ir[0], s.status);
+    assert!(u32::from(ir[4]) << 16 | u32::from(ir[5]) > s.scans);
+    // The program window: the listing's 256 lines, two per register.
+    let mut words = read_input(&mut line, PROGRAM, 125);
+    words.extend(read_input(&mut line, PROGRAM + 125, 3));
+    let uf = snapshot::program_from_registers(&words.try_into().expect("128 registers"));
+    assert_eq!(uf, prog.uf);
+    // Any part of a read outside the map: exception 02.
+    for (start, qty) in [
+        (SNAPSHOT - 1, 2),
+        (SNAPSHOT + SNAPSHOT_LEN - 1, 2),
+        (PROGRAM + 127, 2),
+    ] {
+        let [s0, s1] = start.to_be_bytes();
+        let (_, reply) = line.transact(&[0x04, s0, s1, 0, qty as u8]);
+        assert_eq!(pdu(&reply), vec![0x84, 2], "{start} x {qty}");
+    }
+}
+
+/// A test program from `tests/data/`.
+fn data_listing(name: &str) -> Program {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name);
+    let text = std::fs::read_to_string(&path).expect("the listing");
+    listing::parse(name, &text).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn a_reply_streamed_over_many_scans_shows_the_bits_of_one_scan() {
+    // Y0..Y7 count the scans; U and V copy them; every Q and TQ follows Y0.
+    let mut line = Line::new(&data_listing("scan_counter.utl"));
+    for (k, qty) in [8u16, SNAPSHOT_LEN, 8, SNAPSHOT_LEN, 8]
+        .into_iter()
+        .enumerate()
+    {
+        let (_, reply) = line.transact(&[0x04, 0, SNAPSHOT as u8, 0, qty as u8]);
+        let first = reply[0].1;
+        let regs = modbus::registers(&pdu(&reply));
+        let scans = u32::from(regs[6]) << 16 | u32::from(regs[7]);
+        // The reply took many scans to go out (about 0.5 ms a byte).
+        let spent = (reply.last().unwrap().1 - first) / CYCLES_PER_MS;
+        assert!(spent >= 10, "request {k}: the reply took {spent} ms");
+        let y = (scans & 0xFF) as u16;
+        let all = if y & 1 == 1 { 0xFFFF } else { 0 };
+        assert_eq!(regs[1] >> 8, y, "request {k}: Y0..Y7 at scan {scans}");
+        assert_eq!(
+            regs[2..5],
+            [y << 8 | y, all, all],
+            "request {k}: U/V, Q and TQ of scan {scans}"
+        );
+    }
 }

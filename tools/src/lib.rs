@@ -6,5 +6,8 @@
 pub mod bench;
 /// Programs to and from a uTile over a serial port (`utile push`, `utile pull`).
 pub mod link;
+/// Every uTile on a line live in the browser, the terminal and a Modbus TCP gateway
+/// (`utile live`).
+pub mod live;
 /// The virtual Nano (`cargo nano`): firmware in simavr, UART on a terminal or pty.
 pub mod vnano;

@@ -1,13 +1,16 @@
 //! The map of SPEC §13 on top of the engine's own state (no second copy of the I/O image):
 //! coils Y/U/V, discrete inputs A/Q/TQ/CQ/H, holding registers for the presets and
-//! set-points, input registers for status, STAT's figures, counts, readings, time left.
+//! set-points, input registers for status, STAT's figures, counts, readings, time left;
+//! and SPEC §17's snapshot and program windows of input registers ([`super::snapshot`]).
 
 use crate::analog;
 use crate::board::Board;
-use crate::engine::{Engine, COUNTERS, SET_POINTS, UNITS};
+use crate::engine::{Engine, COUNTERS, LINES, SET_POINTS, UNITS};
 use crate::stats::{self, ScanStats};
 
+use super::crc::Crc16;
 use super::map::{Map, Table};
+use super::snapshot::{at, PROGRAM, PROGRAM_LEN, SNAPSHOT, SNAPSHOT_LEN};
 
 /// Input register 0, bit 0: the program runs.
 pub const STATUS_RUNNING: u16 = 1 << 0;
@@ -29,32 +32,73 @@ pub const IR_READINGS: u16 = IR_COUNTS + COUNTERS as u16;
 /// First input register of the timers' time left.
 pub const IR_TIME_LEFT: u16 = 32;
 
-/// Input registers 0..7, kept up to date by the firmware: status bits, STAT's scan times,
-/// the scan count, receive overruns and dropped frames.
+/// What the firmware keeps for the input registers the engine does not hold: input
+/// registers 0..7 (status bits, STAT's scan times, the scan count, receive overruns,
+/// dropped frames), SPEC §17's registers 64..71 taken together between two scans, and the
+/// program's fingerprint.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Status {
-    /// The registers, in address order.
+    /// Input registers 0..7, in address order.
     pub regs: [u16; 8],
+    /// Input registers 64..71 (status, every bit, the scan count) as [`Status::take_scan`]
+    /// took them: one scan's, however late in a reply they are read.
+    pub scan: [u16; 8],
+    /// The running program's fingerprint ([`super::snapshot::fingerprint`]), taken at its start:
+    /// a running CRC, so no other copy of one is needed (`.value()` is the register).
+    pub fingerprint: Crc16,
 }
 
 impl Status {
-    /// The registers for `flags` (`STATUS_*` bits), STAT's figures since RUN (min/max in
-    /// Timer1 ticks of 0.5 µs, scans, run time), overruns since reset and frames dropped.
+    /// Input registers 0..7 for `flags` (`STATUS_*` bits), STAT's figures since RUN (min/max
+    /// in Timer1 ticks of 0.5 µs, scans, run time), overruns since reset and frames dropped.
     pub fn new(flags: u16, st: &ScanStats, overruns: u16, dropped: u16) -> Self {
+        let mut status = Self::default();
+        status.refresh(flags, st, overruns, dropped);
+        status
+    }
+
+    /// The program `uf` starts (RUN, EX0, autostart): its fingerprint.
+    #[inline(never)]
+    pub fn start(&mut self, uf: &[u8; LINES]) {
+        self.fingerprint = Crc16::new();
+        for &line in uf {
+            self.fingerprint.update(line);
+        }
+    }
+
+    /// Input registers 0..7 as [`Status::new`] makes them; the rest kept.
+    pub fn refresh(&mut self, flags: u16, st: &ScanStats, overruns: u16, dropped: u16) {
         // No scan yet shows 0.
         let us = |ticks: u16| if st.count == 0 { 0 } else { ticks >> 1 };
-        Self {
-            regs: [
-                flags,
-                us(st.min),
-                stats::per_1000(st.run_ms, st.count).min(0xFFFF) as u16,
-                us(st.max),
-                (st.count >> 16) as u16,
-                st.count as u16,
-                overruns,
-                dropped,
-            ],
-        }
+        self.regs = [
+            flags,
+            us(st.min),
+            stats::per_1000(st.run_ms, st.count).min(0xFFFF) as u16,
+            us(st.max),
+            (st.count >> 16) as u16,
+            st.count as u16,
+            overruns,
+            dropped,
+        ];
+    }
+
+    /// Registers 64..71 now, between two scans and just after [`Status::refresh`]: the
+    /// status, the inputs and thresholds, every port, flip-flop, timer and counter output,
+    /// and the scan count, all of one scan (SPEC §17).
+    #[inline(never)]
+    pub fn take_scan<B: Board>(&mut self, eng: &Engine, b: &mut B) {
+        let thresholds = b.analog_bits() >> analog::FIRST_CHANNEL;
+        let inputs = (b.inputs() & 0x3F) | (thresholds << 6);
+        self.scan = [
+            self.regs[0],
+            u16::from_le_bytes([inputs, eng.py]),
+            u16::from_le_bytes([eng.pu, eng.pv]),
+            eng.q,
+            eng.tq,
+            u16::from(eng.cq),
+            self.regs[4],
+            self.regs[5],
+        ];
     }
 }
 
@@ -110,9 +154,36 @@ impl<B: Board> PlcMap<'_, B> {
         }
     }
 
-    fn input_register(&mut self, addr: u16) -> u16 {
-        let a = usize::from(addr);
+    fn input_register(&mut self, mut addr: u16) -> u16 {
+        let mut a = usize::from(addr);
         // Masks instead of checks: `contains` has kept the address in range.
+        if addr >= PROGRAM {
+            // Two lines per register, line 2n in the high byte.
+            let uf = &self.eng.prog.uf;
+            let line = (a << 1) & (LINES - 2);
+            return u16::from_le_bytes([uf[line | 1], uf[line]]);
+        }
+        if addr >= SNAPSHOT {
+            // The snapshot: the registers of one scan, the fingerprint, and the rest as
+            // the §13 register it repeats.
+            let offset = addr - SNAPSHOT;
+            if offset < at::ONE_SCAN_END {
+                return self.status.scan[a & 7];
+            }
+            if offset == at::FINGERPRINT {
+                return self.status.fingerprint.value();
+            }
+            addr = if offset < at::TIME_LEFT {
+                offset
+            } else if offset < at::SCAN_TIMES {
+                offset - at::TIME_LEFT + IR_TIME_LEFT
+            } else if offset < at::OVERRUNS {
+                offset - at::SCAN_TIMES + 1
+            } else {
+                offset - at::OVERRUNS + 6
+            };
+            a = usize::from(addr);
+        }
         if addr < IR_COUNTS {
             self.status.regs[a & 7]
         } else if addr < IR_READINGS {
@@ -137,6 +208,8 @@ impl<B: Board> Map for PlcMap<'_, B> {
             Table::InputRegisters => {
                 addr < IR_READINGS + SET_POINTS as u16
                     || (IR_TIME_LEFT..IR_TIME_LEFT + UNITS as u16).contains(&addr)
+                    || (SNAPSHOT..SNAPSHOT + SNAPSHOT_LEN).contains(&addr)
+                    || (PROGRAM..PROGRAM + PROGRAM_LEN).contains(&addr)
             }
         }
     }

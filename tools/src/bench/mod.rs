@@ -8,6 +8,7 @@
 //! need that setup made public in a second module for no reader's gain.
 
 pub mod chip;
+pub mod live;
 pub mod modbus;
 
 use std::path::{Path, PathBuf};

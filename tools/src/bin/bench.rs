@@ -3,7 +3,8 @@
 //!
 //! Usage: `bench [--quick | --long] [--scans N] [SECTION...]` with sections `scan`,
 //! `opcodes` (cycles per command line), `latency`, `timers`, `autostart` (also behind each
-//! Arduino boot loader), `size`, `stack`, `uart`, `store`, `modbus` (default: all).
+//! Arduino boot loader), `size`, `stack`, `uart`, `store`, `modbus`, `live` (`utile live` on
+//! the release `vnano` binary beside this one; default: all).
 //! Timer runs up to 60 s of simulated time run in simavr, longer ones on the host core;
 //! `--quick` lowers that to 10 s and uses 1000 scans, `--long` raises it to 600 s.
 //! Not a test: nothing is asserted; an unmeasurable row says why.
@@ -337,6 +338,74 @@ fn autostart_boot_rows(rows: &mut Vec<Row>, elf: &Path) {
     }
 }
 
+/// `utile live`'s budgets: one uTile and a bus of three.
+fn live_rows(rows: &mut Vec<Row>, secs: u32) {
+    for (units, goal) in [(1usize, "≥ 15 /s"), (3, "≥ 5 /s each")] {
+        let what = if units == 1 {
+            "one uTile".to_string()
+        } else {
+            format!("{units} uTiles on a bus")
+        };
+        match bench::live::measure_live(units, secs) {
+            Ok(f) => {
+                let rates: Vec<String> =
+                    f.refresh_per_s.iter().map(|r| format!("{r:.1}")).collect();
+                row(
+                    rows,
+                    format!("live view, {what}: refreshes per simulated second"),
+                    format!(
+                        "{} (simulation at {:.2}× the clock)",
+                        rates.join(" / "),
+                        f.pace
+                    ),
+                    "—",
+                    goal,
+                );
+                row(
+                    rows,
+                    format!("live view, {what}: line busy while polling"),
+                    format!("{:.0} %", f.busy * 100.0),
+                    "—",
+                    "≥ 85 %",
+                );
+                row(
+                    rows,
+                    format!("live view, {what}: click on a coil → shown (min / median / max)"),
+                    ms(&f.click_ms),
+                    "—",
+                    "≤ 150 ms",
+                );
+                row(
+                    rows,
+                    format!("live view, {what}: rig switch → shown (min / median / max)"),
+                    ms(&f.rig_ms),
+                    "—",
+                    "≤ 150 ms",
+                );
+                row(
+                    rows,
+                    format!("live view, {what}: gateway overhead (mean / max)"),
+                    format!(
+                        "{:.2} / {:.2} ms (TCP round trip {})",
+                        f.gateway_ms.0,
+                        f.gateway_ms.1,
+                        ms(&f.tcp_rtt_ms)
+                    ),
+                    "—",
+                    "≤ 1 ms",
+                );
+            }
+            Err(e) => row(
+                rows,
+                format!("live view, {what}"),
+                format!("not measurable: {e}"),
+                "—",
+                goal,
+            ),
+        }
+    }
+}
+
 fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
     let quick = args.iter().any(|a| a == "--quick");
@@ -403,6 +472,9 @@ fn main() {
             "≤ 100 ms",
         );
         autostart_boot_rows(&mut rows, &elf);
+    }
+    if want("live") {
+        live_rows(&mut rows, if quick { 5 } else { 20 });
     }
     if want("uart") {
         match bench::measure_uart(&elf) {

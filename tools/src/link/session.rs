@@ -11,13 +11,13 @@ use utile_kit::listing;
 use super::port::{find, Port};
 
 /// The editor's title, on every full screen (`editor::text::TITLE`).
-const TITLE: &[u8] = b"Nano - u T I L E";
+pub const TITLE: &[u8] = b"Nano - u T I L E";
 /// On the editor's page (`USER_FILE`).
-const PAGE: &[u8] = b"*** User File 0 ***";
+pub const PAGE: &[u8] = b"*** User File 0 ***";
 /// On the RUN screen (`RUNNING`).
-const RUNNING: &[u8] = b"*** Running User File Program ***";
+pub const RUNNING: &[u8] = b"*** Running User File Program ***";
 /// After `/` has stopped a program (`STRIKE`).
-const STRIKE: &[u8] = b"Strike any key";
+pub const STRIKE: &[u8] = b"Strike any key";
 /// READ's and WRITE's screens (`READ_PROMPT`, `WRITE_PROMPT`).
 const READ_PROMPT: &[u8] = b"Reading file";
 const WRITE_PROMPT: &[u8] = b"File write";

@@ -28,6 +28,15 @@ pub fn firmware_elf() -> PathBuf {
     p
 }
 
+/// An EEPROM file holding `prog` as STORE leaves it, in the scratch directory `name`.
+pub fn eeprom_file(name: &str, prog: &utile_core::engine::Program) -> PathBuf {
+    let mut b = utile_kit::sim::SimBoard::new();
+    utile_core::store::store(prog, &mut b).expect("STORE");
+    let path = scratch(name).join("eeprom.bin");
+    std::fs::write(&path, &b.eeprom).expect("write EEPROM file");
+    path
+}
+
 /// A scratch directory for this test binary.
 pub fn scratch(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
