@@ -4,7 +4,6 @@
 //! however late a reply reads them) and program window.
 
 use utile_core::engine::{Engine, Program};
-use utile_core::modbus::crc::crc16_modbus;
 use utile_core::modbus::plc::{PlcMap, Status, STATUS_RUNNING};
 use utile_core::modbus::slave::{Event, Slave, ACTIVE_MS};
 use utile_core::modbus::snapshot::{self, Snapshot, PROGRAM, SNAPSHOT, SNAPSHOT_LEN};
@@ -59,10 +58,11 @@ impl Rig {
     /// Send `frame` (CRC appended unless `raw`) and judge it between two scans, as the
     /// firmware does: §17's registers of one scan are taken first.
     fn judge(&mut self, bytes: &[u8], raw: bool) -> Event {
-        let mut frame = bytes.to_vec();
-        if !raw {
-            frame.extend_from_slice(&crc16_modbus(bytes).to_le_bytes());
-        }
+        let frame = if raw {
+            bytes.to_vec()
+        } else {
+            modbus::with_crc(bytes)
+        };
         for &x in &frame {
             self.slave.push(x, false);
         }
@@ -98,13 +98,6 @@ impl Rig {
     }
 }
 
-fn words(pdu: &[u8]) -> Vec<u16> {
-    pdu[2..]
-        .chunks(2)
-        .map(|c| u16::from_be_bytes([c[0], c[1]]))
-        .collect()
-}
-
 #[test]
 fn a_remote_start_on_u0_runs_the_program_and_the_coils_show_it() {
     let mut r = Rig::new(&["U0.", ".Y0", "U0.", "!", ".Y1", "END"]);
@@ -131,7 +124,7 @@ fn presets_and_set_points_are_holding_registers_with_their_ranges() {
     r.eng.prog.counter_presets[0] = 300;
     r.eng.prog.set_points = [512, 0];
     let pdu = r.ask(&[0x03, 0, 0, 0, 26]);
-    let regs = words(&pdu);
+    let regs = modbus::registers(&pdu);
     assert_eq!(regs.len(), 26);
     assert_eq!((regs[3], regs[16], regs[24], regs[25]), (42, 300, 512, 0));
     // Out of range: exception 03 and nothing changes.
@@ -162,7 +155,7 @@ fn presets_and_set_points_are_holding_registers_with_their_ranges() {
     r.scan(2);
     assert!(r.b.output(0), "preset 3 reached");
     assert_eq!(
-        words(&r.ask(&[0x04, 0, 8, 0, 1])),
+        modbus::registers(&r.ask(&[0x04, 0, 8, 0, 1])),
         vec![3],
         "count C0 as input register 8"
     );
@@ -196,9 +189,9 @@ fn discrete_inputs_show_levels_flip_flops_timers_counters_and_thresholds() {
     assert!(bits[8 + 2], "Q2");
     assert!(bits[24 + 1], "TQ1 running");
     assert!(bits[48] && !bits[49], "H6 on, H7 disabled");
-    let regs = words(&r.ask(&[0x04, 0, 16, 0, 2]));
+    let regs = modbus::registers(&r.ask(&[0x04, 0, 16, 0, 2]));
     assert_eq!(regs, vec![700, 0], "readings of A6, A7");
-    let left = words(&r.ask(&[0x04, 0, 33, 0, 1]))[0];
+    let left = modbus::registers(&r.ask(&[0x04, 0, 33, 0, 1]))[0];
     assert_eq!(
         left, 20,
         "T1 retriggered every scan: 2.0 s left, in 0.1 s steps"
@@ -227,8 +220,7 @@ fn broadcasts_are_done_silently_and_other_frames_are_dropped_and_counted() {
         r.send(&[9, 0x03, 0, 0, 0, 1], false),
         (Event::Dropped, vec![])
     );
-    let mut bad = vec![ADDRESS, 0x03, 0, 0, 0, 1];
-    bad.extend_from_slice(&(crc16_modbus(&bad) ^ 1).to_le_bytes());
+    let bad = modbus::with_wrong_crc(&[ADDRESS, 0x03, 0, 0, 0, 1], 1);
     assert_eq!(r.send(&bad, true), (Event::Dropped, vec![]));
     assert_eq!(r.send(&[ADDRESS, 0x03], true), (Event::Dropped, vec![]));
     assert_eq!(r.slave.dropped(), 3);
@@ -274,7 +266,7 @@ fn read_input(r: &mut Rig, start: u16, qty: u16) -> Result<Vec<u16>, u8> {
     if pdu[0] == 0x84 {
         return Err(pdu[1]);
     }
-    Ok(words(&pdu))
+    Ok(modbus::registers(&pdu))
 }
 
 #[test]

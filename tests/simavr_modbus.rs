@@ -5,11 +5,10 @@
 //!
 //! Needs `out/m328-nano-utile.elf` (`cargo fw`).
 
-mod common;
+mod support;
 
-use common::{Board, Rig, CYCLES_PER_MS};
+use support::chip::{Board, Rig, CYCLES_PER_MS};
 use utile_core::engine::Program;
-use utile_core::modbus::crc::crc16_modbus;
 use utile_core::modbus::plc::{STATUS_RUNNING, STATUS_STORED};
 use utile_core::modbus::snapshot::{self, Snapshot, PROGRAM, SNAPSHOT, SNAPSHOT_LEN};
 use utile_core::store;
@@ -206,8 +205,7 @@ fn replies_start_soon_and_d10_frames_each_reply_exactly() {
 fn broken_frames_get_no_answer_and_are_counted() {
     let mut line = Line::new(&remote_start());
     // Bad CRC.
-    let mut bad = vec![ADDRESS, 0x03, 0, 0, 0, 1];
-    bad.extend_from_slice(&(crc16_modbus(&bad) ^ 0x0101).to_le_bytes());
+    let bad = modbus::with_wrong_crc(&[ADDRESS, 0x03, 0, 0, 0, 1], 0x0101);
     line.send(4 * char_cycles(), &bad);
     assert!(line.collect().is_empty(), "no answer to a bad CRC");
     // Another address.

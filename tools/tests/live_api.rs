@@ -4,8 +4,7 @@
 //! others, values out of range refused with the reason and nothing written (on the page's
 //! API, and by the uTile through the gateway), `--read-only`.
 
-mod live_util;
-mod vnano_util;
+mod support;
 
 use std::io::Write;
 use std::net::TcpStream;
@@ -16,7 +15,7 @@ use std::time::{Duration, Instant};
 use serde_json::json;
 use utile_kit::rng::Rng;
 
-use live_util::{mbap, tank, Live, NanoSpec};
+use support::live::{mbap, tank, Live, NanoSpec};
 
 /// The scenarios share two cores: one at a time.
 static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
@@ -24,7 +23,7 @@ static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
 const T: Duration = Duration::from_secs(30);
 
 /// The tank on one virtual Nano and `utile live` on it with `extra`, uTile 1 online.
-fn tank_live(name: &str, extra: &[&str]) -> (vnano_util::PtyNano, Live) {
+fn tank_live(name: &str, extra: &[&str]) -> (support::vnano::PtyNano, Live) {
     let spec = NanoSpec::single(name, &tank(), false);
     let nano = spec.start();
     let live = Live::start(&spec.link, extra);
@@ -43,7 +42,7 @@ fn pictures_during(live: &Live, addr: u64, busy: impl FnOnce()) -> usize {
         std::thread::spawn(move || {
             let mut last = None;
             while !stop.load(Ordering::Relaxed) {
-                let (_, s) = live_util::request(http, "GET", "/api/state", None);
+                let (_, s) = support::live::request(http, "GET", "/api/state", None);
                 let scans = s["units"]
                     .as_array()
                     .and_then(|u| u.iter().find(|u| u["addr"] == addr))
@@ -187,7 +186,7 @@ fn read_only_refuses_every_write() {
     assert_eq!(live.state()["read_only"], true);
     let (code, body) = live.post("/api/units/1/write", &json!({"signal": "U0", "value": 1}));
     assert_eq!(code, 403, "{body}");
-    let (code, _) = live_util::request(live.http, "POST", "/api/terminal", Some(b"/"));
+    let (code, _) = support::live::request(live.http, "POST", "/api/terminal", Some(b"/"));
     assert_eq!(code, 403);
     let mut s = TcpStream::connect(live.tcp).unwrap();
     s.set_read_timeout(Some(T)).unwrap();

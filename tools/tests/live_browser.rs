@@ -6,15 +6,14 @@
 //! pymodbus's TCP client through the gateway while the page polls. `./x setup` installs
 //! chromium, Playwright, pymodbus and mbpoll: without them these tests fail, they never skip.
 
-mod live_util;
-mod vnano_util;
+mod support;
 
 use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::Mutex;
 
-use live_util::{tank, tank_path, tank_with_remote, Live, NanoSpec};
+use support::live::{tank, tank_path, tank_with_remote, Live, NanoSpec};
 
 /// The browser scenarios share two cores: one at a time.
 static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());

@@ -4,30 +4,24 @@
 //! behaviour a written set-point changes. `./x setup` installs both masters; without them
 //! the tests say so and pass, unless `CI` is set.
 
-mod vnano_util;
+mod support;
 
 use std::path::Path;
 use std::process::Command;
 use std::time::{Duration, Instant};
 
+use support::vnano::*;
 use utile_core::engine::Program;
 use utile_core::modbus::snapshot;
 use utile_kit::listing;
-use vnano_util::*;
+use utile_kit::setup;
 
 const T: Duration = Duration::from_secs(30);
 
 /// Whether `what` can run here; in CI it must.
 fn have(what: &str, check: &mut Command) -> bool {
     let ok = check.output().map(|o| o.status.success()).unwrap_or(false);
-    if !ok {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "{what} is missing (./x setup installs it)"
-        );
-        eprintln!("skipped: {what} is missing (./x setup installs it)");
-    }
-    ok
+    setup::installed(what, ok)
 }
 
 fn pymodbus() -> bool {

@@ -4,8 +4,9 @@
 //!
 //! The texts are ASCII: a run of 6 or more equal bytes (spaces, dashes, `=`) becomes the
 //! symbol RUN, a 6-bit count and the byte, and each text ends with the symbol END; then every
-//! symbol gets a canonical Huffman code from its frequency over all texts (2,285 bytes of
-//! text take 1,192, about 4.2 bits each), and the blob is the texts' codes back to back.
+//! symbol gets a canonical Huffman code from its frequency over all texts (2,294 bytes of
+//! coded text take 1,244 with their ENDs, about 4.3 bits each), and the blob is the texts'
+//! codes back to back.
 //! Codes of one length are consecutive, so the reader needs only the number of codes of
 //! each length and the symbols in code order.
 

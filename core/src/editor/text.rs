@@ -5,8 +5,8 @@
 //! register and RAM holds no strings and no per-text pointers. Coded texts end with the
 //! code's END symbol, plain texts with a NUL.
 //!
-//! Long (about 410 lines) on purpose: the `texts!` list is every string the editor sends, one
-//! per line; the coder lives in `huffman.rs`.
+//! The `texts!` list is every string the editor sends, one per line; the coder lives in
+//! `huffman.rs`.
 
 use core::num::NonZeroU8;
 
@@ -42,24 +42,29 @@ impl Txt {
         let plain = start & PLAIN_TEXT != 0;
         let mut at = PLAIN_AT as u16 + (start & !PLAIN_TEXT);
         let mut bits = Bits::at(start);
+        // The reader's state stays in registers: its steps are inlined once each here, so
+        // `send` needs no stack frame.
+        let mut n = 1;
         loop {
-            let (mut c, mut n) = if plain {
+            let c = if plain {
                 at = at.wrapping_add(1);
-                (rom(at.wrapping_sub(1)), 1)
+                rom(at.wrapping_sub(1))
             } else {
-                (bits.symbol(), 1)
+                bits.symbol()
             };
             if c == END {
                 break;
             }
             if c == RUN && !plain {
+                // The count, then the symbol it repeats.
                 n = bits.take(RUN_BITS);
-                c = bits.symbol();
+                continue;
             }
             // One call of `f`, so that `send` inlines the board's output once.
             for _ in 0..n {
                 f(c);
             }
+            n = 1;
         }
     }
 
@@ -93,17 +98,18 @@ struct Bits {
 
 impl Bits {
     /// Reading from bit `bit` of the blob.
+    #[inline(always)]
     fn at(bit: u16) -> Self {
-        let mut at = Bits {
-            next: bit >> 3,
-            byte: 0,
-            left: 0,
-        };
-        at.take(bit as u8 & 7);
-        at
+        let skip = bit as u8 & 7;
+        Bits {
+            next: (bit >> 3).wrapping_add(1),
+            byte: rom(TEXT_AT as u16 + (bit >> 3)) << skip,
+            left: 8 - skip,
+        }
     }
 
     /// The next bit (0 past the blob).
+    #[inline(always)]
     fn bit(&mut self) -> u8 {
         if self.left == 0 {
             self.byte = rom(TEXT_AT as u16 + self.next);
@@ -129,6 +135,7 @@ impl Bits {
     /// The next symbol of the canonical Huffman code: the counts give the number of codes of
     /// each length, the symbols come in code order. `d` is how far the bits read so far lie
     /// past the first code of their length.
+    #[inline(always)]
     fn symbol(&mut self) -> u8 {
         let (mut d, mut index) = (0u8, 0u8);
         for &count in &COUNTS {
@@ -154,14 +161,27 @@ macro_rules! build_date {
 }
 
 /// Declares the texts: each becomes a public [`Txt`] constant, numbered in order (plain
-/// ones first); all go into one blob.
+/// ones first), and its words a `&str` of the same name in [`source`]; all go into one blob.
 macro_rules! texts {
     (
         plain { $($(#[$pm:meta])* $pname:ident = $ps:expr;)* }
         $($(#[$m:meta])* $name:ident = $s:expr;)*
     ) => {
-        const PLAIN: &[&str] = &[$($ps),*];
-        const PARTS: &[&str] = &[$($s),*];
+        /// Every text as written, for host code that looks for it on the screen (the
+        /// `utile` tool's push and pull, tests). The firmware sends the texts from the blob;
+        /// these constants are only the compiler's input to it, so they cost no flash.
+        pub mod source {
+            $(
+                $(#[$pm])*
+                pub const $pname: &str = $ps;
+            )*
+            $(
+                $(#[$m])*
+                pub const $name: &str = $s;
+            )*
+        }
+        const PLAIN: &[&str] = &[$(source::$pname),*];
+        const PARTS: &[&str] = &[$(source::$name),*];
         #[allow(non_camel_case_types, clippy::upper_case_acronyms, dead_code)]
         enum Index { NoText, $($pname,)* $($name),* }
         $(
@@ -174,7 +194,7 @@ macro_rules! texts {
         )*
         /// Every text with its source, for the unpacking test.
         #[cfg(test)]
-        const ALL: &[(Txt, &str)] = &[$(($pname, $ps),)* $(($name, $s)),*];
+        const ALL: &[(Txt, &str)] = &[$(($pname, source::$pname),)* $(($name, source::$name)),*];
     };
 }
 

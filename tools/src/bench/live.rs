@@ -64,7 +64,7 @@ fn start_nano(dir: &Path, link: &Path, units: usize) -> Result<Child, String> {
     store::store(&program(), &mut b).map_err(|e| format!("{e:?}"))?;
     let ee = dir.join("live-bench.eeprom");
     std::fs::write(&ee, &b.eeprom).map_err(|e| e.to_string())?;
-    let elf = super::elf_path();
+    let elf = utile_kit::setup::firmware_elf();
     let mut cmd = Command::new(vnano);
     cmd.arg("--elf").arg(&elf).arg("--eeprom").arg(&ee);
     cmd.arg("--link").arg(link);

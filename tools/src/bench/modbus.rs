@@ -12,7 +12,9 @@ use utile_core::engine::Program;
 use utile_kit::simavr::{frame_cycles, Chip, RxPacing};
 
 use super::chip::{BenchRun, CYCLES_PER_MS};
-use super::{autostarting, every_opcode_program, program, symbol, Spread};
+use super::programs::{autostarting, every_opcode_program, program};
+use super::stats::Spread;
+use crate::elf;
 
 /// The slave's address (none stored: the default).
 const ADDRESS: u8 = 1;
@@ -62,12 +64,13 @@ struct Master {
 impl Master {
     /// The image autostarting `prog` with its line timed as a wire, the RUN screen gone out
     /// (1 s).
-    fn new(elf: &Path, prog: &Program) -> Result<Self, String> {
-        let mut chip = autostarting(elf, prog)?;
+    fn new(image: &Path, prog: &Program) -> Result<Self, String> {
+        let mut chip = autostarting(image, prog)?;
         chip.set_rx_pacing(RxPacing::Line { baud: 19_200 });
         chip.run_rig(1_000 * CYCLES_PER_MS);
         chip.take_output();
-        let run_at = symbol(elf, "utile_run").ok_or("no utile_run symbol")? as u32;
+        let run_at =
+            elf::address(&elf::symbols(image)?, "utile_run").ok_or("no utile_run symbol")? as u32;
         let ret_at = (run_at..run_at + 512)
             .step_by(2)
             .find(|&pc| chip.flash_word(pc) == RET)

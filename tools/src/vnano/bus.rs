@@ -15,6 +15,7 @@ use utile_kit::sim::SimBoard;
 use utile_kit::simavr::{Bus, Chip, RigPin, F_CPU};
 
 use super::args::Options;
+use super::io::{self, STDIN};
 use super::pty::Pty;
 use super::rig::{self, RigAction, RigView};
 use super::term;
@@ -127,19 +128,11 @@ struct Keys {
 impl Keys {
     /// Reads the console without waiting; true when `q` asks to quit.
     fn read(&mut self, bus: &mut Bus, out: &mut std::io::Stdout) -> bool {
-        let mut pfd = libc::pollfd {
-            fd: 0,
-            events: libc::POLLIN,
-            revents: 0,
-        };
-        // SAFETY: one valid pollfd, zero timeout.
-        if unsafe { libc::poll(&mut pfd, 1, 0) } <= 0 || pfd.revents & libc::POLLIN == 0 {
+        if !io::readable(STDIN) {
             return false;
         }
         let mut buf = [0u8; 64];
-        // SAFETY: reading into a stack buffer of the given length.
-        let got = unsafe { libc::read(0, buf.as_mut_ptr() as *mut libc::c_void, buf.len()) };
-        let Ok(got) = usize::try_from(got) else {
+        let Ok(got) = io::read(STDIN, &mut buf) else {
             return false;
         };
         for &b in &buf[..got] {
@@ -175,15 +168,7 @@ impl Keys {
                 _ => continue,
             }
             let chip = bus.chip(self.selected);
-            let view = RigView {
-                switches: (0..6u8)
-                    .filter(|&n| chip.is_held_low(RigPin::Switch(n)))
-                    .fold(0, |m, n| m | 1 << n),
-                d8_low: chip.is_held_low(RigPin::D8),
-                d9_low: chip.is_held_low(RigPin::D9),
-                outputs: chip.outputs(),
-                analog_mv: self.analog_mv[self.selected],
-            };
+            let view = RigView::of(chip, self.analog_mv[self.selected]);
             let _ = writeln!(out, "Nano {}: {}", self.selected + 1, view.status_line(""));
             let _ = out.flush();
         }

@@ -1,14 +1,13 @@
 //! The Kermit scripts in `kermit/` (manual §6.1) driven by real C-Kermit against a fake
 //! uTile: a thread on one end of a socat pty pair that speaks the WRITE/READ protocol of
-//! SPEC §10 with the core's own Intel HEX code. `download`, `FILL`, `upload` must restore
+//! SPEC §10 with the core's own Intel HEX code and the editor's own texts. `download`, `FILL`, `upload` must restore
 //! the program bit-exactly; a missing file gives `File not found!`; a damaged file is
-//! refused and changes nothing.
+//! refused and changes nothing. Then the same scripts against the virtual Nano running the
+//! real image (the README's test).
 //!
-//! Needs `kermit` (Debian package ckermit) and `socat`; without them the test prints
-//! SKIPPED and why. The same scripts against the virtual Nano are the README's test.
-//!
-//! Long (about 470 lines) on purpose: the fake uTile (the SPEC §10 protocol side) and the
-//! C-Kermit runs that talk to it belong together; the fake is used by no other test.
+//! Needs `kermit` (Debian package ckermit) and `socat`, which `./x setup` installs: without
+//! them the test says SKIPPED and why, except in CI, where it fails. The virtual Nano is this
+//! package's `vnano`, the image `cargo fw`'s.
 
 use std::fs;
 use std::io::{Read, Write};
@@ -19,27 +18,19 @@ use std::sync::{Arc, Mutex};
 use std::thread;
 use std::time::{Duration, Instant};
 
+use utile_core::editor::text::source as text;
 use utile_core::engine::Program;
 use utile_core::ihex::{write_hex, HexEvent, HexReader};
 use utile_core::image;
+use utile_kit::setup;
 
-fn have(cmd: &str, arg: &str) -> bool {
-    Command::new(cmd)
-        .arg(arg)
-        .stdin(Stdio::null())
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok()
-}
+mod support;
+use support::vnano::{firmware_elf, VNANO};
 
-/// Both tools present, or say clearly why the test does not run.
+/// Both tools present; else SKIPPED, or in CI a failure.
 fn tools_available() -> bool {
-    let ok = have("kermit", "-h") && have("socat", "-V");
-    if !ok {
-        eprintln!("SKIPPED: kermit_roundtrip needs `kermit` (ckermit) and `socat` on PATH");
-    }
-    ok
+    setup::installed("`kermit` (ckermit)", setup::on_path("kermit"))
+        && setup::installed("`socat`", setup::on_path("socat"))
 }
 
 /// What the fake uTile did, for the test to check.
@@ -90,11 +81,8 @@ fn wait_cr(rx: &Receiver<u8>) -> bool {
 
 /// The fake uTile: editor prompt, commands WRITE, READ, FILL (SPEC §10 protocol).
 fn run_device(mut out: fs::File, rx: Receiver<u8>, dev: Arc<Mutex<Device>>) {
-    let prompt = "\x1b[22;6H\x1b[KEnter: ";
-    screen(
-        &mut out,
-        &format!("\x1b[2J<<<< Nano - u T I L E - ATmega328 >>>>{prompt}"),
-    );
+    let prompt = format!("\x1b[22;6H\x1b[K{}", text::ENTER);
+    screen(&mut out, &format!("\x1b[2J{}{prompt}", text::TITLE));
     let mut line = String::new();
     loop {
         let b = match next(&rx, Duration::from_secs(60)) {
@@ -111,8 +99,11 @@ fn run_device(mut out: fs::File, rx: Receiver<u8>, dev: Arc<Mutex<Device>>) {
                     "WRITE" => {
                         screen(
                             &mut out,
-                            "\x1b[9;17HFile write .... 'CR' to send .... '/' to abort\
-                             \x1b[24;2H\x1b[K*** Start/end host transfer procedure ***\x1b[11;1H",
+                            &format!(
+                                "\x1b[9;17H{}\x1b[24;2H\x1b[K{}\x1b[11;1H",
+                                text::WRITE_PROMPT,
+                                text::TRANSFER
+                            ),
                         );
                         let go = loop {
                             match next(&rx, Duration::from_secs(30)) {
@@ -134,7 +125,7 @@ fn run_device(mut out: fs::File, rx: Receiver<u8>, dev: Arc<Mutex<Device>>) {
                     "READ" => {
                         screen(
                             &mut out,
-                            "\x1b[9;25HReading file ...... '/' to abort\x1b[24;2H",
+                            &format!("\x1b[9;25H{}\x1b[24;2H", text::READ_PROMPT),
                         );
                         let mut reader = HexReader::new();
                         let outcome = loop {
@@ -162,10 +153,13 @@ fn run_device(mut out: fs::File, rx: Receiver<u8>, dev: Arc<Mutex<Device>>) {
                             d.reads.push(ok);
                         }
                         match outcome {
-                            Ok(_) => screen(&mut out, "File read completed - 'CR' for menu -->"),
-                            Err(why) => {
-                                screen(&mut out, &format!("Read error! - {why} 'CR' for menu -->"))
+                            Ok(_) => {
+                                screen(&mut out, &format!("{}{}", text::READ_DONE, text::FOR_MENU))
                             }
+                            Err(why) => screen(
+                                &mut out,
+                                &format!("{}{why}{}", text::READ_ERROR, text::FOR_MENU),
+                            ),
                         }
                         if !wait_cr(&rx) {
                             return;
@@ -174,7 +168,7 @@ fn run_device(mut out: fs::File, rx: Receiver<u8>, dev: Arc<Mutex<Device>>) {
                     "FILL" => dev.lock().unwrap().prog = Program::blank(),
                     _ => {}
                 }
-                screen(&mut out, prompt);
+                screen(&mut out, &prompt);
             }
             c => line.push(char::from(c)),
         }
@@ -234,7 +228,7 @@ fn start_rig(name: &str, prog: Program) -> Rig {
 
 /// Run C-Kermit with the repository's `.mykermrc` and then `commands`, in `rig.dir`.
 fn kermit(rig: &Rig, commands: &[&str]) -> String {
-    let rc = Path::new(env!("CARGO_MANIFEST_DIR")).join("kermit/.mykermrc");
+    let rc = setup::workspace_root().join("kermit/.mykermrc");
     let mut script = vec![format!("take {}", rc.display())];
     script.extend(commands.iter().map(|c| c.to_string()));
     script.push("exit".into());
@@ -365,48 +359,17 @@ fn default_file_name_and_a_damaged_file() {
     assert_eq!(d.prog, prog);
 }
 
-/// The firmware image and the virtual Nano binary, when both are built and the firmware
-/// already has READ/WRITE; otherwise why not.
-fn virtual_nano() -> Result<(PathBuf, PathBuf), String> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let elf = std::env::var_os("UTILE_ELF")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| root.join("out/m328-nano-utile.elf"));
-    let vnano = std::env::var_os("UTILE_VNANO")
-        .map(PathBuf::from)
-        .or_else(|| {
-            ["target/release/vnano", "target/debug/vnano"]
-                .iter()
-                .map(|p| root.join(p))
-                .find(|p| p.exists())
-        });
-    let vnano = vnano.ok_or("no vnano binary (cargo build -p utile-tools)")?;
-    let image =
-        fs::read(&elf).map_err(|_| format!("no firmware at {} (cargo fw)", elf.display()))?;
-    let has = |s: &[u8]| image.windows(s.len()).any(|w| w == s);
-    if !has(b"'/' to abort") || !has(b"File read completed") {
-        return Err(format!("{} has no READ/WRITE yet", elf.display()));
-    }
-    Ok((vnano, elf))
-}
-
 #[test]
 fn download_fill_upload_on_the_virtual_nano() {
     if !tools_available() {
         return;
     }
-    let (vnano, elf) = match virtual_nano() {
-        Ok(v) => v,
-        Err(why) => {
-            eprintln!("SKIPPED: Kermit against the virtual Nano: {why}");
-            return;
-        }
-    };
+    let elf = firmware_elf();
     let dir = std::env::temp_dir().join(format!("utile-kermit-{}-vnano", std::process::id()));
     let _ = fs::remove_dir_all(&dir);
     fs::create_dir_all(&dir).unwrap();
     let host = dir.join("host");
-    let mut nano = Command::new(vnano)
+    let mut nano = Command::new(VNANO)
         .arg("--elf")
         .arg(&elf)
         .arg("--pty")

@@ -1,6 +1,9 @@
 //! Modbus RTU frames as a master makes and checks them: the one place the host code (tests,
 //! fuzz harnesses, benches, tools) puts a CRC on a request or takes a reply apart. The
-//! slave's side is the core's `utile_core::modbus`.
+//! slave's side is the core's `utile_core::modbus`; [`map`] is a map of SPEC §13's shape for
+//! testing it.
+
+pub mod map;
 
 use std::fmt;
 
@@ -10,6 +13,15 @@ use utile_core::modbus::crc::crc16_modbus;
 pub fn with_crc(body: &[u8]) -> Vec<u8> {
     let mut frame = body.to_vec();
     frame.extend_from_slice(&crc16_modbus(body).to_le_bytes());
+    frame
+}
+
+/// `body` with a wrong CRC: the right one with `flip` (not 0) XORed in, low byte first, as
+/// noise on the line would leave it.
+pub fn with_wrong_crc(body: &[u8], flip: u16) -> Vec<u8> {
+    debug_assert_ne!(flip, 0, "a flip of 0 leaves the CRC right");
+    let mut frame = body.to_vec();
+    frame.extend_from_slice(&(crc16_modbus(body) ^ flip).to_le_bytes());
     frame
 }
 

@@ -1,6 +1,5 @@
 //! Helpers shared by the `utile` tool tests: run the binary, scratch files, example paths,
 //! the output table, SVG and VCD checks.
-#![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -109,18 +108,7 @@ pub fn parse_table(stdout: &str) -> Vec<(u32, u8)> {
 }
 
 /// The edges of output bit `n`: (ms, new level), from the output change rows.
-pub fn edges(rows: &[(u32, u8)], n: u8) -> Vec<(u32, bool)> {
-    let mut last = false;
-    let mut out = Vec::new();
-    for &(ms, py) in rows {
-        let v = py & (1 << n) != 0;
-        if v != last {
-            out.push((ms, v));
-            last = v;
-        }
-    }
-    out
-}
+pub use utile_kit::simulate::edges;
 
 /// Level of output bit `n` at `ms` (after every change at or before `ms`).
 pub fn level(rows: &[(u32, u8)], n: u8, ms: u32) -> bool {

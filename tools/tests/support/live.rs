@@ -1,6 +1,5 @@
-//! Helpers of the `utile live` tests: the virtual Nano with a stored program on a pty link,
+//! The `utile live` tests' rig: the virtual Nano with a stored program on a pty link,
 //! `utile live` on it, a small HTTP client for the API and a raw Modbus TCP client.
-#![allow(dead_code)]
 
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{SocketAddr, TcpStream};
@@ -14,7 +13,7 @@ use utile_core::engine::Program;
 use utile_core::opcodes;
 use utile_kit::listing;
 
-use crate::vnano_util::{eeprom_file, firmware_elf, scratch, PtyNano};
+use super::vnano::{eeprom_file, firmware_elf, scratch, PtyNano};
 
 /// The `utile` binary under test.
 pub const UTILE: &str = env!("CARGO_BIN_EXE_utile");
@@ -52,55 +51,36 @@ pub struct NanoSpec {
 }
 
 impl NanoSpec {
+    /// The Nano (or the `extra`-described bus) running `prog` from its EEPROM, A6 = A7 =
+    /// 2.0 V, on a pty link of its own.
+    fn with(name: &str, prog: &Program, extra: &[&str]) -> NanoSpec {
+        let ee = eeprom_file(name, prog);
+        let link = scratch(&format!("{name}-link")).join("tty");
+        let elf = firmware_elf();
+        let mut args: Vec<String> = ["--elf", elf.to_str().unwrap(), "--eeprom"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        args.push(ee.to_str().unwrap().to_string());
+        args.extend(extra.iter().map(|s| s.to_string()));
+        args.extend(["--a6", "2.0", "--a7", "2.0", "--link"].map(String::from));
+        args.push(link.to_str().unwrap().to_string());
+        NanoSpec { args, link }
+    }
+
     /// One Nano autostarting `prog` (D8 fitted), A6 = A7 = 2.0 V; `dtr`: opening the port
     /// resets it, as a Nano's DTR does.
     pub fn single(name: &str, prog: &Program, dtr: bool) -> NanoSpec {
-        let ee = eeprom_file(name, prog);
-        let link = scratch(&format!("{name}-link")).join("tty");
-        let mut args: Vec<String> = [
-            "--elf",
-            firmware_elf().to_str().unwrap(),
-            "--eeprom",
-            ee.to_str().unwrap(),
-            "--d8-low",
-            "--a6",
-            "2.0",
-            "--a7",
-            "2.0",
-            "--link",
-            link.to_str().unwrap(),
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
+        let mut spec = Self::with(name, prog, &["--d8-low"]);
         if dtr {
-            args.push("--dtr-reset".into());
+            spec.args.push("--dtr-reset".into());
         }
-        NanoSpec { args, link }
+        spec
     }
 
     /// `n` Nanos on one RS-485 line, each running `prog`, A6 = A7 = 2.0 V.
     pub fn bus(name: &str, n: usize, prog: &Program) -> NanoSpec {
-        let ee = eeprom_file(name, prog);
-        let link = scratch(&format!("{name}-link")).join("tty");
-        let args = [
-            "--elf",
-            firmware_elf().to_str().unwrap(),
-            "--bus",
-            &n.to_string(),
-            "--eeprom",
-            ee.to_str().unwrap(),
-            "--a6",
-            "2.0",
-            "--a7",
-            "2.0",
-            "--link",
-            link.to_str().unwrap(),
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
-        NanoSpec { args, link }
+        Self::with(name, prog, &["--bus", &n.to_string()])
     }
 
     /// Starts it.

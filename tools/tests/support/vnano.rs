@@ -1,6 +1,5 @@
 //! Helpers shared by the virtual Nano's tests: starting `vnano`, reading its console and
 //! its pty with timeouts, and building the stand-in firmware.
-#![allow(dead_code)]
 
 use std::fs::File;
 use std::io::{BufRead, BufReader, Read, Write};
@@ -15,18 +14,7 @@ use std::time::{Duration, Instant};
 pub const VNANO: &str = env!("CARGO_BIN_EXE_vnano");
 
 /// The real firmware image (`cargo fw` writes it; `UTILE_ELF` overrides).
-pub fn firmware_elf() -> PathBuf {
-    let p = match std::env::var_os("UTILE_ELF") {
-        Some(p) => PathBuf::from(p),
-        None => Path::new(env!("CARGO_MANIFEST_DIR")).join("../out/m328-nano-utile.elf"),
-    };
-    assert!(
-        p.is_file(),
-        "{} is missing: run `cargo fw` first",
-        p.display()
-    );
-    p
-}
+pub use utile_kit::setup::built_firmware_elf as firmware_elf;
 
 /// An EEPROM file holding `prog` as STORE leaves it, in the scratch directory `name`.
 pub fn eeprom_file(name: &str, prog: &utile_core::engine::Program) -> PathBuf {
@@ -55,17 +43,7 @@ pub fn fixture_elf() -> PathBuf {
         std::fs::create_dir_all(&dir).expect("fixture dir");
         let elf = dir.join(format!("fixture-{}.elf", std::process::id()));
         let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/vnano_fixture.c");
-        let out = Command::new("avr-gcc")
-            .args(["-mmcu=atmega328p", "-Os", "-DF_CPU=16000000UL", "-o"])
-            .arg(&elf)
-            .arg(&src)
-            .output()
-            .expect("avr-gcc (package gcc-avr) must be installed");
-        assert!(
-            out.status.success(),
-            "avr-gcc failed: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        utile_kit::setup::avr_gcc(&src, &elf, &[]);
         elf
     })
     .clone()

@@ -2,10 +2,8 @@
 //! `$UTILE_ELF`) on the kit's simulated ATmega328P ([`utile_kit::simavr::Chip`]), with the
 //! test conveniences on top (typing lines, waiting for text, the VT100 screen, the stack
 //! high-water mark). Everything simavr is in the kit.
-#![allow(dead_code)]
 
-use std::path::PathBuf;
-
+use utile_kit::setup;
 use utile_kit::simavr::{Chip, CpuState, Reset, RxPacing};
 
 pub use utile_kit::simavr::CYCLES_PER_MS;
@@ -18,14 +16,6 @@ pub const RAMEND: u16 = 0x08FF;
 pub const RAMSTART: u16 = 0x0100;
 /// Byte the firmware paints over free RAM at boot (`utile::hal::STACK_PAINT`).
 pub const STACK_PAINT: u8 = 0xC5;
-
-/// The image the tests run.
-pub fn elf_path() -> PathBuf {
-    if let Some(p) = std::env::var_os("UTILE_ELF") {
-        return PathBuf::from(p);
-    }
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("out/m328-nano-utile.elf")
-}
 
 /// Jumpers and switches at reset.
 #[derive(Clone, Copy, Debug, Default)]
@@ -57,7 +47,7 @@ impl Board {
     /// Load the firmware, set the rig up before the first instruction, and return without
     /// running anything yet.
     pub fn load(rig: Rig) -> Self {
-        let elf = elf_path();
+        let elf = setup::firmware_elf();
         let mut chip = Chip::load(&elf).unwrap_or_else(|e| panic!("{e}"));
         // Typed bytes go into simavr's FIFO while it has room; it paces them at the baud.
         chip.set_rx_pacing(RxPacing::Fifo);

@@ -1,7 +1,5 @@
-//! Shared rig for the editor tests: the editor on a `SimBoard`, its output fed into a
-//! 24×80 VT100 screen model. Included by the `editor_*` tests with `#[path]`; built alone
-//! it has no tests.
-#![allow(dead_code, clippy::new_without_default)]
+//! The editor on a `SimBoard`, its output fed into a 24×80 VT100 screen model: the rig of
+//! the `editor_*` tests.
 
 use utile_core::editor::{Editor, Mode};
 use utile_core::engine::{Engine, Flow};

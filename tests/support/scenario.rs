@@ -8,7 +8,6 @@
 //! [`utile_kit::simulate::parse_timeline`]): `100ms press A0`, `1.5s release A0`,
 //! `2s set A3 low`, one event per line. `press` pulls the input low (a normally-open
 //! push-button to GND).
-#![allow(dead_code)]
 
 use utile_core::engine::{Engine, Program};
 use utile_core::opcodes;
@@ -229,18 +228,7 @@ impl Run {
 }
 
 /// Every change of bit `n` in an output log: (time, new level).
-pub fn changes(log: &[(u32, u8)], n: u8) -> Vec<(u32, bool)> {
-    let mut last = false;
-    let mut out = Vec::new();
-    for &(t, v) in log {
-        let b = v & (1 << n) != 0;
-        if b != last {
-            out.push((t, b));
-            last = b;
-        }
-    }
-    out
-}
+pub use utile_kit::simulate::edges as changes;
 
 /// Assert that output `n` changed exactly as `expected` (time, level), each within `tol` ms.
 #[track_caller]
