@@ -79,7 +79,9 @@ pub fn on_conversion(cs: CriticalSection) {
 /// conversions from reset): autostart's program must not see H6/H7 of no reading. Interrupts
 /// must be on; the ADC always finishes, and the watchdog is the last line of defence.
 pub fn wait_ready() {
-    while READY.load(Ordering::Relaxed) == 0 {}
+    while READY.load(Ordering::Relaxed) == 0 {
+        core::hint::spin_loop();
+    }
 }
 
 /// The last readings of A6 and A7.
