@@ -26,6 +26,18 @@ fn char_cycles() -> u64 {
 /// The slave's address when EEPROM holds none.
 const ADDRESS: u8 = 1;
 
+/// The board with `prog` stored in EEPROM, booted; `d8`: the autostart jumper fitted.
+fn stored(prog: &Program, d8: bool) -> Board {
+    let mut b = SimBoard::new();
+    store::store(prog, &mut b).expect("STORE");
+    let eeprom: &'static [u8] = Box::leak(b.eeprom.into_boxed_slice());
+    Board::boot_with(Rig {
+        d8,
+        d9: false,
+        eeprom: Some(eeprom),
+    })
+}
+
 /// A chip running `prog` (autostarted from EEPROM), its line timed as a wire.
 struct Line {
     nano: Board,
@@ -35,14 +47,7 @@ struct Line {
 
 impl Line {
     fn new(prog: &Program) -> Self {
-        let mut b = SimBoard::new();
-        store::store(prog, &mut b).expect("STORE");
-        let eeprom: &'static [u8] = Box::leak(b.eeprom.into_boxed_slice());
-        let mut nano = Board::boot_with(Rig {
-            d8: true,
-            d9: false,
-            eeprom: Some(eeprom),
-        });
+        let mut nano = stored(prog, true);
         nano.chip.set_rx_pacing(RxPacing::Line { baud: 19_200 });
         // The RUN screen is drawn first (about 0.4 s of line time): a master talks after it.
         nano.run_ms(1_000);
@@ -274,15 +279,7 @@ fn a_lone_slash_typed_after_line_noise_breaks_key_in_the_virtual_nano_too() {
     // The virtual Nano's terminal (`RxPacing::AfterRead`) once fed the line at 11 bits a
     // byte: a writer at the true 19200 baud ran ahead of it, and after 500 bytes its 20 ms
     // of silence was gone: the `/` joined the noise's frame and KEY never saw it alone.
-    let prog = listing::commands(&["PA.", ".PY", "KEY", "END"]);
-    let mut b = SimBoard::new();
-    store::store(&prog, &mut b).expect("STORE");
-    let eeprom: &'static [u8] = Box::leak(b.eeprom.into_boxed_slice());
-    let mut nano = Board::boot_with(Rig {
-        d8: false,
-        d9: false,
-        eeprom: Some(eeprom),
-    });
+    let mut nano = stored(&listing::commands(&["PA.", ".PY", "KEY", "END"]), false);
     nano.chip.set_rx_pacing(RxPacing::AfterRead);
     assert!(nano.wait_for("User File", 2_000));
     // Started from the terminal, as the user did.
