@@ -154,6 +154,11 @@ fn values_out_of_range_are_refused_with_the_reason_and_nothing_is_written() {
         (code, body["error"].as_str().unwrap()),
         (400, "timer preset T3 takes 0..255, not 256")
     );
+    // The page shows a preset in its timer's unit: the core's, carried by the state.
+    assert_eq!(
+        live.state()["timer_unit_ms"],
+        json!(utile_core::engine::TIMER_UNIT_MS)
+    );
     let (code, body) = write("S6", json!("12ab"));
     assert_eq!(code, 400, "{body}");
     assert!(body["error"].as_str().unwrap().contains("whole number"));

@@ -185,6 +185,7 @@ def single(p, a):
     tank(p, 1)
     if a.screenshot:
         time.sleep(2)  # a few seconds of trend
+        p.page.evaluate("window.scrollTo(0, 0)")  # the field typed into scrolled the page
         p.page.screenshot(path=a.screenshot, full_page=True)
     step("a rig switch shows on the page")
     ask("rig 0")

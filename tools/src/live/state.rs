@@ -10,6 +10,7 @@ use std::time::Instant;
 use serde_json::{json, Value};
 use tokio::sync::{mpsc, watch};
 
+use utile_core::engine::TIMER_UNIT_MS;
 use utile_core::modbus::plc::STATUS_RUNNING;
 
 use super::queue::Job;
@@ -173,6 +174,7 @@ impl Shared {
             "message": live.message,
             "notes": live.notes,
             "read_only": self.read_only,
+            "timer_unit_ms": TIMER_UNIT_MS,
             "line": {
                 "busy": live.busy,
                 "stray_bytes": live.stray,

@@ -55,10 +55,12 @@ function header(state) {
   $("port").textContent = state.port;
   const mode = $("mode");
   const word = !state.open ? "closed" : state.mode;
-  mode.textContent = { run: "run", edit: "edit mode", unknown: "starting", closed: "port closed" }[word];
+  mode.textContent = { run: "running", edit: "EDIT mode", unknown: "starting", closed: "port closed" }[word];
   mode.className = `pill ${word}`;
   mode.dataset.value = word;
-  $("busy").textContent = `${Math.round(state.line.busy * 100)} %`;
+  const busy = Math.round(state.line.busy * 100);
+  $("busy").textContent = `${busy} %`;
+  $("busy-bar").style.width = `${busy}%`;
   $("tcp").textContent = String(state.line.tcp_clients);
   $("stray").textContent = String(state.line.stray_bytes);
   $("notes").textContent = state.notes.join(" · ");
@@ -70,7 +72,7 @@ function update(state) {
   for (const u of state.units) {
     let card = cards.get(u.addr);
     if (!card) {
-      card = new Card(u.addr, state.read_only);
+      card = new Card(u.addr, state.read_only, state.timer_unit_ms);
       cards.set(u.addr, card);
       $("plant").append(card.root);
       const view = new ProgramView(u.addr);
@@ -87,7 +89,7 @@ function connect() {
   events.addEventListener("state", (e) => update(JSON.parse(e.data)));
   events.onerror = () => {
     // The browser reconnects by itself; meanwhile nothing on the page is current.
-    $("mode").textContent = "no server";
+    $("mode").textContent = "no server: is utile live still running?";
     $("mode").className = "pill closed";
   };
 }

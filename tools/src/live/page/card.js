@@ -1,13 +1,13 @@
-// One uTile's card: inputs, outputs and the virtual ports (click a coil to write it),
-// flip-flops, timers (preset, running, time left as a bar), counters (count against preset),
-// A6/A7 (reading, set-point, threshold bit), the scan figures and the link's health. Every
-// value carries data-unit, data-signal (the listing's name) and data-value.
+// One uTile's card, laid out as an instrument panel: lamps for the bits (inputs, flip-flops,
+// the timers' and counters' outputs, the thresholds), switches for the coils (Y, U, V: a
+// click writes), bars for a timer's time left and a counter's count against its preset,
+// meters for A6/A7 against their set-points, the scan's figures and the link's health, and
+// a trend. Every value carries data-unit, data-signal (the listing's name) and data-value
+// (the number it shows, 0/1 for bits); what a user must do is said in words.
 
 import { Trend } from "/trend.js";
 
 const HEX = "0123456789ABCDEF";
-// Timer units in ms (T0..T3 0.1 s, T4..TB 1 s, TC..TE 1 min, TF 400 s): a preset times this.
-const UNIT_MS = [100, 100, 100, 100, 1e3, 1e3, 1e3, 1e3, 1e3, 1e3, 1e3, 1e3, 6e4, 6e4, 6e4, 4e5];
 
 function el(tag, attrs = {}, ...children) {
   const e = document.createElement(tag);
@@ -20,10 +20,47 @@ function el(tag, attrs = {}, ...children) {
   return e;
 }
 
+const range = (n, f) => Array.from({ length: n }, (_, i) => f(i));
+
+// A timer's unit in words: 0.1 s, 1 s, 1 min, 400 s.
+export function unitWords(ms) {
+  return ms >= 60e3 && ms % 60e3 === 0 ? `${ms / 60e3} min` : `${ms / 1e3} s`;
+}
+
+// Time left (tenths of a second) as a panel clock shows it: 4.2 s, 3:05, 1:02:07.
+export function clock(tenths) {
+  if (tenths < 600) return `${(tenths / 10).toFixed(1)} s`;
+  const all = Math.round(tenths / 10);
+  const h = Math.floor(all / 3600);
+  const m = Math.floor(all / 60) % 60;
+  const s = String(all % 60).padStart(2, "0");
+  return h ? `${h}:${String(m).padStart(2, "0")}:${s}` : `${m}:${s}`;
+}
+
+// What a card's state asks of the user, in words.
+const STATE_WORDS = { online: "running", offline: "offline", edit: "EDIT mode", stopped: "not running" };
+
+function advice(u) {
+  switch (u.state) {
+    case "offline":
+      return `No answer${u.reason ? ` (${u.reason})` : ""}: check the cable, the power and ` +
+        `the uTile's address (ADDR ${u.addr}). The values shown are the last ones read.`;
+    case "edit":
+      return "The editor has the line, so the program is not running: start it in the " +
+        "Terminal tab (RUN or EX0), or fit D8 for autostart (STORE the program first).";
+    case "stopped":
+      return "uTile answers, but its program is not running: start it with RUN or EX0.";
+    default:
+      return u.reason || "";
+  }
+}
+
 export class Card {
-  constructor(addr, readOnly) {
+  // `unitMs`: each timer's unit in ms, as the core defines it (/api/state's timer_unit_ms).
+  constructor(addr, readOnly, unitMs) {
     this.addr = addr;
     this.readOnly = readOnly;
+    this.unitMs = unitMs || [];
     this.values = {};
     this.signals = new Map(); // name -> [elements]
     this.root = el("article", { class: "card", "data-unit": addr });
@@ -40,21 +77,25 @@ export class Card {
     return e;
   }
 
-  lamp(name) {
-    return this.bind(el("span", { class: "lamp", text: name, title: name }), name);
+  // A lamp: lit when its bit is 1.
+  lamp(signal, label = signal, title = signal) {
+    return this.bind(el("span", { class: "lamp", title }, el("i", { class: "led" }), label), signal);
   }
 
+  // A coil's switch: lit when on, a click writes the other value.
   coil(name) {
-    const b = this.bind(el("button", { class: "coil", text: name, type: "button",
-      title: `${name}: click to switch` }), name);
+    const b = this.bind(el("button", { class: "coil", type: "button",
+      title: this.readOnly ? `${name} (read-only)` : `${name}: click to switch` },
+    el("i", { class: "led" }), name), name);
     if (this.readOnly) b.disabled = true;
     b.addEventListener("click", () => this.write(name, b.dataset.value === "1" ? 0 : 1));
     return b;
   }
 
-  setting(name, title) {
-    const i = this.bind(el("input", { class: "setting", inputmode: "numeric", title,
-      "aria-label": `${name} of uTile ${this.addr}` }), name);
+  // A preset or set-point field: written on Enter or when it loses focus.
+  setting(name, title, cls = "") {
+    const i = this.bind(el("input", { class: `setting ${cls}`, inputmode: "numeric", title,
+      "aria-label": `${title} (uTile ${this.addr})` }), name);
     if (this.readOnly) i.disabled = true;
     const send = () => {
       if (i.value.trim() === "" || i.value === i.dataset.value) return;
@@ -65,88 +106,127 @@ export class Card {
     return i;
   }
 
-  row(label, ...items) {
-    return el("div", { class: "row" }, el("span", { class: "label", text: label }), ...items);
+  // A titled group of the panel.
+  panel(title, cls, ...children) {
+    return el("section", { class: `panel ${cls}` }, el("h3", { text: title }), ...children);
+  }
+
+  // A labelled readout; `signal` binds it.
+  readout(label, title, signal) {
+    const b = el("b", { text: "–" });
+    if (signal) this.bind(b, signal);
+    return [el("div", { class: "readout", title }, el("span", { text: label }), b), b];
   }
 
   build() {
-    const r = this.root;
-    this.stateEl = this.bind(el("span", { class: "state", text: "…" }), "online");
-    this.reasonEl = el("span", { class: "reason" });
-    r.append(el("header", {}, el("h2", { text: `uTile ${this.addr}` }), this.stateEl, this.reasonEl));
+    this.stateEl = this.bind(el("span", { class: "state", text: "connecting" }), "online");
+    this.root.append(el("header", {}, el("h2", { text: `uTile ${this.addr}` }),
+      el("span", { class: "addr", text: `Modbus address ${this.addr}` }), this.stateEl));
+    this.adviceEl = el("p", { class: "advice" });
+    this.refusal = el("div", { class: "refusal", role: "alert" });
+    this.root.append(this.adviceEl, this.refusal);
 
-    const range = (n, f) => Array.from({ length: n }, (_, i) => f(i));
-    r.append(this.row("inputs", ...range(6, (i) => this.lamp(`A${i}`))));
-    r.append(this.row("outputs", ...range(8, (i) => this.coil(`Y${i}`))));
-    r.append(this.row("U", ...range(8, (i) => this.coil(`U${i}`))));
-    r.append(this.row("V", ...range(8, (i) => this.coil(`V${i}`))));
-    r.append(this.row("flip-flops", ...range(16, (i) => this.lamp(`Q${HEX[i]}`))));
+    const panels = el("div", { class: "panels" });
+    this.root.append(panels);
+    const row = (tag, title, ...items) => el("div", { class: "bits" }, el("span", { class: "tag", text: tag, title }), ...items);
+    panels.append(this.panel("Inputs and outputs", "wide",
+      row("PA", "input port PA", ...range(6, (i) => this.lamp(`A${i}`, `A${i}`, `input A${i}`))),
+      row("PY", "output port PY: click to switch", ...range(8, (i) => this.coil(`Y${i}`)))));
+    panels.append(this.panel("Virtual ports (coils: click to switch)", "wide",
+      row("PU", "virtual port PU", ...range(8, (i) => this.coil(`U${i}`))),
+      row("PV", "virtual port PV", ...range(8, (i) => this.coil(`V${i}`)))));
+    panels.append(this.panel("Flip-flops", "wide", el("div", { class: "bits" },
+      ...range(16, (i) => this.lamp(`Q${HEX[i]}`, `Q${HEX[i]}`, `flip-flop Q${HEX[i]}`)))));
+    panels.append(this.panel("Analog inputs: reading against the set-point", "wide", this.analog()));
+    panels.append(this.panel("Timers: preset × unit, time left", "wide", this.timers()));
+    panels.append(this.panel("Counters: count / preset", "wide", this.counters()));
+    panels.append(this.panel("Scan", "", this.scan()));
+    panels.append(this.panel("Link", "", this.link()));
+    this.trend = new Trend(this.addr);
+    panels.append(this.panel("Trend", "wide", this.trend.root));
+  }
 
-    // Timers: preset, TQ and the time left as a bar of the preset's time.
-    const timers = el("div", { class: "grid" });
+  timers() {
+    const grid = el("div", { class: "tiles" });
+    this.timerTiles = [];
     for (let m = 0; m < 16; m++) {
       const d = HEX[m];
-      const bar = el("i");
-      const tl = this.bind(el("span", { class: "tbar", title: `time left on T${d}` }, bar), `TL${d}`);
-      tl.bar = bar;
-      tl.timer = m;
-      timers.append(el("div", { class: "cell" },
-        this.bind(el("span", { class: "name lamp", text: `T${d}` }), `TQ${d}`),
-        this.setting(`T${d}`, `timer preset T${d}: 0..255 × ${UNIT_MS[m] >= 6e4 ? UNIT_MS[m] / 6e4 + " min" : UNIT_MS[m] / 1e3 + " s"}`),
-        tl));
+      const unit = this.unitMs[m] ? unitWords(this.unitMs[m]) : "";
+      const fill = el("i");
+      const left = el("span", { class: "left", text: "–" });
+      const bar = this.bind(el("span", { class: "fillbar", title: `time left on T${d}` }, fill), `TL${d}`);
+      bar.fill = fill;
+      bar.left = left;
+      bar.timer = m;
+      const tile = el("div", { class: "tile" },
+        el("div", { class: "tile-head" }, this.lamp(`TQ${d}`, `T${d}`, `T${d}'s output (TQ${d})`),
+          this.setting(`T${d}`, `timer preset T${d}: 0..255 × ${unit}`, "short"),
+          el("span", { class: "unit", text: `× ${unit}` })),
+        el("div", { class: "tile-foot" }, bar, left));
+      this.timerTiles.push(tile);
+      grid.append(tile);
     }
-    r.append(el("div", { class: "row" }, el("span", { class: "label", text: "timers" })), timers);
+    return grid;
+  }
 
-    // Counters: count / preset, CQ.
-    const counters = el("div", { class: "grid" });
+  counters() {
+    const grid = el("div", { class: "tiles" });
+    this.counterTiles = [];
     for (let m = 0; m < 8; m++) {
-      counters.append(el("div", { class: "cell" },
-        this.bind(el("span", { class: "name lamp", text: `C${m}` }), `CQ${m}`),
-        this.bind(el("span", { class: "num", text: "0" }), `C${m}`),
-        el("span", { text: "/" }),
-        this.setting(`CP${m}`, `counter preset C${m}: 0..65535 (0: output off)`)));
+      const fill = el("i");
+      const tile = el("div", { class: "tile" },
+        el("div", { class: "tile-head" }, this.lamp(`CQ${m}`, `C${m}`, `C${m}'s output (CQ${m})`),
+          this.bind(el("span", { class: "num", text: "0", title: `count of C${m}` }), `C${m}`),
+          el("span", { class: "unit", text: "/" }),
+          this.setting(`CP${m}`, `counter preset C${m}: 0..65535 (0: output off)`)),
+        el("div", { class: "tile-foot" }, el("span", { class: "fillbar", title: `C${m}: count against preset` }, fill)));
+      tile.fill = fill;
+      this.counterTiles.push(tile);
+      grid.append(tile);
     }
-    r.append(el("div", { class: "row" }, el("span", { class: "label", text: "counters" })), counters);
+    return grid;
+  }
 
-    // Analog inputs: reading against the set-point, threshold bit.
+  analog() {
+    const box = el("div", { class: "analogs" });
     for (const n of [6, 7]) {
       const fill = el("i");
-      const mark = el("b");
-      const meter = el("span", { class: "meter" }, fill, mark);
-      this[`meter${n}`] = { fill, mark };
-      r.append(el("div", { class: "analog" },
+      const mark = el("b", { title: `set-point S${n}` });
+      const volts = el("span", { class: "volts" });
+      this[`meter${n}`] = { fill, mark, volts };
+      box.append(el("div", { class: "analog" },
         el("span", { class: "name", text: `A${n}` }),
-        this.bind(el("span", { class: "num", text: "0", title: `reading of A${n}, 0..1023` }), `A${n}`),
-        meter,
-        el("span", { text: "set-point" }),
-        this.setting(`S${n}`, `set-point S${n}: 0..1023 (0: threshold off)`),
-        this.lamp(`H${n}`)));
+        this.bind(el("span", { class: "num reading", text: "0", title: `reading of A${n}, 0..1023` }), `A${n}`),
+        volts,
+        el("span", { class: "meter" }, fill, mark),
+        el("label", { class: "sp" }, "set-point ", this.setting(`S${n}`, `set-point S${n}: 0..1023 (0: threshold off)`)),
+        this.lamp(`H${n}`, `H${n}`, `H${n}: A${n} at or over its set-point`)));
     }
+    return box;
+  }
 
-    const stat = (label, signal, title) => {
-      const b = signal ? this.bind(el("b", { text: "–" }), signal) : el("b", { text: "–" });
-      const s = el("span", { title: title || label }, `${label} `, b);
-      return [s, b];
-    };
-    const stats = el("div", { class: "stats" });
-    const add = (...a) => { const [s, b] = stat(...a); stats.append(s); return b; };
-    this.statusEl = add("status", "status", "input register 0: bit 0 running, 1 watchdog reset, 2 stored program, 3 overrun");
-    this.scanEl = add("scan µs min/mean/max", null);
-    add("scans", "scans", "scans since RUN");
-    this.rateEl = add("scans/s", null);
-    add("overruns", "overruns", "received bytes lost since RUN");
-    add("dropped frames", "dropped", "Modbus frames the uTile dropped (CRC, length, gap)");
-    this.refreshEl = add("refresh/s", null, "pictures of this uTile per second");
-    this.rttEl = add("round trip", null, "request out to the reply's last byte in, last request");
-    this.shareEl = add("line share", null, "share of the line this uTile used over the last two seconds");
-    this.reqEl = add("requests", null);
-    this.toEl = add("time-outs", null);
-    this.crcEl = add("CRC errors", null);
-    r.append(stats);
-    this.refusal = el("div", { class: "refusal", role: "alert" });
-    r.append(this.refusal);
-    this.trend = new Trend(this.addr);
-    r.append(this.trend.root);
+  scan() {
+    const box = el("div", { class: "readouts" });
+    const add = (...a) => { const [r, b] = this.readout(...a); box.append(r); return b; };
+    this.statusEl = add("program", "input register 0: running, watchdog reset, overrun", "status");
+    this.scanEl = add("scan µs min / mean / max", "time per scan since RUN, µs");
+    this.rateEl = add("scans per second", "scans per second of the uTile's own time");
+    add("scans since RUN", "scans since RUN", "scans");
+    add("overruns", "received bytes lost since RUN", "overruns");
+    return box;
+  }
+
+  link() {
+    const box = el("div", { class: "readouts" });
+    const add = (...a) => { const [r, b] = this.readout(...a); box.append(r); return b; };
+    this.refreshEl = add("refreshes per second", "pictures of this uTile per second");
+    this.rttEl = add("round trip", "request out to the reply's last byte in, last request");
+    this.shareEl = add("share of the line", "share of the line this uTile used over the last two seconds");
+    this.reqEl = add("requests", "requests sent to this uTile");
+    this.toEl = add("time-outs", "requests with no whole reply in time");
+    this.crcEl = add("CRC errors", "replies with a wrong CRC");
+    add("frames the uTile dropped", "Modbus frames the uTile dropped (CRC, length, gap)", "dropped");
+    return box;
   }
 
   async write(signal, value, input) {
@@ -164,7 +244,7 @@ export class Card {
     } catch (e) {
       answer = { error: `the server did not answer (${e})` };
     }
-    this.refusal.textContent = answer.error;
+    this.refusal.textContent = `${signal} not written: ${answer.error}`;
     if (input) {
       input.classList.add("refused");
       input.value = input.dataset.value;
@@ -173,13 +253,11 @@ export class Card {
 
   update(u) {
     this.values = u.values;
-    const offline = u.state === "offline";
-    this.root.classList.toggle("offline", offline);
-    this.stateEl.dataset.state = u.state;
-    this.stateEl.textContent = { online: "online", offline: "offline", edit: "EDIT mode",
-      stopped: "not running" }[u.state] || u.state;
-    this.reasonEl.textContent = u.reason || "";
     const v = u.values;
+    this.root.dataset.state = u.state;
+    this.stateEl.dataset.state = u.state;
+    this.stateEl.textContent = STATE_WORDS[u.state] || u.state;
+    this.adviceEl.textContent = advice(u);
     for (const [name, els] of this.signals) {
       const value = v[name];
       if (value === undefined) continue;
@@ -187,23 +265,35 @@ export class Card {
     }
     for (const n of [6, 7]) {
       const m = this[`meter${n}`];
-      m.fill.style.width = `${((v[`A${n}`] || 0) / 1023) * 100}%`;
-      m.mark.style.left = `${((v[`S${n}`] || 0) / 1023) * 100}%`;
-      m.mark.hidden = !v[`S${n}`];
+      const a = v[`A${n}`] || 0;
+      const sp = v[`S${n}`] || 0;
+      m.fill.style.width = `${(a / 1023) * 100}%`;
+      m.mark.style.left = `${(sp / 1023) * 100}%`;
+      m.mark.hidden = !sp;
+      m.volts.textContent = `${((a * 5) / 1023).toFixed(2)} V`;
     }
+    this.timerTiles.forEach((t, m) => {
+      t.classList.toggle("idle", !v[`T${HEX[m]}`] && !v[`TL${HEX[m]}`] && !v[`TQ${HEX[m]}`]);
+    });
+    this.counterTiles.forEach((t, m) => {
+      const count = v[`C${m}`] || 0;
+      const preset = v[`CP${m}`] || 0;
+      t.fill.style.width = preset ? `${Math.min(100, (count / preset) * 100)}%` : "0";
+      t.classList.toggle("idle", !preset && !count);
+    });
     if (v.status !== undefined) {
       this.statusEl.textContent = (v.status & 1 ? "running" : "stopped") +
-        (v.status & 2 ? ", watchdog reset" : "") + (v.status & 8 ? ", overrun" : "");
-      this.scanEl.textContent = `${v.scan_min}/${v.scan_mean}/${v.scan_max}`;
+        (v.status & 2 ? ", after a watchdog reset" : "") + (v.status & 8 ? ", overrun" : "");
+      this.scanEl.textContent = `${v.scan_min} / ${v.scan_mean} / ${v.scan_max}`;
     }
-    this.rateEl.textContent = String(u.scans_per_s);
+    this.rateEl.textContent = u.scans_per_s.toLocaleString("en");
     this.refreshEl.textContent = u.refresh_per_s.toFixed(1);
     this.rttEl.textContent = `${u.link.rtt_ms.toFixed(1)} ms`;
     this.shareEl.textContent = `${Math.round(u.link.share * 100)} %`;
-    this.reqEl.textContent = String(u.link.requests);
+    this.reqEl.textContent = u.link.requests.toLocaleString("en");
     this.toEl.textContent = String(u.link.timeouts);
     this.crcEl.textContent = String(u.link.crc_errors);
-    if (!offline) this.trend.add(v);
+    if (u.state !== "offline") this.trend.add(v);
   }
 
   show(e, name, value) {
@@ -212,16 +302,16 @@ export class Card {
       if (document.activeElement !== e && !e.classList.contains("refused")) e.value = String(value);
       return;
     }
-    if (e.bar) {
+    if (e.fill) {
       // Time left, tenths of a second, against the preset's time.
-      const preset = this.values[`T${HEX[e.timer]}`] || 0;
-      const full = (preset * UNIT_MS[e.timer]) / 100;
-      e.bar.style.width = full > 0 ? `${Math.min(100, (value / full) * 100)}%` : "0";
-      e.title = `time left on T${HEX[e.timer]}: ${(value / 10).toFixed(1)} s`;
+      const d = HEX[e.timer];
+      const full = ((this.values[`T${d}`] || 0) * (this.unitMs[e.timer] || 0)) / 100;
+      e.fill.style.width = full > 0 ? `${Math.min(100, (value / full) * 100)}%` : "0";
+      e.left.textContent = clock(value);
+      e.title = `time left on T${d}: ${clock(value)}`;
       return;
     }
-    if (e.classList.contains("lamp") || e.classList.contains("coil")) return;
-    if (name === "online") return;
-    e.textContent = String(value);
+    if (e.classList.contains("lamp") || e.classList.contains("coil") || name === "online") return;
+    e.textContent = typeof value === "number" && value >= 1e4 ? value.toLocaleString("en") : String(value);
   }
 }

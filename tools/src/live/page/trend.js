@@ -1,5 +1,6 @@
 // The trend of A6, A7 and the counts over the last minutes (uPlot): the history kept by the
-// server (/api/units/N/trend), then a point from the events every quarter second.
+// server (/api/units/N/trend), then a point from the events every quarter second. The time
+// axis reads the wall clock as hh:mm:ss (the PC's time of day), never a date.
 
 import uPlot from "/vendor/uplot.mjs";
 
@@ -57,25 +58,32 @@ export class Trend {
     if (!this.plot || key !== this.key) {
       this.key = key;
       if (this.plot) this.plot.destroy();
-      const series = [{}];
+      const series = [{ label: "time", value: (u, t) => (t == null ? "" : timeOfDay(t)) }];
       NAMES.forEach((n, i) => {
         if (used[i]) series.push({ label: n, stroke: COLOURS[i], width: 1.5, scale: i < 2 ? "adc" : "count", points: { show: false } });
       });
       this.idx = NAMES.map((n, i) => i).filter((i) => used[i]);
       this.plot = new uPlot({
-        width: 530,
+        width: 560,
         height: 150,
         series,
         scales: { x: { time: true }, adc: { range: [0, 1023] }, count: { auto: true } },
         axes: [
-          { stroke: "#8b949e", grid: { stroke: "#30363d" } },
+          { stroke: "#8b949e", grid: { stroke: "#30363d" }, space: 70, values: (u, ticks) => ticks.map(timeOfDay) },
           { scale: "adc", stroke: "#8b949e", grid: { stroke: "#30363d" }, size: 50 },
           { scale: "count", side: 1, stroke: "#8b949e", grid: { show: false }, size: 40 },
         ],
         legend: { live: false },
+        cursor: { show: false },
       }, [this.t, ...this.idx.map((i) => this.series[i])], this.root);
       return;
     }
     this.plot.setData([this.t, ...this.idx.map((i) => this.series[i])]);
   }
+}
+
+// Seconds since 1970 as the PC's time of day, hh:mm:ss.
+function timeOfDay(t) {
+  const d = new Date(t * 1000);
+  return [d.getHours(), d.getMinutes(), d.getSeconds()].map((n) => String(n).padStart(2, "0")).join(":");
 }
