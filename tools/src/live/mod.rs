@@ -107,7 +107,6 @@ pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Ru
         line_bytes: 0,
         file,
         slack: rtu::ANSWER_SLACK,
-        pace: 1.0,
     };
     let (shared, inputs) = Shared::new(live, opts.read_only);
     let http = tokio::net::TcpListener::bind(opts.http)

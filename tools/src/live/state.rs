@@ -62,8 +62,6 @@ pub struct Live {
     pub file: Option<ProgramFile>,
     /// How late a reply may be before it is missing, as the line has learnt it.
     pub slack: std::time::Duration,
-    /// How much slower than the line's own time replies come (1 on a real line).
-    pub pace: f64,
 }
 
 impl Live {
@@ -179,7 +177,6 @@ impl Shared {
                 "busy": live.busy,
                 "stray_bytes": live.stray,
                 "reply_slack_ms": live.slack.as_millis() as u64,
-                "pace": live.pace,
                 "tcp_clients": self.tcp.clients.load(Ordering::Relaxed),
                 "tcp_requests": self.tcp.requests.load(Ordering::Relaxed),
                 "tcp_refused": self.tcp.refused.load(Ordering::Relaxed),

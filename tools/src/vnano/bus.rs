@@ -15,6 +15,7 @@ use utile_kit::sim::SimBoard;
 use utile_kit::simavr::{Bus, Chip, RigPin, F_CPU};
 
 use super::args::Options;
+use super::arrivals::Arrivals;
 use super::io::{self, STDIN};
 use super::pty::Pty;
 use super::rig::{self, RigAction, RigView};
@@ -71,6 +72,7 @@ pub fn run(o: &Options, n: usize, elf: &Path) -> Result<(), String> {
     let limit = o.run_for.map(|secs| (secs * F_CPU as f64) as u64);
     let (wall0, sim0) = (Instant::now(), bus.cycle());
     let mut collisions = 0;
+    let mut arrivals = Arrivals::default();
     let mut keys = Keys {
         selected: 0,
         at: false,
@@ -85,15 +87,26 @@ pub fn run(o: &Options, n: usize, elf: &Path) -> Result<(), String> {
         }
         let mut bytes = Vec::new();
         if pty.read_into(&mut bytes) > 0 {
-            bus.send(&bytes);
+            arrivals.came(bytes, Instant::now(), bus.cycle());
         }
-        if let Some((i, state)) = bus.run_for(STEP) {
+        let due = arrivals.due(bus.cycle());
+        if !due.is_empty() {
+            bus.send(&due);
+        }
+        // A step ends where the master's next bytes are due.
+        let step = match arrivals.next_in(bus.cycle()) {
+            Some(n) if n > 0 => STEP.min(n),
+            _ => STEP,
+        };
+        if let Some((i, state)) = bus.run_for(step) {
             return Err(format!("Nano {} stopped: {state:?}", i + 1));
         }
-        let sent: Vec<u8> = bus.take_master().iter().map(|b| b.byte).collect();
-        if !sent.is_empty() {
-            pty.write(&sent);
+        let sent = bus.take_master();
+        if let Some(last) = sent.last() {
+            let bytes: Vec<u8> = sent.iter().map(|b| b.byte).collect();
+            pty.write(&bytes);
             pty.flush();
+            arrivals.sent(Instant::now(), last.cycle);
         }
         if bus.collisions().len() != collisions {
             collisions = bus.collisions().len();
@@ -103,7 +116,8 @@ pub fn run(o: &Options, n: usize, elf: &Path) -> Result<(), String> {
         if !o.fast {
             let sim = Duration::from_nanos((bus.cycle() - sim0) * 1000 / (F_CPU / 1_000_000));
             if let Some(wait) = sim.checked_sub(wall0.elapsed()) {
-                std::thread::sleep(wait.min(Duration::from_millis(5)));
+                // Ahead of the clock: wait, but wake for the master's bytes.
+                io::wait_readable(&[pty.fd()], wait.min(Duration::from_millis(5)));
             }
         }
     }

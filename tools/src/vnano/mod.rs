@@ -3,12 +3,14 @@
 //! The `vnano` binary (`cargo nano`) parses the options and runs a [`session`].
 //!
 //! The rooms: [`args`] (the command line), [`start`] (the chip and the pty a run starts
-//! from), [`session`] (the loop: chip, keys, UART, pacing), [`status`] (the line below the
+//! from), [`session`] (the loop: chip, keys, UART, pacing), [`arrivals`] (the pty client's
+//! bytes at the simulated time they came), [`status`] (the line below the
 //! screen), [`rig`] (the rig's keys and its view), [`load`] (`--load` through READ),
 //! [`term`] (the user's terminal), [`pty`] (the pseudo-terminal), [`io`] (waiting and
 //! reading on descriptors) and [`bus`] (`--bus N`).
 
 pub mod args;
+pub mod arrivals;
 pub mod bus;
 pub mod io;
 pub mod load;

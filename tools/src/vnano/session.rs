@@ -8,6 +8,7 @@ use std::time::{Duration, Instant};
 use utile_kit::simavr::{self as nano, Chip, CpuState, Reset, RxPacing};
 
 use super::args::Options;
+use super::arrivals::Arrivals;
 use super::io::{self, STDIN, STDOUT};
 use super::load::{Loader, Step};
 use super::pty::Pty;
@@ -53,6 +54,8 @@ pub(super) struct Session {
     boot: Option<u32>,
     /// Reset the chip when a client opens the pty.
     dtr_reset: bool,
+    /// The pty client's bytes waiting for their simulated time.
+    arrivals: Arrivals,
 }
 
 /// Runs the virtual Nano of `o` on the image `elf` until `q`, a quit signal, `--for` or a
@@ -98,6 +101,7 @@ pub fn run(o: &Options, elf: &Path) -> Result<(), String> {
         analog_mv: o.analog_mv,
         boot: o.bootloader.map(|b| b.section().start()),
         dtr_reset: o.dtr_reset,
+        arrivals: Arrivals::default(),
     };
     if matches!(s.uart, Uart::Terminal) && stdout_tty {
         // A clean screen below uTile's: its screen is drawn with absolute positions.
@@ -174,6 +178,7 @@ impl Session {
             // While --load feeds READ, the user's keys wait (in the terminal or the pty).
             if loader.is_none() {
                 self.read_input(nano);
+                self.deliver(nano);
             }
             if std::mem::take(&mut self.reset) {
                 nano.reset(Reset::External);
@@ -181,10 +186,17 @@ impl Session {
             let step = limit_cycles.map_or(CHUNK_CYCLES, |l| {
                 CHUNK_CYCLES.min(l.saturating_sub(nano.cycle())).max(1)
             });
+            // A step ends where the client's next bytes are due.
+            let step = match self.arrivals.next_in(nano.cycle()) {
+                Some(n) if n > 0 => step.min(n),
+                _ => step,
+            };
             let state = nano.run_for(step);
             // simavr drops an external level whenever the firmware writes the PORT register.
             nano.assert_pins();
-            let mut out = nano.take_output();
+            let timed = nano.take_output_timed();
+            let last_out = timed.last().map(|&(_, cycle)| cycle);
+            let mut out: Vec<u8> = timed.into_iter().map(|(b, _)| b).collect();
             if let Some(l) = loader {
                 match l.feed(&out) {
                     Step::Send(bytes) => {
@@ -202,6 +214,9 @@ impl Session {
                 }
             }
             self.emit(&out);
+            if let (Some(cycle), false) = (last_out, out.is_empty()) {
+                self.arrivals.sent(Instant::now(), cycle);
+            }
             self.update_status(nano);
             if state != CpuState::Running {
                 return Ok(Some(state));
@@ -247,12 +262,21 @@ impl Session {
         if let Uart::Pty(p) = &mut self.uart {
             let mut bytes = Vec::new();
             if p.read_into(&mut bytes) > 0 {
-                if let Some(start) = self.boot {
-                    line_pacing(nano, start);
-                }
-                nano.send(&bytes);
+                self.arrivals.came(bytes, Instant::now(), nano.cycle());
             }
         }
+    }
+
+    /// The client's bytes whose simulated time has come, to the chip.
+    fn deliver(&mut self, nano: &mut Chip) {
+        let bytes = self.arrivals.due(nano.cycle());
+        if bytes.is_empty() {
+            return;
+        }
+        if let Some(start) = self.boot {
+            line_pacing(nano, start);
+        }
+        nano.send(&bytes);
     }
 
     /// A client opened the pty: reset the chip as a Nano's DTR line does, dropping what the
@@ -268,6 +292,7 @@ impl Session {
             return;
         }
         p.discard_output();
+        self.arrivals.clear();
         nano.clear_input();
         nano.take_output();
         nano.reset(Reset::External);

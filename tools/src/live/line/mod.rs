@@ -41,8 +41,6 @@ const DEAD_FOR: Duration = Duration::from_secs(1);
 const SCAN_SLACK: Duration = Duration::from_millis(30);
 /// Window of the line's busy figure.
 const BUSY_WINDOW: Duration = Duration::from_secs(2);
-/// The most the gap between frames is stretched (see `Line::pace`).
-const MAX_PACE: f64 = 20.0;
 /// The longest silence inside a reply that is on its way.
 const INTER_BYTE: Duration = Duration::from_millis(100);
 /// The most a reply may be late before it counts as missing.
@@ -107,10 +105,6 @@ struct Line {
     scan: Option<(u8, Duration)>,
     /// The last turn went to the scan.
     scan_turn: bool,
-    /// How much slower than the line's own time replies come (1 on a real line; more on a
-    /// simulated Nano running behind the clock): the gap between frames is stretched by it,
-    /// so every Nano on a bus hears the 3.5 characters of silence in its own time.
-    pace: f64,
 }
 
 /// Starts the line's owner on its own thread.
@@ -141,7 +135,6 @@ pub fn spawn(
                 answered: None,
                 scan: None,
                 scan_turn: false,
-                pace: 1.0,
             }
             .run()
         })

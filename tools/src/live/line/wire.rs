@@ -1,5 +1,5 @@
 //! The bytes on the wire: the terminal's share, writes after the 3.5-character gap, one
-//! request and its reply, and what the replies teach about the line's pace.
+//! request and its reply, and what the replies teach about how late they may come.
 
 use std::io::{Read as _, Write as _};
 use std::time::{Duration, Instant};
@@ -8,7 +8,7 @@ use serialport::SerialPort;
 use utile_kit::modbus;
 
 use super::super::rtu::{self, Scan};
-use super::{Line, Miss, BUSY_WINDOW, INTER_BYTE, MAX_PACE, SLACK_MAX};
+use super::{Line, Miss, BUSY_WINDOW, INTER_BYTE, SLACK_MAX};
 
 impl Line {
     /// Reads whatever comes within `wait`: the editor's screen.
@@ -43,7 +43,7 @@ impl Line {
 
     /// Writes `bytes` after the 3.5-character gap.
     pub(super) fn write(&mut self, bytes: &[u8]) -> bool {
-        let gap = rtu::frame_gap().mul_f64(self.pace.min(MAX_PACE));
+        let gap = rtu::frame_gap();
         let since = self.quiet.elapsed();
         if since < gap {
             std::thread::sleep(gap - since);
@@ -169,20 +169,14 @@ impl Line {
 
     /// A reply came `rtt` after the request went out, for `on_line` of bytes on the line:
     /// the slack follows the latest replies' lateness (three times the recent worst, at least
-    /// [`rtu::ANSWER_SLACK`]), the pace their slowness.
+    /// [`rtu::ANSWER_SLACK`]).
     pub(super) fn learn(&mut self, rtt: Duration, on_line: Duration, now: Instant) {
         self.answered = Some(now);
         let late = rtt.saturating_sub(on_line);
-        // A uTile starts its reply within 5 ms: only what is beyond that is slowness.
-        let allowed = on_line + Duration::from_millis(5);
-        let ratio = rtt.as_secs_f64() / allowed.as_secs_f64();
-        self.pace = (self.pace * 0.8 + ratio * 0.2).max(1.0);
         self.late = late.max(self.late.mul_f64(0.98));
         self.slack =
             (self.late * 3 + Duration::from_millis(30)).clamp(rtu::ANSWER_SLACK, SLACK_MAX);
-        let mut live = self.shared.lock();
-        live.slack = self.slack;
-        live.pace = self.pace;
+        self.shared.lock().slack = self.slack;
     }
 
     /// Bytes that were not a reply: the editor's screen when they carry its text, else
