@@ -32,7 +32,8 @@ ARGS = [
     "--disable-sync",
     "--no-first-run",
 ]
-T = 30_000  # ms: the longest wait for anything the page must show
+T = 60_000  # ms: the longest wait for anything the page must show (a loaded machine's
+# simulation may run at a third of the clock: every wait is for a condition, never a sleep)
 
 
 def fail(why):
@@ -88,6 +89,20 @@ class Page:
                 f"{json.dumps({k: v for k, v in (u[0] if u else {}).items() if k != 'values'})}"
             )
 
+    def fresh(self, unit, pictures=2, timeout=T):
+        """Waits until the card of `unit` has shown `pictures` newer pictures (its scan count
+        moves with every one), so what it shows was read after this call."""
+        for _ in range(pictures):
+            before = self.value(unit, "scans")
+            try:
+                self.page.wait_for_function(
+                    "([s, b]) => { const e = document.querySelector(s); return e && e.dataset.value !== b; }",
+                    arg=[self.sel(unit, "scans"), before],
+                    timeout=timeout,
+                )
+            except Exception:
+                fail(f"uTile {unit}: no new picture after {timeout} ms (scans {before!r})")
+
     def wait_text(self, selector, text, timeout=T):
         try:
             self.page.wait_for_function(
@@ -130,7 +145,7 @@ def tank(p, unit):
     step(f"uTile {unit}: S6 = 2000 is refused with the reason, nothing written")
     p.set(unit, "S6", 2000)
     p.wait_text(f'.card[data-unit="{unit}"] .refusal', "0..1023")
-    time.sleep(0.5)
+    p.fresh(unit)
     p.wait(unit, "S6", 400)
     regs = api(p.url, "/api/state")
     s6 = [u for u in regs["units"] if u["addr"] == unit][0]["values"]["S6"]
@@ -144,13 +159,14 @@ def gateway(p, tcp, unit):
     step(f"mbpoll -m tcp reads S6, S7 of uTile {unit} while the page polls")
     scans = int(p.value(unit, "scans"))
     out = subprocess.run(
-        ["mbpoll", "-m", "tcp", "-p", port, "-a", str(unit), "-t", "4", "-r", "25", "-c", "2", "-1", host],
-        capture_output=True, text=True, timeout=30,
+        ["mbpoll", "-m", "tcp", "-p", port, "-a", str(unit), "-t", "4", "-r", "25", "-c", "2", "-1",
+         "-o", "10", host],
+        capture_output=True, text=True, timeout=60,
     )
     if out.returncode != 0 or "400" not in out.stdout or "500" not in out.stdout:
         fail(f"mbpoll: {out.returncode}\n{out.stdout}\n{out.stderr}")
     step(f"pymodbus TCP: reads A6 and writes U1 of uTile {unit}")
-    c = ModbusTcpClient(host, port=int(port), timeout=5)
+    c = ModbusTcpClient(host, port=int(port), timeout=15)
     if not c.connect():
         fail("pymodbus cannot connect to the gateway")
     rr = c.read_input_registers(16, count=1, slave=unit)
@@ -166,9 +182,15 @@ def gateway(p, tcp, unit):
     if not rr.isError() or getattr(rr, "exception_code", None) != 0x0B:
         fail(f"pymodbus: a silent address must give exception 0x0B, got {rr}")
     c.close()
-    # The page kept refreshing all along.
-    time.sleep(0.5)
-    if int(p.value(unit, "scans")) == scans:
+    # The page kept refreshing all along: a picture newer than the one before the gateway's
+    # requests (waited for, not slept on).
+    try:
+        p.page.wait_for_function(
+            "([s, b]) => { const e = document.querySelector(s); return e && Number(e.dataset.value) !== b; }",
+            arg=[p.sel(unit, "scans"), scans],
+            timeout=T,
+        )
+    except Exception:
         fail("the page stopped refreshing while the gateway was used")
 
 
@@ -248,7 +270,8 @@ def bus(p, a):
     step("clicking U0 on card 2 drives its Y2 through its program")
     p.click(2, "U0")
     p.wait(2, "Y2", 1)
-    time.sleep(0.5)
+    p.fresh(1)
+    p.fresh(3)
     if p.value(1, "Y2") != "0" or p.value(3, "Y2") != "0":
         fail("U0 of uTile 2 reached another uTile")
     p.click(2, "U0")

@@ -1,6 +1,6 @@
 //! The polls of the uTiles and the queued requests (the page's writes, the gateway's).
 
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use super::super::queue::{Done, Failure, Job, Origin};
 use super::{Line, Miss, BUSY_WINDOW, DEAD_FOR, SLACK_MAX};
@@ -88,9 +88,12 @@ impl Line {
                 self.dead.remove(&job.addr);
                 let wrote = job.writes() && pdu.first().is_some_and(|f| f & 0x80 == 0);
                 let mut live = self.shared.lock();
+                // After a write the next poll is this uTile's, ahead of the others on a bus,
+                // so the page shows the write one poll later.
+                let first = live.units.iter().map(|u| u.due).min().unwrap_or(now);
+                let first = first.checked_sub(Duration::from_micros(1)).unwrap_or(first);
                 if let Some(u) = live.unit_mut(job.addr) {
-                    // The next poll of this uTile comes first, so the page shows the write.
-                    u.due = job.queued.min(u.due);
+                    u.due = if wrote { first } else { job.queued.min(u.due) };
                     if wrote && job.pdu.first() != Some(&5) && job.pdu.first() != Some(&15) {
                         u.holdings_stale();
                     }
