@@ -325,11 +325,34 @@ impl Chip {
     /// Runs the CPU until `cycles` more cycles have passed (or it stops), feeding queued
     /// UART input on the way.
     pub fn run_for(&mut self, cycles: u64) -> CpuState {
-        let end = self.cycle().saturating_add(cycles);
+        self.run_until(self.cycle().saturating_add(cycles), false)
+    }
+
+    /// [`Chip::run_for`] that also ends right after an instruction that puts the CPU to
+    /// sleep ([`Chip::sleeping`] tells): for a firmware that must never sleep.
+    pub fn run_awake_for(&mut self, cycles: u64) -> CpuState {
+        self.run_until(self.cycle().saturating_add(cycles), true)
+    }
+
+    /// The one run loop: steps until cycle `end`, a stop, or (`awake`) a sleep. Kept out of
+    /// line and not generic, so it is always built with the kit's optimization
+    /// (`[profile.dev.package.utile-kit]`), whatever the caller's profile.
+    fn run_until(&mut self, end: u64, awake: bool) -> CpuState {
+        self.run_while(end, |c| awake && c.sleeping())
+    }
+
+    /// Steps until cycle `end` or a stop, or until `pause` says so after an instruction
+    /// (then `Running`). Only the kit calls it, so every instance is built with the kit's
+    /// optimization.
+    #[inline(always)]
+    pub(crate) fn run_while(&mut self, end: u64, mut pause: impl FnMut(&Chip) -> bool) -> CpuState {
         while self.cycle() < end {
-            let state = self.step();
+            let state = self.step_inline();
             if state != CpuState::Running {
                 return state;
+            }
+            if pause(self) {
+                break;
             }
         }
         CpuState::Running
@@ -338,8 +361,14 @@ impl Chip {
     /// Executes one instruction (plus any interrupt entry simavr does after it, or one
     /// sleeping stretch), feeding queued UART input on the way. A reset simavr does by
     /// itself (the watchdog) keeps the cycle count going and re-arms the watchdog.
-    #[inline]
     pub fn step(&mut self) -> CpuState {
+        self.step_inline()
+    }
+
+    /// [`Chip::step`], inlined into the run loop: the harness's per-instruction path, so
+    /// everything on it is a load and a compare unless something is due.
+    #[inline(always)]
+    fn step_inline(&mut self) -> CpuState {
         self.feed_uart();
         let before = self.avr().cycle;
         let wdr = self.wd_pending.is_some() && self.flash_word(self.pc()) == WDR;
@@ -350,7 +379,11 @@ impl Chip {
             self.link.base += before;
             self.after_reset();
         }
-        self.watchdog_rule(wdr);
+        // Nothing to do unless the watchdog's interrupt waits (or waited) in reset mode.
+        let armed = self.peek(WDTCSR) & WD_PENDING_IN_RESET_MODE == WD_PENDING_IN_RESET_MODE;
+        if armed || self.wd_pending.is_some() {
+            self.watchdog_rule(wdr);
+        }
         match state {
             ffi::cpu_Crashed => CpuState::Crashed,
             ffi::cpu_Done | ffi::cpu_Stopped => CpuState::Done,

@@ -57,6 +57,9 @@ pub(crate) struct UartLink {
     rx_empty: bool,
     /// simavr's receive FIFO is full (XOFF).
     rx_full: bool,
+    /// The firmware wrote UBRR0 or UCSR0A (or the chip was reset) since the frame time was
+    /// last set ([`RxPacing::Line`]).
+    frame_stale: bool,
 }
 
 impl UartLink {
@@ -67,6 +70,7 @@ impl UartLink {
             tx_free: 0,
             rx_empty: true,
             rx_full: false,
+            frame_stale: true,
         }
     }
 }
@@ -139,6 +143,25 @@ unsafe extern "C" fn on_uart_xoff(_irq: *mut ffi::avr_irq_t, value: u32, param: 
     link.uart.rx_full = value != 0;
 }
 
+/// simavr's hook on writes of UBRR0L and UCSR0A (the UART's own handler stores them): the
+/// frame time is due again.
+unsafe extern "C" fn on_baud_write(_avr: *mut ffi::avr_t, _addr: u16, _v: u8, param: *mut c_void) {
+    // SAFETY: as in `on_uart_output`.
+    let link = unsafe { &mut *(param as *mut Link) };
+    link.uart.frame_stale = true;
+}
+
+/// simavr's hook on writes of UBRR0H, which its UART does not watch: this hook is the
+/// register's only one, so it stores the value, and the frame time is due again.
+unsafe extern "C" fn on_ubrrh_write(avr: *mut ffi::avr_t, addr: u16, v: u8, param: *mut c_void) {
+    // SAFETY: `avr` is the running AVR and `addr` one of its I/O registers; `param` as in
+    // `on_uart_output`.
+    unsafe {
+        *(*avr).data.add(usize::from(addr)) = v;
+        (*(param as *mut Link)).uart.frame_stale = true;
+    }
+}
+
 impl Chip {
     /// Hooks the UART: no copy on simavr's stdout, our callbacks, the input IRQ.
     pub(crate) fn attach_uart(&mut self) -> Result<(), LoadError> {
@@ -164,6 +187,10 @@ impl Chip {
             ffi::avr_irq_register_notify(irq(ffi::UART_IRQ_OUTPUT), Some(on_uart_output), param);
             ffi::avr_irq_register_notify(irq(ffi::UART_IRQ_OUT_XON), Some(on_uart_xon), param);
             ffi::avr_irq_register_notify(irq(ffi::UART_IRQ_OUT_XOFF), Some(on_uart_xoff), param);
+            for reg in [UBRR0L, UCSR0A] {
+                ffi::avr_register_io_write(avr, reg as u16, Some(on_baud_write), param);
+            }
+            ffi::avr_register_io_write(avr, UBRR0H as u16, Some(on_ubrrh_write), param);
             self.rx.irq = irq(ffi::UART_IRQ_INPUT);
             let table = &(*avr).interrupts;
             let count = usize::from(table.vector_count).min(table.vector.len());
@@ -188,15 +215,28 @@ impl Chip {
     }
 
     /// Puts the next input byte on the line when its turn has come (see [`RxPacing`]).
-    #[inline]
+    /// On every instruction: a flag and a compare unless a byte is due.
+    #[inline(always)]
     pub(crate) fn feed_uart(&mut self) {
         if let RxPacing::Line { .. } = self.rx.pacing {
-            self.line_frame_time();
-            return self.feed_line();
+            if self.link.uart.frame_stale {
+                self.line_frame_time();
+            }
+            if self
+                .rx
+                .timed
+                .front()
+                .is_some_and(|&(at, _)| self.cycle() >= at)
+            {
+                self.feed_line();
+            }
+        } else if !self.rx.queue.is_empty() {
+            self.feed_paced();
         }
-        if self.rx.queue.is_empty() {
-            return;
-        }
+    }
+
+    /// The paced modes' turn: a byte into simavr's FIFO when its time (or room) has come.
+    fn feed_paced(&mut self) {
         if self.rx.pacing == RxPacing::Fifo {
             while !self.link.uart.rx_full {
                 let Some(byte) = self.rx.queue.pop_front() else {
@@ -227,8 +267,10 @@ impl Chip {
 
     /// [`RxPacing::Line`]: simavr's UART counts 11 bits per 8N1 frame (it always counts a
     /// parity bit), so the firmware could send only one byte per 11 bit times; on the real
-    /// line a frame is 10 bits. Kept right after every change of the baud rate.
+    /// line a frame is 10 bits. Set again after every write of UBRR0 or UCSR0A (simavr's
+    /// own figure comes from UBRR0L writes only) and every reset.
     fn line_frame_time(&mut self) {
+        self.link.uart.frame_stale = false;
         if self.rx.uart.is_null() {
             return;
         }
@@ -267,11 +309,13 @@ impl Chip {
         self.rx.next = self.cycle();
         self.link.uart.rx_empty = true;
         self.link.uart.rx_full = false;
+        self.link.uart.frame_stale = true;
     }
 
     /// Chooses how input is paced (default [`RxPacing::AfterRead`]).
     pub fn set_rx_pacing(&mut self, pacing: RxPacing) {
         self.rx.pacing = pacing;
+        self.link.uart.frame_stale = true;
     }
 
     /// Queues bytes for the firmware's UART, back to back after what is already queued.
