@@ -298,6 +298,16 @@ impl Chip {
         unsafe { *avr.data.add(addr) }
     }
 
+    /// One I/O register (data-space address below 0x100), read without the bounds check of
+    /// [`Chip::peek`]: for the per-instruction path.
+    #[inline(always)]
+    pub(crate) fn io(&self, addr: usize) -> u8 {
+        debug_assert!(addr < 0x100 && addr <= self.ramend());
+        // SAFETY: the data space holds `ramend + 1` bytes, 0x900 on the ATmega328P (the only
+        // MCU the harness makes), so every I/O address is within it.
+        unsafe { *self.avr().data.add(addr & 0xFF) }
+    }
+
     /// Writes one byte of the data space directly (no I/O side effects); ignored past RAM.
     pub fn poke(&mut self, addr: usize, value: u8) {
         if addr > usize::from(self.avr().ramend) {
@@ -380,7 +390,7 @@ impl Chip {
             self.after_reset();
         }
         // Nothing to do unless the watchdog's interrupt waits (or waited) in reset mode.
-        let armed = self.peek(WDTCSR) & WD_PENDING_IN_RESET_MODE == WD_PENDING_IN_RESET_MODE;
+        let armed = self.io(WDTCSR) & WD_PENDING_IN_RESET_MODE == WD_PENDING_IN_RESET_MODE;
         if armed || self.wd_pending.is_some() {
             self.watchdog_rule(wdr);
         }

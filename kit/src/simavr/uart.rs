@@ -57,9 +57,6 @@ pub(crate) struct UartLink {
     rx_empty: bool,
     /// simavr's receive FIFO is full (XOFF).
     rx_full: bool,
-    /// The firmware wrote UBRR0 or UCSR0A (or the chip was reset) since the frame time was
-    /// last set ([`RxPacing::Line`]).
-    frame_stale: bool,
 }
 
 impl UartLink {
@@ -70,7 +67,6 @@ impl UartLink {
             tx_free: 0,
             rx_empty: true,
             rx_full: false,
-            frame_stale: true,
         }
     }
 }
@@ -92,6 +88,10 @@ pub(crate) struct Rx {
     /// Cycle at which the last byte went into the UART.
     last: u64,
     pacing: RxPacing,
+    /// UBRR0L, UBRR0H and U2X0 when the frame time was last set, and the frame time set
+    /// ([`RxPacing::Line`]).
+    frame_regs: [u8; 3],
+    frame_set: u64,
 }
 
 impl Rx {
@@ -105,6 +105,8 @@ impl Rx {
             next: 0,
             last: 0,
             pacing: RxPacing::AfterRead,
+            frame_regs: [0; 3],
+            frame_set: 0,
         }
     }
 }
@@ -143,25 +145,6 @@ unsafe extern "C" fn on_uart_xoff(_irq: *mut ffi::avr_irq_t, value: u32, param: 
     link.uart.rx_full = value != 0;
 }
 
-/// simavr's hook on writes of UBRR0L and UCSR0A (the UART's own handler stores them): the
-/// frame time is due again.
-unsafe extern "C" fn on_baud_write(_avr: *mut ffi::avr_t, _addr: u16, _v: u8, param: *mut c_void) {
-    // SAFETY: as in `on_uart_output`.
-    let link = unsafe { &mut *(param as *mut Link) };
-    link.uart.frame_stale = true;
-}
-
-/// simavr's hook on writes of UBRR0H, which its UART does not watch: this hook is the
-/// register's only one, so it stores the value, and the frame time is due again.
-unsafe extern "C" fn on_ubrrh_write(avr: *mut ffi::avr_t, addr: u16, v: u8, param: *mut c_void) {
-    // SAFETY: `avr` is the running AVR and `addr` one of its I/O registers; `param` as in
-    // `on_uart_output`.
-    unsafe {
-        *(*avr).data.add(usize::from(addr)) = v;
-        (*(param as *mut Link)).uart.frame_stale = true;
-    }
-}
-
 impl Chip {
     /// Hooks the UART: no copy on simavr's stdout, our callbacks, the input IRQ.
     pub(crate) fn attach_uart(&mut self) -> Result<(), LoadError> {
@@ -187,10 +170,6 @@ impl Chip {
             ffi::avr_irq_register_notify(irq(ffi::UART_IRQ_OUTPUT), Some(on_uart_output), param);
             ffi::avr_irq_register_notify(irq(ffi::UART_IRQ_OUT_XON), Some(on_uart_xon), param);
             ffi::avr_irq_register_notify(irq(ffi::UART_IRQ_OUT_XOFF), Some(on_uart_xoff), param);
-            for reg in [UBRR0L, UCSR0A] {
-                ffi::avr_register_io_write(avr, reg as u16, Some(on_baud_write), param);
-            }
-            ffi::avr_register_io_write(avr, UBRR0H as u16, Some(on_ubrrh_write), param);
             self.rx.irq = irq(ffi::UART_IRQ_INPUT);
             let table = &(*avr).interrupts;
             let count = usize::from(table.vector_count).min(table.vector.len());
@@ -219,7 +198,7 @@ impl Chip {
     #[inline(always)]
     pub(crate) fn feed_uart(&mut self) {
         if let RxPacing::Line { .. } = self.rx.pacing {
-            if self.link.uart.frame_stale {
+            if self.frame_time_stale() {
                 self.line_frame_time();
             }
             if self
@@ -265,17 +244,36 @@ impl Chip {
         }
     }
 
+    /// UBRR0L, UBRR0H and U2X0 now.
+    #[inline(always)]
+    fn frame_regs(&self) -> [u8; 3] {
+        [self.io(UBRR0L), self.io(UBRR0H), self.io(UCSR0A) & U2X0]
+    }
+
+    /// The frame time must be set again: the baud registers changed, or simavr set its own
+    /// figure (it does on every UBRR0L write and reset).
+    #[inline(always)]
+    fn frame_time_stale(&self) -> bool {
+        if self.rx.uart.is_null() {
+            return false;
+        }
+        // SAFETY: the UART module belongs to this AVR, which is not running now.
+        let set = unsafe { (*self.rx.uart).cycles_per_byte };
+        set != self.rx.frame_set || self.frame_regs() != self.rx.frame_regs
+    }
+
     /// [`RxPacing::Line`]: simavr's UART counts 11 bits per 8N1 frame (it always counts a
     /// parity bit), so the firmware could send only one byte per 11 bit times; on the real
-    /// line a frame is 10 bits. Set again after every write of UBRR0 or UCSR0A (simavr's
-    /// own figure comes from UBRR0L writes only) and every reset.
+    /// line a frame is 10 bits. Set again whenever UBRR0 or U2X0 changed or simavr set its
+    /// own figure.
     fn line_frame_time(&mut self) {
-        self.link.uart.frame_stale = false;
         if self.rx.uart.is_null() {
             return;
         }
         let ubrr = u64::from(self.peek(UBRR0L)) | u64::from(self.peek(UBRR0H) & 0x0F) << 8;
         let bit = (ubrr + 1) * if self.peek(UCSR0A) & U2X0 != 0 { 8 } else { 16 };
+        self.rx.frame_regs = self.frame_regs();
+        self.rx.frame_set = 10 * bit;
         // SAFETY: the UART module belongs to this AVR, which is not running now.
         unsafe { (*self.rx.uart).cycles_per_byte = 10 * bit };
     }
@@ -309,13 +307,11 @@ impl Chip {
         self.rx.next = self.cycle();
         self.link.uart.rx_empty = true;
         self.link.uart.rx_full = false;
-        self.link.uart.frame_stale = true;
     }
 
     /// Chooses how input is paced (default [`RxPacing::AfterRead`]).
     pub fn set_rx_pacing(&mut self, pacing: RxPacing) {
         self.rx.pacing = pacing;
-        self.link.uart.frame_stale = true;
     }
 
     /// Queues bytes for the firmware's UART, back to back after what is already queued.
