@@ -302,9 +302,8 @@ impl Chip {
     /// [`Chip::peek`]: for the per-instruction path.
     #[inline(always)]
     pub(crate) fn io(&self, addr: usize) -> u8 {
-        debug_assert!(addr < 0x100 && addr <= self.ramend());
         // SAFETY: the data space holds `ramend + 1` bytes, 0x900 on the ATmega328P (the only
-        // MCU the harness makes), so every I/O address is within it.
+        // MCU the harness makes), so every address below 0x100 is within it.
         unsafe { *self.avr().data.add(addr & 0xFF) }
     }
 
@@ -319,7 +318,7 @@ impl Chip {
 
     /// CPU cycles since power-up, counting on over resets (simavr restarts its own count).
     pub fn cycle(&self) -> u64 {
-        self.link.now()
+        self.link.base + self.avr().cycle
     }
 
     /// CPU cycles since the last reset (simavr's own counter).
@@ -382,8 +381,11 @@ impl Chip {
         self.feed_uart();
         let before = self.avr().cycle;
         let wdr = self.wd_pending.is_some() && self.flash_word(self.pc()) == WDR;
+        // What `avr_run` does through its `run` pointer, without the two calls around it: the
+        // harness never attaches gdb, so `run` is always this function.
         // SAFETY: `avr` is valid; callbacks it fires only touch our boxed `Link`.
-        let state = unsafe { ffi::avr_run(self.avr.as_ptr()) } as u32;
+        unsafe { ffi::avr_callback_run_raw(self.avr.as_ptr()) };
+        let state = self.avr().state as u32;
         if self.avr().cycle < before {
             // simavr reset the chip (and its counter) during this step.
             self.link.base += before;
@@ -393,6 +395,9 @@ impl Chip {
         let armed = self.io(WDTCSR) & WD_PENDING_IN_RESET_MODE == WD_PENDING_IN_RESET_MODE;
         if armed || self.wd_pending.is_some() {
             self.watchdog_rule(wdr);
+        }
+        if state == ffi::cpu_Running {
+            return CpuState::Running;
         }
         match state {
             ffi::cpu_Crashed => CpuState::Crashed,
