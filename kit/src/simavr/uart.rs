@@ -209,7 +209,10 @@ impl Chip {
             {
                 self.feed_line();
             }
-        } else if !self.rx.queue.is_empty() {
+        } else if !self.rx.queue.is_empty()
+            && !(self.link.uart.rx_full && self.rx.pacing == RxPacing::Fifo)
+        {
+            // (`Fifo` waits while simavr's FIFO is full: most of a long input's time.)
             self.feed_paced();
         }
     }
