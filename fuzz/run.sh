@@ -10,7 +10,13 @@ cd "$(dirname "$0")/.."
 secs=${1:-60}
 [ $# -gt 0 ] && shift
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(editor lines keys ihex hex_roundtrip image eeprom modbus)
+# Every target in fuzz/fuzz_targets/ unless some are named: a new target is fuzzed at once.
+if [ ${#targets[@]} -eq 0 ]; then
+    for f in fuzz/fuzz_targets/*.rs; do
+        t=${f##*/}
+        targets+=("${t%.rs}")
+    done
+fi
 command -v cargo-fuzz >/dev/null 2>&1 || cargo install cargo-fuzz --locked
 for t in "${targets[@]}"; do
     mkdir -p "fuzz/work/$t"

@@ -1,8 +1,12 @@
-//! RUN mode's Modbus RTU slave (SPEC §13), between scans: judge a frame once its silence has
-//! passed, carry the request out on the engine (the core's `PlcMap`), and feed the reply to
-//! the transmitter a few bytes per visit, so no visit holds the scan up for long.
+//! RUN mode's Modbus RTU slave (SPEC §13, §17), between scans: judge a frame once its silence
+//! has passed, carry the request out on the engine (the core's `PlcMap`) and start its reply
+//! at once, then feed the reply to the transmitter a few bytes per visit. The line's timing
+//! and the slave itself are the hardware layer's (`hal/line.rs`); this file has no `unsafe`.
+//!
+//! The scan comes back for this after the very scan in which the work arose (a frame ended,
+//! the transmitter took a byte of the reply), so a reply starts within a scan of its
+//! request's silence, whatever the program's length; no visit holds the scan up long.
 
-use avr_device::interrupt;
 use utile_core::board::Board;
 use utile_core::engine::Engine;
 use utile_core::modbus::plc::{PlcMap, Status, STATUS_OVERRUN, STATUS_RUNNING};
@@ -12,13 +16,18 @@ use utile_core::stats::ScanStats;
 use utile_core::store;
 
 use crate::hal::scan::RunState;
-use crate::hal::{serial, Nano};
+use crate::hal::{line, serial, Nano};
 
-/// Reply bytes made per visit at most (a map read and the CRC each), so a visit stays below
-/// the 0.5 ms a scan may wait.
-const BYTES_PER_VISIT: u8 = 6;
-/// Bytes kept queued ahead of the line (6 ms of it): visits come every 16 scans, 2.2 ms apart
-/// for a program of 200 lines, and a reply must not pause 1.5 characters.
+/// Timer1 counts (0.5 µs) a visit may go on making reply bytes (0.2 ms): a byte costs a map
+/// read and the CRC, a timer's time left or the mean scan time a division (0.13 ms). With
+/// the judging before them, no visit holds the scan up 0.45 ms.
+const VISIT_TICKS: u16 = 400;
+/// Reply bytes a visit makes whatever it costs: a reply's first three (address, function,
+/// byte count or echo) read nothing from the map, and three bytes keep the line busy
+/// 1.5 ms, longer than the slowest scan before the next visit.
+const MIN_BYTES: u8 = 3;
+/// Bytes kept queued ahead of the line (6 ms of it), so that a program whose scans are long
+/// never leaves a pause of 1.5 characters inside a reply.
 const AHEAD: u8 = 12;
 
 /// What the RUN loop must do after a visit.
@@ -49,48 +58,47 @@ pub struct Server {
 }
 
 impl Server {
-    /// RUN starts: the address from EEPROM, the status bits (`stored`: EEPROM holds a valid
-    /// program, as the editor knows it), the line switched to Modbus.
-    pub fn begin(board: &mut Nano, mcusr: u8, stored: bool) -> Self {
+    /// RUN starts: the address from EEPROM, the status bits (`by_watchdog`: the last reset
+    /// was the watchdog's; `stored`: EEPROM holds a valid program, as the editor knows it),
+    /// the program's fingerprint, the line switched to Modbus.
+    pub fn begin(eng: &Engine, board: &mut Nano, by_watchdog: bool, stored: bool) -> Self {
         let mut flags = STATUS_RUNNING;
-        // WDRF: the last reset was the watchdog's (0 after a boot loader that clears MCUSR).
-        if mcusr & 0x08 != 0 {
+        if by_watchdog {
             flags |= STATUS_WATCHDOG;
         }
         if stored {
             flags |= STATUS_STORED;
         }
+        let mut status = Status::default();
+        status.start(&eng.prog.uf);
         let server = Server {
             address: store::slave_address(board),
             flags,
-            status: Status::default(),
+            status,
             start_ms: board.now_ms(),
             overruns_at_start: board.rx_overruns(),
             pending: false,
             started: false,
             reseal: false,
         };
-        serial::serve_modbus(true);
+        line::serve(true);
         server
     }
 
     /// RUN ends: the line goes back to the terminal.
     pub fn end(&mut self) {
-        serial::serve_modbus(false);
+        line::serve(false);
     }
 
-    /// Whether a master talked to this slave within the last 3 s (the terminal is quiet).
-    pub fn master_active(&self, board: &mut Nano) -> bool {
-        let now = board.now_ms();
-        interrupt::free(|cs| {
-            // SAFETY: the closure does not re-enter LINE.
-            unsafe { serial::LINE.with(cs, |l| l.slave.master_active(now)) }
-        })
+    /// Whether the terminal must wait: a master talked to this slave within the last 3 s,
+    /// or a frame is on its way (its reply must not queue behind a display).
+    pub fn quiet(&self, board: &mut Nano) -> bool {
+        line::busy(board.now_ms())
     }
 
-    /// One visit between scans, one job per visit so that none holds the scan up for long:
-    /// a finished frame judged and carried out, or a few reply bytes made, or (the reply
-    /// queued) the warm-reset seal renewed.
+    /// One visit between scans: a finished frame judged and carried out, its reply started
+    /// and fed as the transmit ring has room, or (the reply queued) the warm-reset seal
+    /// renewed. Whatever is left wants the scan back after the next scan.
     pub fn visit(
         &mut self,
         eng: &mut Engine,
@@ -99,21 +107,16 @@ impl Server {
         wraps: u16,
     ) -> After {
         let mut after = After::Nothing;
-        if serial::take_frame_end() {
-            self.refresh(board, st, wraps);
+        let start = board.stats_ticks();
+        if line::take_frame_end() {
+            self.refresh(eng, board, st, wraps);
             let now = board.now_ms();
-            let (address, status) = (self.address, &self.status);
-            let event = interrupt::free(|cs| {
-                let mut map = PlcMap {
-                    eng: &mut *eng,
-                    b: &mut *board,
-                    status,
-                };
-
-                // SAFETY: the map reaches the ticker, the ADC and EEPROM, never LINE.
-                unsafe { serial::LINE.with(cs, |l| l.slave.end(address, &mut map, now)) }
-            });
-            match event {
+            let mut map = PlcMap {
+                eng: &mut *eng,
+                b: &mut *board,
+                status: &self.status,
+            };
+            match line::judge(self.address, &mut map, now) {
                 Event::Slash => {
                     serial::inject(b'/');
                     after = After::BreakKey;
@@ -127,46 +130,47 @@ impl Server {
                 Event::Broadcast => self.reseal = true,
                 Event::None | Event::Dropped => {}
             }
-            return after;
-        }
-        if self.pending {
-            self.send(eng, board);
-        } else if self.reseal {
+        } else if !self.pending && self.reseal {
             // After the reply is queued: the master waits for the reply, not for the seal.
             self.reseal = false;
-            after = After::Written;
+            return After::Written;
+        }
+        if self.pending {
+            self.send(eng, board, start);
+        }
+        // A reply waiting for the line, or the seal: at the next END. A reply being fed
+        // comes back by itself each time the transmitter takes a byte.
+        if (self.pending && !self.started) || (!self.pending && self.reseal) {
+            line::again();
         }
         after
     }
 
-    /// Make up to [`BYTES_PER_VISIT`] reply bytes, as the transmit ring has room.
-    fn send(&mut self, eng: &mut Engine, board: &mut Nano) {
+    /// Make reply bytes while the transmit ring has room, at least [`MIN_BYTES`] and then
+    /// until the visit that began at Timer1 count `start` has lasted [`VISIT_TICKS`].
+    fn send(&mut self, eng: &mut Engine, board: &mut Nano, start: u16) {
         // A RUN display still going out must leave the line before the driver enable rises.
         if !self.started {
-            if !serial::reply_start() {
+            if !line::reply_start() {
                 return;
             }
             self.started = true;
         }
-        let status = &self.status;
-        for _ in 0..BYTES_PER_VISIT {
+        let mut map = PlcMap {
+            eng: &mut *eng,
+            b: &mut *board,
+            status: &self.status,
+        };
+        let mut made = 0u8;
+        while made < MIN_BYTES || map.b.stats_ticks().wrapping_sub(start) < VISIT_TICKS {
+            made += 1;
             if serial::tx_room() <= serial::TX_SIZE as u8 - AHEAD {
                 return;
             }
-            let byte = interrupt::free(|cs| {
-                let mut map = PlcMap {
-                    eng: &mut *eng,
-                    b: &mut *board,
-                    status,
-                };
-
-                // SAFETY: the map never reaches LINE.
-                unsafe { serial::LINE.with(cs, |l| l.slave.next_byte(&mut map)) }
-            });
-            match byte {
+            match line::reply_byte(&mut map) {
                 Some(b) => serial::tx(b),
                 None => {
-                    serial::reply_queued();
+                    line::reply_queued();
                     self.pending = false;
                     return;
                 }
@@ -174,22 +178,21 @@ impl Server {
         }
     }
 
-    /// The figures the input registers report, as they are now.
-    fn refresh(&mut self, board: &mut Nano, st: &RunState, wraps: u16) {
+    /// The figures the input registers report, as they are now, and the snapshot's
+    /// registers of this scan (SPEC §17).
+    fn refresh(&mut self, eng: &Engine, board: &mut Nano, st: &RunState, wraps: u16) {
         let overruns = board.rx_overruns();
         if overruns != self.overruns_at_start {
             self.flags |= STATUS_OVERRUN;
         }
-        let dropped = interrupt::free(|cs| {
-            // SAFETY: the closure does not re-enter LINE.
-            unsafe { serial::LINE.with(cs, |l| l.slave.dropped()) }
-        });
         let stats = ScanStats {
             min: st.min,
             max: st.max,
             count: (u32::from(wraps) << 16) | u32::from(st.scans),
             run_ms: board.now_ms().wrapping_sub(self.start_ms),
         };
-        self.status = Status::new(self.flags, &stats, overruns, dropped);
+        self.status
+            .refresh(self.flags, &stats, overruns, line::dropped());
+        self.status.take_scan(eng, board);
     }
 }

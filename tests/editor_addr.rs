@@ -2,10 +2,9 @@
 //! `ADDR` alone and by `VER`, kept in its own EEPROM cell that STORE, LOAD and FILL leave
 //! alone.
 
-#[path = "editor_harness.rs"]
-mod harness;
+mod support;
 
-use harness::Session;
+use support::editor::Session;
 use utile_core::store::{self, ADDR_CELL};
 
 #[test]

@@ -1,9 +1,8 @@
 //! Keys as terminals send them, the line editor, and bad input that must change nothing.
 
-#[path = "editor_harness.rs"]
-mod harness;
+mod support;
 
-use harness::Session;
+use support::editor::Session;
 use utile_core::opcodes::{lookup, END, NOP};
 use utile_kit::rng::Rng;
 

@@ -1,10 +1,9 @@
 //! LDC (SPEC §14, §15): counter presets and set-points with the live counts and readings —
 //! arrows, numbers, refused values, `Z`, the empty line, live refresh, LIST carrying them.
 
-#[path = "editor_harness.rs"]
-mod harness;
+mod support;
 
-use harness::Session;
+use support::editor::Session;
 use utile_kit::listing;
 
 /// LDC opened on a fresh editor; the bytes its full draw took.

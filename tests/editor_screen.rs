@@ -1,14 +1,9 @@
 //! The editor's screens as a VT100 shows them: power-up, the manual's examples of ch. 3 and
 //! 5, help, LDT, RUN, break-out, messages, and the byte cost of redraws.
-//!
-//! Long (about 580 lines) on purpose: one test per screen of the manual, each a short key
-//! script and the rows it must show; a test file per screen would repeat the harness set-up
-//! and scatter the manual's order.
 
-#[path = "editor_harness.rs"]
-mod harness;
+mod support;
 
-use harness::Session;
+use support::editor::Session;
 use utile_core::editor::Mode;
 use utile_core::opcodes::{self, BLANK, END, KEY, NOP};
 

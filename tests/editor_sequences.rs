@@ -2,10 +2,9 @@
 //! boundary with pauses between the pieces, on the main screen and on LDT; Ctrl-L; and
 //! type-ahead with a choked transmitter (output dropped, the screen catching up after).
 
-#[path = "editor_harness.rs"]
-mod harness;
+mod support;
 
-use harness::Session;
+use support::editor::Session;
 use utile_core::opcodes::{lookup, NOP};
 
 /// Sequences the editor does not use: nothing may change on any screen.

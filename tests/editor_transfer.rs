@@ -1,9 +1,8 @@
 //! STORE, LOAD, WRITE and READ from the editor (SPEC §9, §10).
 
-#[path = "editor_harness.rs"]
-mod harness;
+mod support;
 
-use harness::Session;
+use support::editor::Session;
 use utile_core::opcodes::{lookup, END};
 
 fn with_program() -> Session {

@@ -1,7 +1,7 @@
 //! Every executable command: its effect on the bit stack and on the ports (SPEC §4).
 
-mod common_scenario;
-use common_scenario::*;
+mod support;
+use support::scenario::*;
 use utile_core::board::Board;
 use utile_core::engine::{Engine, Flow, LINES};
 use utile_core::opcodes::{self, lookup, BLANK, END, NOP};

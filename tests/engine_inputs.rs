@@ -1,8 +1,8 @@
 //! The input pre-processor (SPEC §7): debounce against synthetic bounce trains, one edge per
 //! bouncing press, sticky edge bits, no phantom edges after reset or EX0, and latency.
 
-mod common_scenario;
-use common_scenario::*;
+mod support;
+use support::scenario::*;
 use utile_core::board::Board;
 use utile_core::ticker::{Debouncer, Ticker};
 use utile_kit::rng::Rng;

@@ -1,8 +1,8 @@
 //! The 16 one-shot timers (SPEC §6): units, presets 1, 2, 255, retrigger, reset priority by
 //! statement order, preset 0, no drift, and the 49.7-day wrap of the ms clock.
 
-mod common_scenario;
-use common_scenario::*;
+mod support;
+use support::scenario::*;
 use utile_core::engine::{Engine, TIMER_UNIT_MS, UNITS};
 use utile_core::opcodes::{END, POP_TK, POP_TR, PUSH_TQ};
 use utile_core::ticker::Ticker;

@@ -1,5 +1,6 @@
 //! The Modbus RTU codec of the core (SPEC §13): CRC-16/MODBUS, framing verdicts, every
-//! function and exception against a map shaped like §13's, replies produced byte by byte.
+//! function and exception against a map shaped like §13's (the kit's [`TestMap`]), replies
+//! produced byte by byte.
 
 use utile_core::modbus::crc::{crc16_modbus, Crc16};
 use utile_core::modbus::frame::{Drop, Receiver, Verdict, FRAME_MAX};
@@ -7,92 +8,12 @@ use utile_core::modbus::map::{Map, Table};
 use utile_core::modbus::reply::Reply;
 use utile_core::modbus::request::{handle, Answer};
 use utile_core::modbus::Exception;
-
-/// A map with §13's shape: coils 0..23; discrete inputs 0..5 and 8..49; holding registers
-/// 0..15 (0..255), 16..23 (any), 24..25 (0..1023); input registers 0..17 and 32..47.
-#[derive(Clone, Debug, PartialEq)]
-struct TestMap {
-    coils: [bool; 24],
-    discrete: [bool; 50],
-    holding: [u16; 26],
-    input: [u16; 48],
-    running: bool,
-}
-
-impl TestMap {
-    fn new() -> Self {
-        let mut m = Self {
-            coils: [false; 24],
-            discrete: [false; 50],
-            holding: [0; 26],
-            input: [0; 48],
-            running: true,
-        };
-        for (i, d) in m.discrete.iter_mut().enumerate() {
-            *d = i % 3 == 0;
-        }
-        for (i, r) in m.input.iter_mut().enumerate() {
-            *r = 0x1000 + i as u16;
-        }
-        m
-    }
-}
-
-impl Map for TestMap {
-    fn contains(&self, table: Table, addr: u16) -> bool {
-        match table {
-            Table::Coils => addr < 24,
-            Table::DiscreteInputs => addr < 6 || (8..50).contains(&addr),
-            Table::HoldingRegisters => addr < 26,
-            Table::InputRegisters => addr < 18 || (32..48).contains(&addr),
-        }
-    }
-    fn read(&mut self, table: Table, addr: u16) -> u16 {
-        let a = usize::from(addr);
-        match table {
-            Table::Coils => u16::from(self.coils[a]),
-            Table::DiscreteInputs => u16::from(self.discrete[a]),
-            Table::HoldingRegisters => self.holding[a],
-            Table::InputRegisters => self.input[a],
-        }
-    }
-    fn accepts(&self, addr: u16, value: u16) -> bool {
-        match addr {
-            0..=15 => value <= 255,
-            16..=23 => true,
-            _ => value <= 1023,
-        }
-    }
-    fn write(&mut self, table: Table, addr: u16, value: u16) {
-        match table {
-            Table::Coils => self.coils[usize::from(addr)] = value != 0,
-            Table::HoldingRegisters => self.holding[usize::from(addr)] = value,
-            _ => panic!("write to a read-only table"),
-        }
-    }
-    fn running(&self) -> bool {
-        self.running
-    }
-    fn id_len(&self) -> u8 {
-        5
-    }
-    fn id_byte(&self, i: u8) -> u8 {
-        b"uTile"[usize::from(i)]
-    }
-}
-
-/// `bytes` followed by their CRC, low byte first.
-fn with_crc(bytes: &[u8]) -> Vec<u8> {
-    let mut v = bytes.to_vec();
-    v.extend_from_slice(&crc16_modbus(bytes).to_le_bytes());
-    v
-}
+use utile_kit::modbus::map::TestMap;
+use utile_kit::modbus::{crc_ok, frame as request, with_crc};
 
 /// A request to slave 1 as a master sends it; the reply as the slave produces it.
 fn transact(map: &mut TestMap, pdu: &[u8]) -> Vec<u8> {
-    let mut frame = vec![1u8];
-    frame.extend_from_slice(pdu);
-    let frame = with_crc(&frame);
+    let frame = request(1, pdu);
     let mut rx = Receiver::new();
     for &b in &frame {
         rx.push(b, false);
@@ -112,7 +33,8 @@ fn transact(map: &mut TestMap, pdu: &[u8]) -> Vec<u8> {
     }
     assert!(reply.is_done());
     assert_eq!(out.len(), usize::from(reply.size()));
-    assert_eq!(crc16_modbus(&out), 0, "reply CRC");
+    assert!(crc_ok(&out), "reply CRC");
+    assert_eq!(map.outside.take(), None, "the codec stayed in the map");
     out
 }
 

@@ -1,11 +1,12 @@
 //! The slave of SPEC §13 on the engine (host): §13's map over a running program, writes that
 //! the program sees at its next scan, range checks that change nothing, broadcasts, drops,
-//! the break key, and the master's activity window.
+//! the break key, and the master's activity window; SPEC §17's snapshot (one scan's bits
+//! however late a reply reads them) and program window.
 
-use utile_core::engine::Engine;
-use utile_core::modbus::crc::crc16_modbus;
+use utile_core::engine::{Engine, Program};
 use utile_core::modbus::plc::{PlcMap, Status, STATUS_RUNNING};
 use utile_core::modbus::slave::{Event, Slave, ACTIVE_MS};
+use utile_core::modbus::snapshot::{self, Snapshot, PROGRAM, SNAPSHOT, SNAPSHOT_LEN};
 use utile_core::stats::ScanStats;
 use utile_kit::listing;
 use utile_kit::modbus;
@@ -22,14 +23,21 @@ struct Rig {
 
 impl Rig {
     fn new(words: &[&str]) -> Self {
-        let mut eng = Engine::new(listing::commands(words));
+        Self::with(listing::commands(words))
+    }
+
+    /// The program starts, as RUN starts it: the status takes its fingerprint.
+    fn with(prog: Program) -> Self {
+        let mut eng = Engine::new(prog);
         let mut b = SimBoard::new();
         eng.clear_runtime(&mut b);
+        let mut status = Status::new(STATUS_RUNNING, &ScanStats::new(), 0, 0);
+        status.start(&eng.prog.uf);
         Rig {
             eng,
             b,
             slave: Slave::new(),
-            status: Status::new(STATUS_RUNNING, &ScanStats::new(), 0, 0),
+            status,
         }
     }
 
@@ -39,25 +47,43 @@ impl Rig {
 
     /// Send `frame` (CRC appended unless `raw`), end it, and collect the reply.
     fn send(&mut self, bytes: &[u8], raw: bool) -> (Event, Vec<u8>) {
-        let mut frame = bytes.to_vec();
-        if !raw {
-            frame.extend_from_slice(&crc16_modbus(bytes).to_le_bytes());
+        let ev = self.judge(bytes, raw);
+        let mut reply = Vec::new();
+        while let Some(x) = self.next_byte() {
+            reply.push(x);
         }
+        (ev, reply)
+    }
+
+    /// Send `frame` (CRC appended unless `raw`) and judge it between two scans, as the
+    /// firmware does: §17's registers of one scan are taken first.
+    fn judge(&mut self, bytes: &[u8], raw: bool) -> Event {
+        let frame = if raw {
+            bytes.to_vec()
+        } else {
+            modbus::with_crc(bytes)
+        };
         for &x in &frame {
             self.slave.push(x, false);
         }
         let now = self.b.ticker.now_ms();
+        self.status.take_scan(&self.eng, &mut self.b);
         let mut map = PlcMap {
             eng: &mut self.eng,
             b: &mut self.b,
             status: &self.status,
         };
-        let ev = self.slave.end(ADDRESS, &mut map, now);
-        let mut reply = Vec::new();
-        while let Some(x) = self.slave.next_byte(&mut map) {
-            reply.push(x);
-        }
-        (ev, reply)
+        self.slave.end(ADDRESS, &mut map, now)
+    }
+
+    /// The reply's next byte, read from the map now.
+    fn next_byte(&mut self) -> Option<u8> {
+        let mut map = PlcMap {
+            eng: &mut self.eng,
+            b: &mut self.b,
+            status: &self.status,
+        };
+        self.slave.next_byte(&mut map)
     }
 
     /// A request to this slave; its reply's PDU after checking address and CRC.
@@ -70,13 +96,6 @@ impl Rig {
             .unwrap_or_else(|e| panic!("{e}: {reply:02X?}"))
             .to_vec()
     }
-}
-
-fn words(pdu: &[u8]) -> Vec<u16> {
-    pdu[2..]
-        .chunks(2)
-        .map(|c| u16::from_be_bytes([c[0], c[1]]))
-        .collect()
 }
 
 #[test]
@@ -105,7 +124,7 @@ fn presets_and_set_points_are_holding_registers_with_their_ranges() {
     r.eng.prog.counter_presets[0] = 300;
     r.eng.prog.set_points = [512, 0];
     let pdu = r.ask(&[0x03, 0, 0, 0, 26]);
-    let regs = words(&pdu);
+    let regs = modbus::registers(&pdu);
     assert_eq!(regs.len(), 26);
     assert_eq!((regs[3], regs[16], regs[24], regs[25]), (42, 300, 512, 0));
     // Out of range: exception 03 and nothing changes.
@@ -136,7 +155,7 @@ fn presets_and_set_points_are_holding_registers_with_their_ranges() {
     r.scan(2);
     assert!(r.b.output(0), "preset 3 reached");
     assert_eq!(
-        words(&r.ask(&[0x04, 0, 8, 0, 1])),
+        modbus::registers(&r.ask(&[0x04, 0, 8, 0, 1])),
         vec![3],
         "count C0 as input register 8"
     );
@@ -170,9 +189,9 @@ fn discrete_inputs_show_levels_flip_flops_timers_counters_and_thresholds() {
     assert!(bits[8 + 2], "Q2");
     assert!(bits[24 + 1], "TQ1 running");
     assert!(bits[48] && !bits[49], "H6 on, H7 disabled");
-    let regs = words(&r.ask(&[0x04, 0, 16, 0, 2]));
+    let regs = modbus::registers(&r.ask(&[0x04, 0, 16, 0, 2]));
     assert_eq!(regs, vec![700, 0], "readings of A6, A7");
-    let left = words(&r.ask(&[0x04, 0, 33, 0, 1]))[0];
+    let left = modbus::registers(&r.ask(&[0x04, 0, 33, 0, 1]))[0];
     assert_eq!(
         left, 20,
         "T1 retriggered every scan: 2.0 s left, in 0.1 s steps"
@@ -201,8 +220,7 @@ fn broadcasts_are_done_silently_and_other_frames_are_dropped_and_counted() {
         r.send(&[9, 0x03, 0, 0, 0, 1], false),
         (Event::Dropped, vec![])
     );
-    let mut bad = vec![ADDRESS, 0x03, 0, 0, 0, 1];
-    bad.extend_from_slice(&(crc16_modbus(&bad) ^ 1).to_le_bytes());
+    let bad = modbus::with_wrong_crc(&[ADDRESS, 0x03, 0, 0, 0, 1], 1);
     assert_eq!(r.send(&bad, true), (Event::Dropped, vec![]));
     assert_eq!(r.send(&[ADDRESS, 0x03], true), (Event::Dropped, vec![]));
     assert_eq!(r.slave.dropped(), 3);
@@ -238,4 +256,157 @@ fn report_server_id_names_utile_and_its_version() {
     let text = std::str::from_utf8(&pdu[4..]).unwrap();
     assert_eq!(text, concat!("uTile ", env!("CARGO_PKG_VERSION")));
     assert_eq!(usize::from(pdu[1]), pdu.len() - 2);
+}
+
+/// FC04 of `qty` input registers from `start`: the registers, or the exception's code.
+fn read_input(r: &mut Rig, start: u16, qty: u16) -> Result<Vec<u16>, u8> {
+    let [s0, s1] = start.to_be_bytes();
+    let [q0, q1] = qty.to_be_bytes();
+    let pdu = r.ask(&[0x04, s0, s1, q0, q1]);
+    if pdu[0] == 0x84 {
+        return Err(pdu[1]);
+    }
+    Ok(modbus::registers(&pdu))
+}
+
+#[test]
+fn the_snapshot_shows_the_whole_picture_in_one_read() {
+    let mut prog = listing::commands(&[
+        "SET", ".S2", "SET", ".TK1", "U0.", ".Y0", "A0.", "!", ".CU0", "CQ0.", ".Y3", "H6.", ".Y1",
+        "SET", ".V7", "END",
+    ]);
+    prog.presets[1] = 20; // 2 s
+    prog.counter_presets[0] = 2;
+    prog.set_points = [100, 0];
+    let mut r = Rig::with(prog);
+    r.b.analog.set_points([100, 0]);
+    r.b.set_analog(6, 700);
+    r.b.set_analog(7, 33);
+    r.eng.pu = 0b1000_0001;
+    for _ in 0..2 {
+        r.b.press(0);
+        r.scan(30);
+        r.b.release(0);
+        r.scan(30);
+    }
+    r.b.press(4);
+    r.scan(30);
+    r.status = Status::new(
+        STATUS_RUNNING,
+        &ScanStats {
+            min: 80,
+            max: 300,
+            count: 0x0001_2345,
+            run_ms: 1000,
+        },
+        4,
+        5,
+    );
+    r.status.start(&r.eng.prog.uf);
+    let regs = read_input(&mut r, SNAPSHOT, SNAPSHOT_LEN).expect("the snapshot");
+    let s = Snapshot::from_registers(&regs.clone().try_into().unwrap());
+    assert_eq!(s.status, STATUS_RUNNING);
+    assert_eq!(s.inputs, 0b10_1111, "A0..A3, A5 open, A4 pressed");
+    assert_eq!(s.thresholds, 0b01, "H6 on, H7 disabled");
+    assert_eq!(s.outputs, 0b1011, "Y0 (U0), Y1 (H6), Y3 (CQ0)");
+    assert_eq!((s.u, s.v), (0b1000_0001, 0b1000_0000));
+    assert_eq!(s.q, 1 << 2);
+    assert_eq!(s.tq, 1 << 1);
+    assert_eq!(s.cq, 1);
+    assert_eq!(s.scans, 0x0001_2345);
+    assert_eq!(s.counts[0], 2);
+    assert_eq!(s.readings, [700, 33]);
+    assert_eq!(s.time_left[1], 20, "T1 retriggered every scan: 2.0 s");
+    // Min and max halved (Timer1 ticks), the mean 1000 ms over 74,565 scans.
+    assert_eq!(s.scan_us, [40, 13, 150]);
+    assert_eq!((s.overruns, s.dropped), (4, 5));
+    assert_eq!(s.fingerprint, snapshot::fingerprint(&r.eng.prog.uf));
+    // Every register but the fingerprint repeats its §13 twin.
+    let ir = |r: &mut Rig, a, n| read_input(r, a, n).unwrap();
+    assert_eq!(regs[0], ir(&mut r, 0, 1)[0]);
+    assert_eq!(regs[6..8], ir(&mut r, 4, 2)[..]);
+    assert_eq!(regs[8..18], ir(&mut r, 8, 10)[..]);
+    assert_eq!(regs[18..34], ir(&mut r, 32, 16)[..]);
+    assert_eq!(regs[34..37], ir(&mut r, 1, 3)[..]);
+    assert_eq!(regs[37..39], ir(&mut r, 6, 2)[..]);
+}
+
+#[test]
+fn the_program_window_holds_every_line_two_per_register() {
+    let mut prog = Program::blank();
+    for (i, line) in prog.uf.iter_mut().enumerate() {
+        *line = (i as u8).wrapping_mul(37);
+    }
+    let mut r = Rig::with(prog.clone());
+    let mut regs = read_input(&mut r, PROGRAM, 125).unwrap();
+    regs.extend(read_input(&mut r, PROGRAM + 125, 3).unwrap());
+    let uf = snapshot::program_from_registers(&regs.try_into().unwrap());
+    assert_eq!(uf, prog.uf);
+    assert_eq!(
+        read_input(&mut r, PROGRAM, 1).unwrap(),
+        vec![u16::from_be_bytes([prog.uf[0], prog.uf[1]])],
+        "line 000 in the high byte"
+    );
+    // Holding registers still hold the presets, not the program.
+    assert_eq!(r.ask(&[0x03, 1, 0, 0, 1]), vec![0x83, 2]);
+}
+
+#[test]
+fn any_part_of_a_read_outside_the_windows_is_exception_02() {
+    let mut r = Rig::new(&["END"]);
+    for (start, qty) in [
+        (SNAPSHOT - 1, 2),
+        (SNAPSHOT + SNAPSHOT_LEN - 1, 2),
+        (SNAPSHOT + SNAPSHOT_LEN, 1),
+        (48, 17),
+        (0, 104),
+        (PROGRAM - 1, 2),
+        (PROGRAM + 127, 2),
+        (PROGRAM + 128, 1),
+        (300, 125),
+    ] {
+        assert_eq!(read_input(&mut r, start, qty), Err(2), "{start} x {qty}");
+    }
+    assert!(read_input(&mut r, SNAPSHOT + SNAPSHOT_LEN - 1, 1).is_ok());
+    assert!(read_input(&mut r, PROGRAM + 127, 1).is_ok());
+    assert!(read_input(&mut r, PROGRAM + 3, 125).is_ok());
+    // The discrete inputs, coils and holding registers have no §17 windows.
+    assert_eq!(r.ask(&[0x02, 0, 64, 0, 1]), vec![0x82, 2]);
+    assert_eq!(r.ask(&[0x01, 1, 0, 0, 1]), vec![0x81, 2]);
+}
+
+#[test]
+fn a_reply_read_over_later_scans_still_shows_the_bits_of_one_scan() {
+    // Y0..Y7 count the scans; U and V copy them; every Q and TQ follows Y0.
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/scan_counter.utl");
+    let text = std::fs::read_to_string(path).expect("the listing");
+    let mut r = Rig::with(listing::parse(path, &text).unwrap_or_else(|e| panic!("{e}")));
+    let mut scans = 0u32;
+    for round in 0..5 {
+        for _ in 0..round * 7 + 3 {
+            r.eng.scan(&mut r.b);
+            scans += 1;
+        }
+        let st = ScanStats {
+            count: scans,
+            ..ScanStats::new()
+        };
+        r.status.refresh(STATUS_RUNNING, &st, 0, 0);
+        let ev = r.judge(&[ADDRESS, 0x04, 0, SNAPSHOT as u8, 0, 8], false);
+        assert_eq!(ev, Event::Reply);
+        let y = u16::from(r.eng.py);
+        assert_eq!(y, (scans & 0xFF) as u16, "the program counts its scans");
+        // Between every two bytes of the reply, a scan changes every bit.
+        let mut reply = Vec::new();
+        while let Some(x) = r.next_byte() {
+            reply.push(x);
+            r.eng.scan(&mut r.b);
+            scans += 1;
+        }
+        let regs = modbus::registers(modbus::reply_pdu(ADDRESS, &reply).unwrap());
+        // A0..A5 open; Y, U and V the count; Q and TQ all Y0: of the judged scan.
+        let q = 0u16.wrapping_sub(y & 1);
+        assert_eq!(regs[1..5], [y << 8 | 0x3F, y << 8 | y, q, q]);
+        assert_eq!(u32::from(regs[6]) << 16 | u32::from(regs[7]), scans - 21);
+    }
 }

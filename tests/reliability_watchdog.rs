@@ -12,16 +12,17 @@
 //! first, the stored program runs again (D8), or the editor's screen comes back with the UF
 //! kept, and Modbus's status register tells a watchdog restart where the firmware can know.
 
-mod common;
+mod support;
 
 use std::path::PathBuf;
 use std::sync::Once;
 
-use common::{Board, Rig, CYCLES_PER_MS};
+use support::chip::{Board, Rig, CYCLES_PER_MS};
 use utile_core::engine::Program;
 use utile_core::modbus::plc::STATUS_WATCHDOG;
 use utile_core::opcodes::{lookup, END};
 use utile_kit::modbus;
+use utile_kit::setup;
 use utile_kit::sim::SimBoard;
 use utile_kit::simavr::{frame_cycles, ArduinoBoot, RxPacing};
 
@@ -50,7 +51,7 @@ fn hang_elf() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("out/m328-nano-utile-hang-test.elf")
 }
 
-/// Every test here runs the hang-test image (common::Board reads `UTILE_ELF`).
+/// Every test here runs the hang-test image (support::chip::Board reads `UTILE_ELF`).
 fn use_hang_image() {
     static SET: Once = Once::new();
     SET.call_once(|| {
@@ -63,24 +64,6 @@ fn use_hang_image() {
         // Set once, before any simulator starts, to the same value for every test.
         std::env::set_var("UTILE_ELF", elf);
     });
-}
-
-/// The boot loader's hex is installed (always in CI, where `./x setup` installs it).
-fn installed(boot: Option<ArduinoBoot>) -> bool {
-    let Some(boot) = boot else { return true };
-    if boot.hex_path().is_file() {
-        return true;
-    }
-    assert!(
-        std::env::var_os("CI").is_none(),
-        "{} missing in CI: `./x setup` installs arduino-core-avr",
-        boot.hex_path().display()
-    );
-    eprintln!(
-        "SKIPPED: {} missing (`./x setup`)",
-        boot.hex_path().display()
-    );
-    false
 }
 
 /// EEPROM with `KEY SET .Y0 SET .Y7 END` stored: Y0 and Y7 on while it runs.
@@ -230,7 +213,7 @@ fn hang_while_running(
 /// Hang with interrupts on: a software restart (no reset at all) about 128 ms after the
 /// last feed, the program again at once, and the status tells a watchdog restart.
 fn interrupts_on(boot: Option<ArduinoBoot>) {
-    if !installed(boot) {
+    if !boot.is_none_or(setup::boot_loader_installed) {
         return;
     }
     let (rec, again, status) =
@@ -298,7 +281,7 @@ fn with_d9_grounded_the_outputs_are_high_from_the_first_instant_after_the_reset(
 #[test]
 fn a_hang_with_interrupts_off_behind_optiboot_resets_and_optiboot_starts_the_firmware() {
     let boot = Some(ArduinoBoot::Optiboot);
-    if !installed(boot) {
+    if !boot.is_none_or(setup::boot_loader_installed) {
         return;
     }
     let (rec, again, status) =
@@ -318,7 +301,7 @@ fn a_hang_with_interrupts_off_behind_optiboot_resets_and_optiboot_starts_the_fir
 #[test]
 fn a_hang_with_interrupts_off_behind_the_old_boot_loader_cannot_be_saved() {
     let boot = Some(ArduinoBoot::Old);
-    if !installed(boot) {
+    if !boot.is_none_or(setup::boot_loader_installed) {
         return;
     }
     let mut nano = power_up(
@@ -361,7 +344,7 @@ fn a_hang_with_interrupts_off_behind_the_old_boot_loader_cannot_be_saved() {
 /// Without D8 the chip comes back in the editor: the screen drawn again, the outputs off
 /// and the UF kept (a warm restart).
 fn editor_comes_back(boot: Option<ArduinoBoot>, kind: Hang) {
-    if !installed(boot) {
+    if !boot.is_none_or(setup::boot_loader_installed) {
         return;
     }
     let mut nano = power_up(boot, Rig::default());

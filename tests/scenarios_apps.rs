@@ -3,13 +3,9 @@
 //!
 //! Inputs: a normally-open push-button pulls its input low while pressed (`press`), so
 //! "pressing" a switch is a falling level and releasing it a rising one (the leading edge).
-//!
-//! Long (about 550 lines) on purpose: the manual's ch. 11 programs, each with its timeline and
-//! the checks taken from its description, in the manual's order; the file is a catalogue, not
-//! logic.
 
-mod common_scenario;
-use common_scenario::*;
+mod support;
+use support::scenario::*;
 use utile_core::opcodes::{self, END};
 
 const ALL_HIGH: u8 = 0x3F;

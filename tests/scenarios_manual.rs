@@ -1,8 +1,8 @@
 //! The manual's examples 5–13 (ch. 5 and 8) as scenarios: program, input timeline, outputs.
 //! Push-buttons S0..S3 are normally open to GND: pressed = input low.
 
-mod common_scenario;
-use common_scenario::*;
+mod support;
+use support::scenario::*;
 use utile_core::engine::Engine;
 use utile_core::opcodes::lookup;
 use utile_kit::sim::SimBoard;

@@ -18,15 +18,11 @@
 //! random point between two samples.
 //!
 //! Needs `out/m328-nano-utile.elf` (`cargo fw`). About 90 s of simulated time in all.
-//!
-//! Long (about 510 lines) on purpose: the same ch. 11 programs as tests/scenarios_apps.rs, on
-//! the real image; each test is a timeline and its checks, in the manual's order.
 
-mod common;
-mod common_scenario;
+mod support;
 
-use common::{Board, Rig, CYCLES_PER_MS};
-use common_scenario::{changes, clock, listing, parse_timeline, Act, DEBOUNCE_MS};
+use support::chip::{Board, Rig, CYCLES_PER_MS};
+use support::scenario::{changes, clock, listing, parse_timeline, Act, DEBOUNCE_MS};
 use utile_core::engine::Program;
 use utile_core::ihex::{HexEvent, HexReader};
 use utile_core::image;

@@ -1,9 +1,9 @@
 //! The real firmware image in simavr: reset state of the pins, out_sense, inputs, autostart
 //! from EEPROM, the main screen. Needs `out/m328-nano-utile.elf` (`cargo fw`).
 
-mod common;
+mod support;
 
-use common::{Board, Rig, CYCLES_PER_MS, RAMSTART, STACK_PAINT};
+use support::chip::{Board, Rig, CYCLES_PER_MS, RAMSTART, STACK_PAINT};
 use utile_core::engine::Program;
 use utile_core::opcodes::{END, LOAD_PA, NOT_ALL, STORE_PY};
 use utile_kit::sim::SimBoard;

@@ -5,12 +5,13 @@
 //!
 //! Needs `out/m328-nano-utile.elf` (`cargo fw`).
 
-mod common;
+mod support;
 
-use common::{elf_path, CYCLES_PER_MS};
+use support::chip::CYCLES_PER_MS;
 use utile_core::store;
 use utile_kit::listing;
 use utile_kit::modbus;
+use utile_kit::setup::firmware_elf;
 use utile_kit::sim::SimBoard;
 use utile_kit::simavr::{frame_cycles, Bus, BusByte, Chip, RigPin};
 
@@ -19,7 +20,7 @@ fn chip(address: u8) -> Chip {
     let mut b = SimBoard::new();
     store::store(&listing::commands(&["U0.", ".Y0", "KEY", "END"]), &mut b).expect("STORE");
     assert!(store::set_slave_address(&mut b, address));
-    let mut c = Chip::load(&elf_path()).unwrap_or_else(|e| panic!("{e}"));
+    let mut c = Chip::load(&firmware_elf()).unwrap_or_else(|e| panic!("{e}"));
     c.set_eeprom(0, &b.eeprom);
     c.hold_low(RigPin::D8, true);
     c

@@ -5,9 +5,9 @@
 //!
 //! Needs `out/m328-nano-utile.elf` (`cargo fw`).
 
-mod common;
+mod support;
 
-use common::{Board, Rig};
+use support::chip::{Board, Rig, CYCLES_PER_MS};
 use utile_core::engine::Program;
 use utile_core::ihex::{self, HexEvent, HexReader};
 use utile_core::{image, store};
@@ -212,6 +212,50 @@ fn the_tank_fills_between_its_marks_raises_the_alarm_and_does_not_chatter() {
     }
     assert_eq!(changes, 1, "the pump stopped once and stayed off");
     assert_eq!(last, 0);
+}
+
+/// Whether the pump (Y0) or the alarm (Y1) was on, every 0.25 ms from 2 ms to 60 ms after a
+/// reset.
+fn pump_or_alarm_after_reset(nano: &mut Board) -> Vec<bool> {
+    nano.run_ms(2);
+    (0..232)
+        .map(|_| {
+            nano.run_cycles(CYCLES_PER_MS / 4);
+            nano.outputs() & (Y0 | Y1) != 0
+        })
+        .collect()
+}
+
+#[test]
+fn the_tank_pump_stays_off_from_power_up_when_the_level_is_between_its_marks() {
+    // The first scans must see the level, not the zeros of no reading yet: with the level
+    // between the marks the tank example's flip-flop would otherwise latch the pump on at
+    // every power-up and every reset (it did, 7 ms after reset, before the fix).
+    let prog = example("tank-fill");
+    let mut nano = Board::load(Rig {
+        d8: true,
+        d9: false,
+        eeprom: Some(eeprom_with(&prog)),
+    });
+    nano.chip.set_analog_mv(6, mv(512));
+    nano.chip.set_analog_mv(7, mv(512));
+    for start in ["power-up", "reset button", "power cycle"] {
+        match start {
+            "reset button" => nano.reset_button(),
+            "power cycle" => nano.power_cycle(),
+            _ => {}
+        }
+        let on = pump_or_alarm_after_reset(&mut nano);
+        assert!(
+            on.iter().all(|on| !on),
+            "{start}: the pump or the alarm came on at {:?} ms",
+            on.iter().position(|&on| on).map(|i| 2.25 + i as f64 / 4.0)
+        );
+        // The program runs: a low level starts the pump and lights the alarm.
+        level(&mut nano, 100, 40);
+        assert_eq!(nano.outputs() & (Y0 | Y1), Y0 | Y1, "{start}: filling");
+        level(&mut nano, 512, 40);
+    }
 }
 
 /// `prog` as a version-1 image (278 bytes), as the version-1 firmware stored it.

@@ -1,18 +1,20 @@
-//! The Modbus RTU slave of SPEC §13 on the REAL firmware image in simavr, with the line
-//! timed as a wire at 19200 8N1 in both directions (`RxPacing::Line`): a master in this test
-//! sends requests with the silences it chooses and reads the replies with the cycle of each
-//! stop bit; D10, the RS-485 driver enable, is sampled all along.
+//! The Modbus RTU slave of SPEC §13 and §17 on the REAL firmware image in simavr, with the
+//! line timed as a wire at 19200 8N1 in both directions (`RxPacing::Line`): a master in this
+//! test sends requests with the silences it chooses and reads the replies with the cycle of
+//! each stop bit; D10, the RS-485 driver enable, is sampled all along.
 //!
 //! Needs `out/m328-nano-utile.elf` (`cargo fw`).
 
-mod common;
+mod support;
 
-use common::{Board, Rig, CYCLES_PER_MS};
+use support::chip::{Board, Rig, CYCLES_PER_MS};
 use utile_core::engine::Program;
-use utile_core::modbus::crc::crc16_modbus;
+use utile_core::modbus::plc::{STATUS_RUNNING, STATUS_STORED};
+use utile_core::modbus::snapshot::{self, Snapshot, PROGRAM, SNAPSHOT, SNAPSHOT_LEN};
 use utile_core::store;
 use utile_kit::listing;
 use utile_kit::modbus;
+use utile_kit::rng::Rng;
 use utile_kit::sim::SimBoard;
 use utile_kit::simavr::{frame_cycles, RxPacing};
 
@@ -24,6 +26,18 @@ fn char_cycles() -> u64 {
 /// The slave's address when EEPROM holds none.
 const ADDRESS: u8 = 1;
 
+/// The board with `prog` stored in EEPROM, booted; `d8`: the autostart jumper fitted.
+fn stored(prog: &Program, d8: bool) -> Board {
+    let mut b = SimBoard::new();
+    store::store(prog, &mut b).expect("STORE");
+    let eeprom: &'static [u8] = Box::leak(b.eeprom.into_boxed_slice());
+    Board::boot_with(Rig {
+        d8,
+        d9: false,
+        eeprom: Some(eeprom),
+    })
+}
+
 /// A chip running `prog` (autostarted from EEPROM), its line timed as a wire.
 struct Line {
     nano: Board,
@@ -33,14 +47,7 @@ struct Line {
 
 impl Line {
     fn new(prog: &Program) -> Self {
-        let mut b = SimBoard::new();
-        store::store(prog, &mut b).expect("STORE");
-        let eeprom: &'static [u8] = Box::leak(b.eeprom.into_boxed_slice());
-        let mut nano = Board::boot_with(Rig {
-            d8: true,
-            d9: false,
-            eeprom: Some(eeprom),
-        });
+        let mut nano = stored(prog, true);
         nano.chip.set_rx_pacing(RxPacing::Line { baud: 19_200 });
         // The RUN screen is drawn first (about 0.4 s of line time): a master talks after it.
         nano.run_ms(1_000);
@@ -203,8 +210,7 @@ fn replies_start_soon_and_d10_frames_each_reply_exactly() {
 fn broken_frames_get_no_answer_and_are_counted() {
     let mut line = Line::new(&remote_start());
     // Bad CRC.
-    let mut bad = vec![ADDRESS, 0x03, 0, 0, 0, 1];
-    bad.extend_from_slice(&(crc16_modbus(&bad) ^ 0x0101).to_le_bytes());
+    let bad = modbus::with_wrong_crc(&[ADDRESS, 0x03, 0, 0, 0, 1], 0x0101);
     line.send(4 * char_cycles(), &bad);
     assert!(line.collect().is_empty(), "no answer to a bad CRC");
     // Another address.
@@ -234,6 +240,66 @@ fn a_lone_slash_breaks_key_and_a_frame_with_0x2f_does_not() {
     assert!(
         String::from_utf8_lossy(&line.nano.chip.take_output()).contains("Strike any key"),
         "the break key stopped the program"
+    );
+}
+
+/// `n` random bytes, none a `/`.
+fn noise(n: usize, seed: u64) -> Vec<u8> {
+    let mut rng = Rng::new(seed);
+    let mut bytes = Vec::with_capacity(n);
+    while bytes.len() < n {
+        let b = rng.byte();
+        if b != b'/' {
+            bytes.push(b);
+        }
+    }
+    bytes
+}
+
+#[test]
+fn a_lone_slash_breaks_key_after_line_noise_on_the_wire() {
+    // SPEC §12, §13 (issue 24): noise changes nothing, and a lone `/` after a silence
+    // breaks KEY, however much noise came first.
+    for (n, seed) in [(8, 1), (64, 2), (500, 3)] {
+        let mut line = Line::new(&listing::commands(&["PA.", ".PY", "KEY", "END"]));
+        line.send(0, &noise(n, seed));
+        line.send(20 * CYCLES_PER_MS, b"/");
+        let bytes_ms = n as u64 * char_cycles() / CYCLES_PER_MS;
+        line.run((bytes_ms + 100) * CYCLES_PER_MS);
+        let text = String::from_utf8_lossy(&line.nano.chip.take_output()).into_owned();
+        assert!(
+            text.contains("Strike any key"),
+            "{n} noise bytes, 20 ms, `/`: {text:?}"
+        );
+    }
+}
+
+#[test]
+fn a_lone_slash_typed_after_line_noise_breaks_key_in_the_virtual_nano_too() {
+    // The virtual Nano's terminal (`RxPacing::AfterRead`) once fed the line at 11 bits a
+    // byte: a writer at the true 19200 baud ran ahead of it, and after 500 bytes its 20 ms
+    // of silence was gone: the `/` joined the noise's frame and KEY never saw it alone.
+    let mut nano = stored(&listing::commands(&["PA.", ".PY", "KEY", "END"]), false);
+    nano.chip.set_rx_pacing(RxPacing::AfterRead);
+    assert!(nano.wait_for("User File", 2_000));
+    // Started from the terminal, as the issue's user did.
+    for line in ["LOAD", "EX0"] {
+        nano.enter(line, 500);
+    }
+    assert!(nano.wait_for("Running", 1_000));
+    nano.run_ms(500);
+    nano.take_output();
+    // A writer at the line rate: one byte every character time, whatever the chip does.
+    for byte in noise(500, 4) {
+        nano.chip.send(&[byte]);
+        nano.run_cycles(char_cycles());
+    }
+    nano.run_ms(20);
+    nano.type_bytes(b"/");
+    assert!(
+        nano.wait_for("Strike any key", 300),
+        "500 noise bytes, 20 ms, `/`: {:?}",
+        String::from_utf8_lossy(&nano.take_output())
     );
 }
 
@@ -353,4 +419,147 @@ fn store_keeps_presets_and_set_points_written_over_modbus() {
             && p.set_points == [500, 0]),
         "a stored image holds the values written over Modbus"
     );
+}
+
+/// FC04 of `qty` input registers from `start` through the real image.
+fn read_input(line: &mut Line, start: u16, qty: u16) -> Vec<u16> {
+    let [s0, s1] = start.to_be_bytes();
+    let [q0, q1] = qty.to_be_bytes();
+    let (_, reply) = line.transact(&[0x04, s0, s1, q0, q1]);
+    let pdu = pdu(&reply);
+    assert_eq!(pdu[0], 0x04, "FC04 {start} x {qty}: {pdu:02X?}");
+    modbus::registers(&pdu)
+}
+
+#[test]
+fn the_snapshot_and_the_program_of_a_listing_are_read_whole_and_its_fingerprint_agrees() {
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/tank-fill.utl"),
+    )
+    .expect("the tank example");
+    let prog = listing::parse("tank-fill", &text).expect("the tank listing");
+    let mut line = Line::new(&prog);
+    // The level at 1.0 V (204 counts): under the low mark, the pump and the alarm are on.
+    line.nano.chip.set_analog_mv(6, 1000);
+    line.nano.chip.set_analog_mv(7, 1000);
+    line.run(200 * CYCLES_PER_MS);
+    let regs = read_input(&mut line, SNAPSHOT, SNAPSHOT_LEN);
+    let s = Snapshot::from_registers(&regs.clone().try_into().expect("40 registers"));
+    assert_eq!(
+        s.fingerprint,
+        snapshot::fingerprint(&prog.uf),
+        "the running program is the listing's"
+    );
+    assert_eq!(
+        s.status & (STATUS_RUNNING | STATUS_STORED),
+        STATUS_RUNNING | STATUS_STORED
+    );
+    assert_eq!(s.inputs, 0x3F, "A0..A5 open");
+    assert_eq!(
+        (s.thresholds, s.outputs, s.q),
+        (0, 0b11, 1),
+        "pump, alarm, Q0"
+    );
+    assert!(
+        s.readings.iter().all(|r| (190..=220).contains(r)),
+        "{:?}",
+        s.readings
+    );
+    assert!(s.scans > 1000, "scans since RUN: {}", s.scans);
+    assert!(
+        s.scan_us[0] > 0 && s.scan_us[0] <= s.scan_us[2],
+        "{:?}",
+        s.scan_us
+    );
+    // The same figures as §13's registers (read a little later: the scan count grew).
+    let ir = read_input(&mut line, 0, 8);
+    assert_eq!(ir[0], s.status);
+    assert!(u32::from(ir[4]) << 16 | u32::from(ir[5]) > s.scans);
+    // The program window: the listing's 256 lines, two per register.
+    let mut words = read_input(&mut line, PROGRAM, 125);
+    words.extend(read_input(&mut line, PROGRAM + 125, 3));
+    let uf = snapshot::program_from_registers(&words.try_into().expect("128 registers"));
+    assert_eq!(uf, prog.uf);
+    // Any part of a read outside the map: exception 02.
+    for (start, qty) in [
+        (SNAPSHOT - 1, 2),
+        (SNAPSHOT + SNAPSHOT_LEN - 1, 2),
+        (PROGRAM + 127, 2),
+    ] {
+        let [s0, s1] = start.to_be_bytes();
+        let (_, reply) = line.transact(&[0x04, s0, s1, 0, qty as u8]);
+        assert_eq!(pdu(&reply), vec![0x84, 2], "{start} x {qty}");
+    }
+}
+
+/// A test program from `tests/data/`.
+fn data_listing(name: &str) -> Program {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name);
+    let text = std::fs::read_to_string(&path).expect("the listing");
+    listing::parse(name, &text).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn a_reply_streamed_over_many_scans_shows_the_bits_of_one_scan() {
+    // Y0..Y7 count the scans; U and V copy them; every Q and TQ follows Y0.
+    let mut line = Line::new(&data_listing("scan_counter.utl"));
+    for (k, qty) in [8u16, SNAPSHOT_LEN, 8, SNAPSHOT_LEN, 8]
+        .into_iter()
+        .enumerate()
+    {
+        let (_, reply) = line.transact(&[0x04, 0, SNAPSHOT as u8, 0, qty as u8]);
+        let first = reply[0].1;
+        let regs = modbus::registers(&pdu(&reply));
+        let scans = u32::from(regs[6]) << 16 | u32::from(regs[7]);
+        // The reply took many scans to go out (about 0.5 ms a byte).
+        let spent = (reply.last().unwrap().1 - first) / CYCLES_PER_MS;
+        assert!(spent >= 10, "request {k}: the reply took {spent} ms");
+        let y = (scans & 0xFF) as u16;
+        let all = if y & 1 == 1 { 0xFFFF } else { 0 };
+        assert_eq!(regs[1] >> 8, y, "request {k}: Y0..Y7 at scan {scans}");
+        assert_eq!(
+            regs[2..5],
+            [y << 8 | y, all, all],
+            "request {k}: U/V, Q and TQ of scan {scans}"
+        );
+    }
+}
+
+#[test]
+fn the_longest_programs_still_answer_within_the_spec_and_without_gaps() {
+    // 256 lines scanned (no END), and 255 of the slowest lines there are (each restarts
+    // TF: a 32-bit deadline), about 0.5 ms a scan.
+    let no_end = listing::commands(&["Y0.", "!", ".Y0"]);
+    let slowest = data_listing("slowest_scan.utl");
+    let mut write = vec![0x10, 0, 0, 0, 16, 32];
+    for _ in 0..16 {
+        write.extend_from_slice(&[0, 10]);
+    }
+    let c = char_cycles();
+    for (name, prog) in [("no END", no_end), ("127 x SET .TKF", slowest)] {
+        let mut line = Line::new(&prog);
+        for _ in 0..3 {
+            for req in [&[0x03, 0, 0, 0, 16][..], &[0x04, 0, 64, 0, 40], &write] {
+                let (end, reply) = line.transact(req);
+                assert_eq!(pdu(&reply)[0], req[0], "{name}: reply to {req:02X?}");
+                let latency_ms = (reply[0].1 - c - end) as f64 / CYCLES_PER_MS as f64;
+                assert!(
+                    latency_ms <= 5.0,
+                    "{name}: SPEC §13, a reply within 5 ms ({latency_ms:.2} ms)"
+                );
+                for w in reply.windows(2) {
+                    assert!(
+                        w[1].1 - w[0].1 < c * 3 / 2,
+                        "{name}: a gap inside the reply to {req:02X?}: {:?}",
+                        reply
+                            .iter()
+                            .map(|r| (r.1 - reply[0].1) / 100)
+                            .collect::<Vec<_>>()
+                    );
+                }
+            }
+        }
+    }
 }

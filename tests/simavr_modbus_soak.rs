@@ -6,10 +6,9 @@
 //! Needs `out/m328-nano-utile.elf` (`cargo fw`). About two minutes of CPU (BENCHMARKS.md,
 //! "The test loop").
 
-mod common;
+mod support;
 
-use common::{Board, Rig, CYCLES_PER_MS};
-use utile_core::modbus::crc::crc16_modbus;
+use support::chip::{Board, Rig, CYCLES_PER_MS};
 use utile_core::store;
 use utile_kit::listing;
 use utile_kit::modbus;
@@ -69,13 +68,10 @@ impl Master {
                 (0..len).map(|_| self.rng.byte()).collect::<Vec<u8>>()
             }
             1 => modbus::frame(2 + self.rng.below(200) as u8, &[0x03, 0, 0, 0, 4]),
-            _ => {
-                let mut f = vec![ADDRESS, 0x04, 0, 0, 0, 8];
-                f.extend_from_slice(
-                    &(crc16_modbus(&f) ^ (1 + self.rng.below(0xFFFE) as u16)).to_le_bytes(),
-                );
-                f
-            }
+            _ => modbus::with_wrong_crc(
+                &[ADDRESS, 0x04, 0, 0, 0, 8],
+                1 + self.rng.below(0xFFFE) as u16,
+            ),
         };
         if kind == 0 && frame.len() > 3 {
             // Random bytes that happen to carry a good CRC would be a real frame: break it.

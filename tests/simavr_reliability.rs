@@ -2,8 +2,8 @@
 //! editor paths against the RAM budget, and ten simulated minutes of random inputs and UART
 //! noise. Needs `out/m328-nano-utile.elf` (`cargo fw`).
 
-mod common;
-use common::{contains, Board, Rig, RAMSTART, STACK_PAINT};
+mod support;
+use support::chip::{contains, Board, Rig, RAMSTART, STACK_PAINT};
 use utile_core::engine::Program;
 use utile_core::opcodes::{self, NOP};
 use utile_core::{ihex, image, store};

@@ -10,12 +10,12 @@
 //! starts and retirements, edges, display requests, the END guard, the clock's wrap, and
 //! counters (counting, resets, saturation at 65535, CQ changes).
 
-mod common;
+mod support;
 
 use std::path::PathBuf;
 use std::time::Instant;
 
-use common::{Board, Rig, CYCLES_PER_MS};
+use support::chip::{Board, Rig, CYCLES_PER_MS};
 
 /// `TRIALS` and `SCANS` in src/hal/scan_check/mod.rs.
 const TRIALS: u64 = 400;
@@ -25,7 +25,7 @@ const SCANS: u64 = 6;
 const LIMIT_MS: u64 = 120_000;
 
 /// The coverage counters the PASS line must report, each non-zero.
-const COVERAGE: [&str; 13] = [
+const COVERAGE: [&str; 14] = [
     "py",
     "q",
     "tk",
@@ -35,6 +35,7 @@ const COVERAGE: [&str; 13] = [
     "guard",
     "wraps",
     "bursts",
+    "by_line",
     "counted",
     "counter_resets",
     "saturated",
@@ -69,7 +70,7 @@ fn the_assembly_scan_matches_the_core_scan_on_random_programs() {
     let started = Instant::now();
     let mut nano = Board::load(Rig::default());
     let mut ms = 0;
-    while ms < LIMIT_MS && !common::contains(&nano.transcript, b"scan-check END") {
+    while ms < LIMIT_MS && !support::chip::contains(&nano.transcript, b"scan-check END") {
         nano.run_ms(100);
         ms += 100;
     }

@@ -36,6 +36,11 @@ pub fn threshold(bit: bool, reading: u16, set_point: u16) -> bool {
 /// [`Analog::sample`] and converts the channel named next. After [`SAMPLES`] conversions of
 /// a channel its reading is their mean and its threshold bit is updated; then the other
 /// channel is read. At one conversion per ms each reading is at most 8 ms old.
+///
+/// Until both channels have their first reading ([`Analog::ready`]) the readings are not
+/// levels but zeros: a program must not start on them (the tank example would start its
+/// pump on every power-up), so the board converts back to back until then and a program
+/// starts only after.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Analog {
     /// Sum of this round's samples.
@@ -50,6 +55,8 @@ pub struct Analog {
     set_points: [u16; CHANNELS],
     /// H6 in bit 6, H7 in bit 7.
     bits: u8,
+    /// Bit `c` set once channel `c` has a reading.
+    read: u8,
 }
 
 impl Default for Analog {
@@ -68,6 +75,7 @@ impl Analog {
             readings: [0; CHANNELS],
             set_points: [0; CHANNELS],
             bits: 0,
+            read: 0,
         }
     }
 
@@ -86,20 +94,33 @@ impl Analog {
             return false;
         }
         let c = usize::from(self.chan & 1);
-        let reading = self.sum / u16::from(SAMPLES);
-        // No variable shift: the AVR would loop for it.
-        let mask = if c == 0 { 0x40 } else { 0x80 };
-        let was = self.bits & mask != 0;
-        self.readings[c] = reading;
-        if threshold(was, reading, self.set_points[c]) {
-            self.bits |= mask;
-        } else {
-            self.bits &= !mask;
-        }
+        self.readings[c] = self.sum / u16::from(SAMPLES);
+        self.read |= if c == 0 { 1 } else { 2 };
+        self.compare(c);
         self.sum = 0;
         self.n = 0;
         self.chan ^= 1;
         true
+    }
+
+    /// Channel `c`'s threshold bit from its reading and set-point (a bit inside its
+    /// hysteresis band keeps its state; a channel with no reading yet reads 0: bit 0).
+    #[inline(never)]
+    fn compare(&mut self, c: usize) {
+        let c = c & 1;
+        // No variable shift: the AVR would loop for it.
+        let mask = if c == 0 { 0x40 } else { 0x80 };
+        let was = self.bits & mask != 0;
+        if threshold(was, self.readings[c], self.set_points[c]) {
+            self.bits |= mask;
+        } else {
+            self.bits &= !mask;
+        }
+    }
+
+    /// Both channels have their first reading: the readings and bits are the levels'.
+    pub fn ready(&self) -> bool {
+        self.read == 0b11
     }
 
     /// The threshold bits: H6 in bit 6, H7 in bit 7, every other bit 0.
@@ -113,9 +134,12 @@ impl Analog {
     }
 
     /// New set-points S6, S7 (0 disables a threshold; values above 1023 act as 1023). The
-    /// bits follow at their channel's next reading (within 8 ms at one sample per ms).
+    /// bits follow at once, so a program starting now sees its own set-points' bits in its
+    /// first scan.
     pub fn set_points(&mut self, sp: [u16; CHANNELS]) {
         self.set_points = sp;
+        self.compare(0);
+        self.compare(1);
     }
 }
 
@@ -153,6 +177,38 @@ mod tests {
         }
         assert_eq!(a.readings(), [501, 1023]);
         assert_eq!(a.bits(), 0x40, "S7 = 0: H7 stays 0");
+    }
+
+    #[test]
+    fn new_set_points_give_their_bits_at_once_once_a_channel_has_a_reading() {
+        let mut a = Analog::new();
+        a.set_points([500, 500]);
+        assert_eq!(a.bits(), 0, "no reading yet: nothing to compare");
+        for _ in 0..4 {
+            a.sample(700);
+        }
+        assert!(!a.ready(), "A7 not read yet");
+        for _ in 0..4 {
+            a.sample(100);
+        }
+        assert!(a.ready());
+        assert_eq!(a.bits(), 0x40);
+        a.set_points([800, 50]);
+        assert_eq!(
+            a.bits(),
+            0x80,
+            "both bits follow the new set-points at once"
+        );
+        a.set_points([695, 50]);
+        assert_eq!(a.bits(), 0xC0);
+        a.set_points([705, 50]);
+        assert_eq!(
+            a.bits(),
+            0xC0,
+            "inside the hysteresis band H6 keeps its state"
+        );
+        a.set_points([0, 0]);
+        assert_eq!(a.bits(), 0, "set-point 0 disables");
     }
 
     #[test]

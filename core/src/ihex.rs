@@ -114,16 +114,12 @@ pub struct HexReader {
     state: State,
     /// Bytes of the image received so far = the address the next data record must start at.
     next: u16,
-    /// Complete bytes of the current record (count, address, type, data, checksum).
-    index: u16,
-    /// The high nibble of the byte being read, if one is pending.
-    high: Option<u8>,
-    /// Data byte count of the current record.
-    count: u8,
-    /// Load address of the current record.
-    addr: u16,
-    /// Record type of the current record.
-    kind: u8,
+    /// Hex digits of the current record so far (two a byte).
+    digits: u16,
+    /// The high nibble of the byte being read (after an odd number of digits).
+    high: u8,
+    /// The current record's byte count, load address (high, low) and record type.
+    head: [u8; 4],
     /// Sum of the current record's bytes (a good record sums to 0).
     sum: u8,
 }
@@ -141,11 +137,9 @@ impl HexReader {
             buf: [0; IMAGE_LEN],
             state: State::Start,
             next: 0,
-            index: 0,
-            high: None,
-            count: 0,
-            addr: 0,
-            kind: 0,
+            digits: 0,
+            high: 0,
+            head: [0; 4],
             sum: 0,
         }
     }
@@ -157,8 +151,7 @@ impl HexReader {
             State::Failed(e) => HexEvent::Error(e),
             State::Start | State::Between | State::AfterRecord if byte == b':' => {
                 self.state = State::Record;
-                self.index = 0;
-                self.high = None;
+                self.digits = 0;
                 self.sum = 0;
                 HexEvent::More
             }
@@ -171,41 +164,44 @@ impl HexReader {
             State::Between | State::AfterRecord => self.fail(HexError::BadChar),
             State::Record => match hex::value(byte) {
                 None => self.fail(HexError::BadChar),
-                Some(v) => match self.high.take() {
-                    None => {
-                        self.high = Some(v);
+                Some(v) => {
+                    let d = self.digits;
+                    self.digits = d.wrapping_add(1);
+                    if d & 1 == 0 {
+                        self.high = v;
                         HexEvent::More
+                    } else {
+                        self.record_byte(d >> 1, (self.high << 4) | v)
                     }
-                    Some(h) => self.record_byte((h << 4) | v),
-                },
+                }
             },
         }
     }
 
-    /// One complete byte of the record in progress.
-    fn record_byte(&mut self, b: u8) -> HexEvent {
+    /// The record's load address.
+    fn addr(&self) -> u16 {
+        u16::from_be_bytes([self.head[1], self.head[2]])
+    }
+
+    /// Complete byte `i` of the record in progress: `b`.
+    fn record_byte(&mut self, i: u16, b: u8) -> HexEvent {
         self.sum = self.sum.wrapping_add(b);
-        let i = self.index;
-        self.index = i.wrapping_add(1);
-        match i {
-            0 => self.count = b,
-            1 => self.addr = u16::from(b) << 8,
-            2 => self.addr |= u16::from(b),
-            3 => self.kind = b,
-            _ => {
-                let data_index = i.wrapping_sub(4);
-                if data_index < u16::from(self.count) {
-                    // Stage only data that lands inside the image; the address is judged
-                    // after the checksum so line noise reports as a checksum error.
-                    let pos = usize::from(self.addr).wrapping_add(usize::from(data_index));
-                    if self.kind == 0x00 {
-                        if let Some(cell) = self.buf.get_mut(pos) {
-                            *cell = b;
-                        }
+        let [count, .., kind] = self.head;
+        if let Some(h) = self.head.get_mut(usize::from(i)) {
+            *h = b;
+        } else {
+            let data_index = i.wrapping_sub(4);
+            if data_index < u16::from(count) {
+                // Stage only data that lands inside the image; the address is judged
+                // after the checksum so line noise reports as a checksum error.
+                let pos = usize::from(self.addr()).wrapping_add(usize::from(data_index));
+                if kind == 0x00 {
+                    if let Some(cell) = self.buf.get_mut(pos) {
+                        *cell = b;
                     }
-                } else {
-                    return self.end_record();
                 }
+            } else {
+                return self.end_record();
             }
         }
         HexEvent::More
@@ -216,21 +212,23 @@ impl HexReader {
         if self.sum != 0 {
             return self.fail(HexError::Checksum);
         }
-        match self.kind {
+        let [count, .., kind] = self.head;
+        let addr = self.addr();
+        match kind {
             0x00 => {
                 // u16 arithmetic: an end past 0xFFFF is past the image too.
-                let end = self.addr.checked_add(u16::from(self.count));
+                let end = addr.checked_add(u16::from(count));
                 let Some(end) = end.filter(|&e| usize::from(e) <= IMAGE_LEN) else {
                     return self.fail(HexError::Address);
                 };
-                if self.addr != self.next {
+                if addr != self.next {
                     return self.fail(HexError::Address);
                 }
                 self.next = end;
                 self.state = State::AfterRecord;
                 HexEvent::More
             }
-            0x01 if self.count == 0 => {
+            0x01 if count == 0 => {
                 // A version-1 file (278 bytes) is whole too; the image check says which
                 // length its header wants.
                 if !matches!(usize::from(self.next), IMAGE_LEN | IMAGE_LEN_V1) {

@@ -16,9 +16,8 @@
 //!
 //! Every other byte is unassigned: it is shown as `.....` and runs as NOP.
 //!
-//! Long (about 500 lines) on purpose: the opcode numbers are the stored-image format and the
-//! names are the manual's words; numbering, spelling and lookup stay together so that a new
-//! command is added in one place. Its unit tests are the last 70 lines.
+//! The opcode numbers are the stored-image format and the names are the manual's words;
+//! numbering, spelling and lookup stay together so that a new command is added in one place.
 
 use crate::hex;
 

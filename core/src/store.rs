@@ -86,9 +86,9 @@ pub fn slot_seq<B: Board>(b: &mut B, slot: u16) -> Option<u16> {
     slot_check(b, slot).map(|(seq, _)| seq)
 }
 
-/// The sequence number and image length of `slot` if it holds a valid image, of either
-/// version, by the same rules as READ's.
-fn slot_check<B: Board>(b: &mut B, slot: u16) -> Option<(u16, usize)> {
+/// The sequence number of `slot` and whether its image is version 2 (else 1), if it holds
+/// a valid image of either version, by the same rules as READ's.
+fn slot_check<B: Board>(b: &mut B, slot: u16) -> Option<(u16, bool)> {
     let magic = [
         b.eeprom_read(image_addr(slot, 0)),
         b.eeprom_read(image_addr(slot, 1)),
@@ -117,7 +117,8 @@ fn slot_check<B: Board>(b: &mut B, slot: u16) -> Option<(u16, usize)> {
         return None;
     }
     let seq = u16::from_le_bytes([b.eeprom_read(slot), b.eeprom_read(slot.wrapping_add(1))]);
-    Some((seq, len))
+    // Four bytes (the version as a flag, not the length): returned in registers.
+    Some((seq, len == IMAGE_LEN))
 }
 
 /// The newest valid slot: (its address from [`SLOT_ADDR`], its sequence number). With
@@ -127,9 +128,9 @@ pub fn newest_slot<B: Board>(b: &mut B) -> Option<(u16, u16)> {
     newest(b).map(|(a, s, _)| (a, s))
 }
 
-/// [`newest_slot`] with the image length of its version.
+/// [`newest_slot`] with whether its image is version 2.
 #[inline(always)]
-fn newest<B: Board>(b: &mut B) -> Option<(u16, u16, usize)> {
+fn newest<B: Board>(b: &mut B) -> Option<(u16, u16, bool)> {
     let [a0, a1] = SLOT_ADDR;
     match (slot_check(b, a0), slot_check(b, a1)) {
         (Some((s0, _)), Some((s1, l1))) if seq_newer(s1, s0) => Some((a1, s1, l1)),
@@ -191,7 +192,8 @@ pub fn load<B: Board>(b: &mut B) -> Result<Program, LoadError> {
 /// temporary on the chip's stack). A version-1 image gives counter presets and set-points
 /// 0.
 pub fn load_into<B: Board>(b: &mut B, prog: &mut Program) -> Result<(), LoadError> {
-    let (slot, _, len) = newest(b).ok_or(LoadError::NoValidImage)?;
+    let (slot, _, v2) = newest(b).ok_or(LoadError::NoValidImage)?;
+    let len = if v2 { IMAGE_LEN } else { image::IMAGE_LEN_V1 };
     // A version-1 image ends at the counter presets: they and the set-points are 0.
     for i in UF_OFFSET..image::CRC_OFFSET {
         let byte = if i < len - 2 {

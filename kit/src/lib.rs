@@ -4,11 +4,14 @@
 //!   and editor;
 //! - [`listing`]: `.utl` listings and hex images;
 //! - [`simulate`] and [`diagram`]: timelines, simulation on the core, VCD and SVG;
-//! - [`modbus`]: Modbus RTU frames as a master makes and checks them;
+//! - [`modbus`]: Modbus RTU frames as a master makes and checks them, and a map of SPEC
+//!   §13's shape for the codec's tests and fuzz harness;
 //! - [`rng`]: the one random generator of the host code;
 //! - [`fuzzing`]: the invariants of SPEC §12 and of the Modbus codec (SPEC §13), shared by
 //!   the fuzz targets and the tests;
-//! - [`simavr`]: the real firmware image on a simulated ATmega328P.
+//! - [`simavr`]: the real firmware image on a simulated ATmega328P;
+//! - [`setup`]: the firmware image and the programs `./x setup` installs, as the tests and
+//!   tools find them.
 #![deny(missing_docs)]
 
 pub mod diagram;
@@ -16,6 +19,7 @@ pub mod fuzzing;
 pub mod listing;
 pub mod modbus;
 pub mod rng;
+pub mod setup;
 pub mod sim;
 pub mod simavr;
 pub mod simulate;

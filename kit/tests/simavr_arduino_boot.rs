@@ -3,6 +3,7 @@
 //! reset, and run the application after it. Skipped (with a message) when the package is
 //! missing, unless `CI` is set.
 
+use utile_kit::setup;
 use utile_kit::simavr::{
     ArduinoBoot, BootSection, Chip, FlashImage, Reset, RxPacing, CYCLES_PER_MS,
 };
@@ -11,26 +12,10 @@ use utile_kit::simavr::{
 const SYNC: [u8; 2] = [0x30, 0x20];
 const IN_SYNC_OK: [u8; 2] = [0x14, 0x10];
 
-fn installed(boot: ArduinoBoot) -> bool {
-    if boot.hex_path().is_file() {
-        return true;
-    }
-    assert!(
-        std::env::var_os("CI").is_none(),
-        "{} missing in CI: `./x setup` installs arduino-core-avr",
-        boot.hex_path().display()
-    );
-    eprintln!(
-        "SKIPPED: {} missing (install arduino-core-avr: `./x setup`)",
-        boot.hex_path().display()
-    );
-    false
-}
-
 #[test]
 fn each_boot_loader_answers_stk500_sync_after_an_external_reset() {
     for boot in ArduinoBoot::ALL {
-        if !installed(boot) {
+        if !setup::boot_loader_installed(boot) {
             continue;
         }
         let mut chip = Chip::blank().expect("blank chip");
@@ -63,7 +48,7 @@ fn each_boot_loader_answers_stk500_sync_after_an_external_reset() {
 #[test]
 fn optiboot_is_relinked_into_the_1k_section_with_its_version_word_on_top() {
     let boot = ArduinoBoot::Optiboot;
-    if !installed(boot) {
+    if !setup::boot_loader_installed(boot) {
         return;
     }
     let raw = FlashImage::read_hex(&boot.hex_path()).unwrap();
@@ -108,7 +93,7 @@ fn optiboot_built_as_the_readme_says(dir: &std::path::Path) -> std::path::PathBu
 #[test]
 fn optiboot_built_from_the_package_source_as_the_readme_says_fits_512_bytes_and_works() {
     let boot = ArduinoBoot::Optiboot;
-    if !installed(boot) {
+    if !setup::boot_loader_installed(boot) {
         return;
     }
     let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("optiboot-512");

@@ -5,7 +5,6 @@
 //! line.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::sync::Mutex;
 
 use utile_kit::simavr::{
@@ -26,19 +25,7 @@ fn fixture(src: &str, name: &str, flags: &[&str]) -> PathBuf {
     let src = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/fixtures")
         .join(src);
-    let out = Command::new("avr-gcc")
-        .args(["-mmcu=atmega328p", "-Os", "-DF_CPU=16000000UL"])
-        .args(flags)
-        .arg("-o")
-        .arg(&elf)
-        .arg(&src)
-        .output()
-        .expect("avr-gcc (package gcc-avr) must be installed");
-    assert!(
-        out.status.success(),
-        "avr-gcc failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    utile_kit::setup::avr_gcc(&src, &elf, flags);
     elf
 }
 

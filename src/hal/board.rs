@@ -6,6 +6,7 @@ use core::sync::atomic::Ordering;
 use avr_device::interrupt;
 use utile_core::board::Board;
 
+use super::regs::bit;
 use super::{adc, eeprom, pins, serial, stack, tick, watchdog};
 
 /// Why the chip started.
@@ -15,6 +16,13 @@ pub struct BootInfo {
     pub cold: bool,
     /// The raw MCUSR reset flags (a boot loader may have cleared them: then 0).
     pub mcusr: u8,
+}
+
+impl BootInfo {
+    /// The last reset was the watchdog's (or its software restart): WDRF.
+    pub fn by_watchdog(&self) -> bool {
+        self.mcusr & bit::WDRF != 0
+    }
 }
 
 /// The Arduino Nano board: the ATmega328P behind the [`Board`] trait.
@@ -30,7 +38,7 @@ pub fn init() -> (Nano, BootInfo) {
     // The reset cause, then the watchdog (after a watchdog reset it runs at 16 ms already).
     let mcusr = watchdog::take_reset_flags();
     watchdog::start();
-    let cold = mcusr & 0x05 != 0; // PORF or BORF
+    let cold = mcusr & (bit::PORF | bit::BORF) != 0;
     stack::paint();
     tick::init();
     adc::init();

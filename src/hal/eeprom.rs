@@ -2,7 +2,7 @@
 
 use avr_device::interrupt;
 
-use super::regs::{regs, wr};
+use super::regs::{bit, regs, wr};
 use super::watchdog;
 
 /// Bytes of EEPROM on the ATmega328P.
@@ -11,7 +11,7 @@ pub const EEPROM_SIZE: u16 = 1024;
 /// Wait until no EEPROM write is in progress (about 3.4 ms per byte), feeding the watchdog.
 fn wait() {
     let dp = regs();
-    while dp.EEPROM.eecr().read().bits() & 0x02 != 0 {
+    while dp.EEPROM.eecr().read().bits() & bit::EEPE != 0 {
         watchdog::feed();
     }
 }
@@ -27,7 +27,7 @@ pub(super) fn read(addr: u16) -> u8 {
         // EEAR: the address (checked above to be < 1024).
         wr!(dp.EEPROM.eear(), addr);
         // EECR: EERE starts the read; the data is in EEDR at once.
-        wr!(dp.EEPROM.eecr(), 0x01);
+        wr!(dp.EEPROM.eecr(), bit::EERE);
         dp.EEPROM.eedr().read().bits()
     })
 }
@@ -46,8 +46,8 @@ pub(super) fn update(addr: u16, value: u8) {
         // EEDR: the byte to write.
         wr!(dp.EEPROM.eedr(), value);
         // EECR: EEMPE (erase + write mode), then within 4 cycles EEMPE|EEPE.
-        wr!(dp.EEPROM.eecr(), 0x04);
-        wr!(dp.EEPROM.eecr(), 0x06);
+        wr!(dp.EEPROM.eecr(), bit::EEMPE);
+        wr!(dp.EEPROM.eecr(), bit::EEMPE | bit::EEPE);
     });
     wait();
 }

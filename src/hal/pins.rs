@@ -17,6 +17,8 @@ use super::regs::{regs, wr};
 const PORTB_PULLUPS: u8 = 0x0B;
 /// PORTB bit of the driver enable D10 (PB2), kept as it is by every other PORTB write.
 pub(crate) const DE_BIT: u8 = 0x04;
+/// PORTD bit of RX (PD0): its pull-up holds the line idle with no cable.
+const PORTD_RX: u8 = 0x01;
 /// PORTB bits of Y6 (PB4) and Y7 (PB5).
 const PORTB_Y: u8 = 0x30;
 /// PORTD bits of Y0..Y5 (PD2..PD7).
@@ -58,7 +60,7 @@ pub(super) fn init() {
     let invert = invert_mask(dp.PORTB.pinb().read().bits());
     let pins = invert;
     // Y0..Y5 levels on PD2..PD7; pull-up on PD0 (RX).
-    wr!(dp.PORTD.portd(), (pins << 2) | 0x01);
+    wr!(dp.PORTD.portd(), (pins << 2) | PORTD_RX);
     // Y6/Y7 levels on PB4/PB5 with the pull-ups.
     wr!(dp.PORTB.portb(), PORTB_PULLUPS | ((pins >> 2) & PORTB_Y));
     // PD2..PD7 outputs.

@@ -1,7 +1,8 @@
 ; The threaded scan: RUN mode's interpreter for the ATmega328P, assembled into the firmware by
 ; `global_asm!` in scan.rs, which first defines the U_* (RAM addresses of the engine's
 ; fields, of the ticker's clock and edge bits, of the output image and of the receive ring),
-; ST_* (RunState offsets), EXIT_* and VIEW_* symbols used here. The rules it follows are the core's (`Engine::scan`); the on-chip
+; ST_* (RunState offsets), EXIT_* and VIEW_* symbols used here, and GPIOR0_IO / NOW_BIT (the
+; main loop wanted at the next END, want.rs). The rules it follows are the core's (`Engine::scan`); the on-chip
 ; differential check (`--features scan-check`, tests/simavr_scan_check.rs) holds it to them.
 ;
 ; Dispatch: X points at the next UF line. `ld r30, X+` / `ijmp` jumps into a 256-word table
@@ -161,8 +162,9 @@
     .p2align 1
 
 ; u8 utile_run(Engine *eng /* r25:r24 */, RunState *st /* r23:r22 */)
-; Runs scans until KEY finds a received byte, the scan count wraps, or (every 16th scan)
-; the editor wants the CPU (U_WANT or a display request). Returns why in r24.
+; Runs scans until KEY finds a received byte, the scan count wraps, (every 16th scan) the
+; editor wants the CPU (U_WANT or a display request), or (after any END) the Modbus line
+; does (NOW_BIT). At least one scan runs first. Returns why in r24.
     .global utile_run
     .type utile_run, @function
 utile_run:
@@ -275,7 +277,7 @@ utile_scan_exit:
     .size utile_run, . - utile_run
 
 ; Every 16th END (the scan count's high byte not yet carried into): leave for the editor
-; if it asked, and when the scan count wrapped.
+; if it asked, and when the scan count wrapped; else on as after any END.
 utile_scan_every16:
     sbci r17, 0xFF
     mov r22, r16
@@ -284,11 +286,13 @@ utile_scan_every16:
     lds r22, U_WANT
     lds r23, U_VIEWS
     or r22, r23
-    brne 2f
-    rjmp utile_scan_start
+    brne utile_scan_leave
+    rjmp utile_scan_check
 1:  ldi r24, EXIT_WRAP
     rjmp 3f
-2:  ldi r24, EXIT_SCANS
+; The main loop is wanted (by the editor, or now by the Modbus line: `utile_scan_busy`).
+utile_scan_leave:
+    ldi r24, EXIT_SCANS
 3:  ldi r26, lo8(U_UF)
     ldi r27, hi8(U_UF)
     rjmp utile_scan_exit
@@ -572,17 +576,34 @@ utile_scan_stats:
 3:  subi r16, 0xFF
     brhc utile_scan_16th
     sbci r17, 0xFF
+; After an END the main loop may be wanted at once (GPIOR0's NOW bit: a Modbus frame ended,
+; a reply needs bytes). The test costs one cycle: the flag joins the test for running
+; timers, and only that slow path tells the two apart.
+utile_scan_check:
+    in r22, GPIOR0_IO
+    wdr
+    ldi r26, lo8(U_UF)
+    ldi r27, hi8(U_UF)
+    or r22, r8
+    or r22, r9
+    brne utile_scan_busy
+utile_scan_go:
+    NEXT
+utile_scan_16th:
+    rjmp utile_scan_every16
+; A new scan on entry: as after an END, but the main loop's wish (NOW_BIT) is looked at
+; only after this scan, so that one scan at least runs between two visits.
 utile_scan_start:
     wdr
     ldi r26, lo8(U_UF)
     ldi r27, hi8(U_UF)
     mov r22, r8
     or r22, r9
-    brne utile_scan_timers
-utile_scan_go:
-    NEXT
-utile_scan_16th:
-    rjmp utile_scan_every16
+    breq utile_scan_go
+    rjmp utile_scan_timers
+utile_scan_busy:
+    sbic GPIOR0_IO, NOW_BIT
+    rjmp utile_scan_leave
 utile_scan_timers:
     lds r22, U_MS
     lds r23, U_SWEPT_MS

@@ -2,14 +2,13 @@
 //!
 //! `scan.S` keeps the whole engine state in registers and dispatches each UF line through a
 //! 256-entry jump table in flash, 6 cycles per line. [`run`] enters it and returns only
-//! when the editor is needed (KEY saw a byte, a display is due, the scan count wrapped), so
+//! when the main loop is needed (KEY saw a byte, a display is due, the scan count wrapped,
+//! the Modbus line has work: `want.rs`), so
 //! the per-scan work (flip-flops, outputs, STAT's timing, the watchdog, the timer sweep)
 //! stays in assembly too. BENCHMARKS.md has the figures; `--features scan-check` builds a
 //! firmware that compares it with the core on random programs (tests/simavr_scan_check.rs).
 
-use core::sync::atomic::{AtomicU8, Ordering};
-
-use super::{kept, serial};
+use super::{kept, regs, serial, want};
 use utile_core::engine::{offsets as eng, Engine, VIEW_BS, VIEW_PORT};
 use utile_core::ticker::offsets as tick;
 
@@ -19,8 +18,8 @@ pub enum Exit {
     /// KEY found a received byte: take it (a `/` stops the program), then call [`run`]
     /// again to go on with the line after KEY.
     Key,
-    /// Sixteen more scans ran and the editor asked for the CPU (`want`) or a PPx/PBS
-    /// display waits.
+    /// A scan ended and the main loop is wanted: every 16th scan by the editor (`want`) or
+    /// a PPx/PBS display, after any scan by the Modbus line (`want.rs`).
     Scans,
     /// The 16-bit scan count wrapped to 0: 65,536 more scans.
     Wrap,
@@ -57,22 +56,11 @@ impl RunState {
     }
 }
 
-/// Nonzero while the editor wants the CPU every 16th scan (the RUN screen is being drawn),
-/// or the Modbus side does (a frame is coming in, ended, or a reply goes out).
-static WANT: AtomicU8 = AtomicU8::new(0);
-
-/// An interrupt wants the main loop soon (a Modbus byte or frame end): the scan comes back
-/// at its next 16th END.
-#[inline(always)]
-pub(crate) fn want_cpu() {
-    WANT.store(1, Ordering::Relaxed);
-}
-
 const EXIT_KEY: u8 = 1;
 const EXIT_SCANS: u8 = 2;
 const EXIT_WRAP: u8 = 3;
 
-/// Scan the program in `eng` until the editor is needed; `want` asks for the CPU every
+/// Scan the program in `eng` until the main loop is needed; `want` asks for the CPU every
 /// 16th scan even without a pending display. Interrupts must be enabled.
 ///
 /// Only the engine handed out by [`kept::take_engine`] can run here (the assembly was
@@ -81,10 +69,7 @@ pub fn run(eng: &mut Engine, st: &mut RunState, want: bool) -> Exit {
     if !core::ptr::eq(eng, kept::engine_ptr()) {
         return Exit::Refused;
     }
-    // With interrupts off: a Modbus interrupt's wish set just before would be lost.
-    avr_device::interrupt::free(|cs| {
-        WANT.store(u8::from(want || serial::modbus_busy(cs)), Ordering::Relaxed);
-    });
+    want::every_16th(want);
     match enter(eng, st) {
         EXIT_KEY => Exit::Key,
         EXIT_WRAP => Exit::Wrap,
@@ -150,6 +135,8 @@ fn enter(eng: *mut Engine, st: *mut RunState) -> u8 {
         ".set U_RX_HEAD, {rx} + {rx_head}",
         ".set U_RX_TAIL, {rx} + {rx_tail}",
         ".set U_WANT, {want}",
+        ".set GPIOR0_IO, {gpior0}",
+        ".set NOW_BIT, {now_bit}",
         ".set ST_NEXT, {st_next}",
         ".set ST_LAST, {st_last}",
         ".set ST_MIN, {st_min}",
@@ -211,7 +198,9 @@ fn enter(eng: *mut Engine, st: *mut RunState) -> u8 {
         rx = sym serial::RX,
         rx_head = const serial::RX_HEAD_AT,
         rx_tail = const serial::RX_TAIL_AT,
-        want = sym WANT,
+        want = sym want::WANT,
+        gpior0 = const regs::GPIOR0_IO,
+        now_bit = const want::NOW_BIT,
         st_next = const core::mem::offset_of!(RunState, next),
         st_last = const core::mem::offset_of!(RunState, last),
         st_min = const core::mem::offset_of!(RunState, min),

@@ -7,7 +7,7 @@ use avr_device::interrupt::{self, CriticalSection};
 use utile_core::ticker::{Ticker, INPUT_MASK};
 
 use super::isr_cell::IsrCell;
-use super::regs::{regs, wr};
+use super::regs::{bit, regs, wr};
 use super::{adc, pins};
 
 /// The core's ticker, advanced by the tick interrupt.
@@ -36,20 +36,20 @@ pub(super) fn init() {
     let dp = regs();
     // Timer0: CTC, clk/64, OCR0A = 249 → exactly 1 kHz at 16 MHz.
     // TCCR0A: WGM01 (CTC).
-    wr!(dp.TC0.tccr0a(), 0x02);
+    wr!(dp.TC0.tccr0a(), bit::WGM01);
     // OCR0A: 250 counts per period.
     wr!(dp.TC0.ocr0a(), 249);
     // TCCR0B: CS01|CS00 = clk/64.
-    wr!(dp.TC0.tccr0b(), 0x03);
+    wr!(dp.TC0.tccr0b(), bit::CS01 | bit::CS00);
     // TIMSK0: OCIE0A.
-    wr!(dp.TC0.timsk0(), 0x02);
+    wr!(dp.TC0.timsk0(), bit::OCIE0A);
     resync();
 
     // Timer1: normal mode, clk/8 (0.5 µs per count), free running for scan statistics.
     // TCCR1A: normal mode.
     wr!(dp.TC1.tccr1a(), 0);
     // TCCR1B: CS11 = clk/8.
-    wr!(dp.TC1.tccr1b(), 0x02);
+    wr!(dp.TC1.tccr1b(), bit::CS11);
     // TIMSK1: no compare interrupt (after a watchdog restart, a Modbus silence may be armed).
     wr!(dp.TC1.timsk1(), 0);
 }

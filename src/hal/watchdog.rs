@@ -10,14 +10,11 @@
 
 use avr_device::interrupt;
 
-use super::regs::{regs, wr};
+use super::regs::{bit, regs, wr, GPIOR0_IO};
 
-/// GPIOR0's bit 0 (I/O address 0x1E) marks a software restart: set by the watchdog's handler
-/// and cleared by every hardware reset, so it never survives a power-up or a real reset.
-const RESTART_BIT: u8 = 0x01;
-
-/// MCUSR's WDRF: the reset cause reported for a watchdog restart.
-pub(super) const WDRF: u8 = 0x08;
+/// GPIOR0's bit 0 marks a software restart: set by the watchdog's handler and cleared by
+/// every hardware reset, so it never survives a power-up or a real reset.
+const RESTART_BIT: u8 = 0;
 
 // The watchdog's interrupt (vector 6) restarts the firmware: mark the restart, then jump to
 // the firmware's reset vector, which sets the stack up again (the crt) and runs `main`.
@@ -27,8 +24,10 @@ core::arch::global_asm!(
     ".section .text.__vector_6,\"ax\",@progbits",
     ".global __vector_6",
     "__vector_6:",
-    "sbi 0x1e, 0",
+    "sbi {gpior0}, {restart}",
     "jmp 0",
+    gpior0 = const GPIOR0_IO,
+    restart = const RESTART_BIT,
 );
 
 /// Read and clear MCUSR's reset flags (power-on, external, brown-out, watchdog), so the
@@ -40,9 +39,9 @@ pub(super) fn take_reset_flags() -> u8 {
     let mut mcusr = dp.CPU.mcusr().read().bits();
     // Clear the flags (WDRF must be 0 to change WDE).
     wr!(dp.CPU.mcusr(), 0);
-    if dp.CPU.gpior0().read().bits() & RESTART_BIT != 0 {
+    if dp.CPU.gpior0().read().bits() & (1 << RESTART_BIT) != 0 {
         wr!(dp.CPU.gpior0(), 0);
-        mcusr |= WDRF;
+        mcusr |= bit::WDRF;
     }
     mcusr
 }
@@ -56,8 +55,8 @@ pub(super) fn start() {
     interrupt::free(|_| {
         avr_device::asm::wdr();
         // Timed sequence: WDCE|WDE, then within 4 cycles the new setting.
-        wr!(dp.WDT.wdtcsr(), 0x18);
-        wr!(dp.WDT.wdtcsr(), 0x4B);
+        wr!(dp.WDT.wdtcsr(), bit::WDCE | bit::WDE);
+        wr!(dp.WDT.wdtcsr(), bit::WDIE | bit::WDE | bit::WDP_125MS);
     });
 }
 

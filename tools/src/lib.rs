@@ -4,7 +4,12 @@
 
 /// Benchmarks of the real firmware image in simavr (`bench` binary).
 pub mod bench;
+/// Symbols and section sizes of a firmware ELF (AVR binutils), for `cargo fw` and the bench.
+pub mod elf;
 /// Programs to and from a uTile over a serial port (`utile push`, `utile pull`).
 pub mod link;
+/// Every uTile on a line live in the browser, the terminal and a Modbus TCP gateway
+/// (`utile live`).
+pub mod live;
 /// The virtual Nano (`cargo nano`): firmware in simavr, UART on a terminal or pty.
 pub mod vnano;

@@ -31,13 +31,12 @@
 //! image at 1.5-2x real time in a debug test build, so the file takes about 80 s on two
 //! cores.
 
-mod utile_support;
-mod vnano_util;
+mod support;
 
+use support::utile::{example_stems, examples_dir};
 use utile_kit::listing;
 use utile_kit::simavr::{self as simavr, CpuState, RigPin};
 use utile_kit::simulate::{self, AnalogEvent, Event};
-use utile_support::{example_stems, examples_dir};
 
 /// CPU cycles per millisecond.
 const MS: u64 = 16_000;
@@ -77,7 +76,8 @@ struct Chip {
 impl Chip {
     /// Power up, find tick 0, wait for the editor's page.
     fn boot() -> Chip {
-        let mut nano = simavr::Chip::load(&vnano_util::firmware_elf()).expect("load the firmware");
+        let mut nano =
+            simavr::Chip::load(&support::vnano::firmware_elf()).expect("load the firmware");
         while nano.peek(TCCR0B) == 0 {
             assert_eq!(nano.run_for(1), CpuState::Running);
             assert!(nano.cycle() < 50 * MS, "Timer0 never started");
@@ -104,7 +104,7 @@ impl Chip {
     /// Run until the output holds `needle` (at most `max_ms`), then forget the output.
     fn wait_for(&mut self, needle: &str, max_ms: u64) {
         let end = self.nano.cycle() + max_ms * MS;
-        while vnano_util::find(&self.seen, needle.as_bytes()).is_none() {
+        while support::vnano::find(&self.seen, needle.as_bytes()).is_none() {
             assert!(
                 self.nano.cycle() < end,
                 "no {needle:?} within {max_ms} ms; got {:?}",
@@ -133,18 +133,7 @@ impl Chip {
 
 /// Per output bit, its changes (ms, new level) in an output log that starts all off.
 fn bit_changes(log: &[(u32, u8)]) -> [Vec<(u32, bool)>; 8] {
-    let mut out: [Vec<(u32, bool)>; 8] = Default::default();
-    let mut last = 0u8;
-    for &(ms, py) in log {
-        for (n, ch) in out.iter_mut().enumerate() {
-            let bit = 1u8 << n;
-            if (py ^ last) & bit != 0 {
-                ch.push((ms, py & bit != 0));
-            }
-        }
-        last = py;
-    }
-    out
+    std::array::from_fn(|n| simulate::edges(log, n as u8))
 }
 
 /// The millivolts that simavr's ADC (`mV × 1023 / 5000`, rounded down) turns into `counts`.

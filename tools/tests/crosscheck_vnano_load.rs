@@ -1,12 +1,12 @@
 //! `cargo nano --load prog.utl` (issue 6): the virtual Nano starts with the listing loaded
 //! through READ, the editor shows it, and it runs.
 
-mod vnano_util;
+mod support;
 
 use std::io::Write;
 use std::path::Path;
 use std::time::Duration;
-use vnano_util::*;
+use support::vnano::*;
 
 const T: Duration = Duration::from_secs(60);
 

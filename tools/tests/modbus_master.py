@@ -9,6 +9,8 @@
     modbus_master.py PORT poll N           N reads of coils in a row, all answered
     modbus_master.py PORT slave S ...      the same commands, to slave S
     modbus_master.py PORT bus N            slaves 1..N on one line, and a broadcast
+    modbus_master.py PORT windows          SPEC 17: the snapshot (64..103) and the program
+                                           (256..383); prints them, checks exception 02
 
 Prints one line per check or value; exits 1 with the reason when a check fails.
 """
@@ -142,6 +144,26 @@ def wire(c):
     print("ALL OK")
 
 
+def windows(c):
+    snap = ok(c.read_input_registers(64, count=40, slave=SLAVE), "04 snapshot").registers
+    if len(snap) != 40:
+        fail(f"snapshot of {len(snap)} registers")
+    ir = ok(c.read_input_registers(0, count=8, slave=SLAVE), "04 status").registers
+    if snap[0] != ir[0]:
+        fail(f"status {snap[0]:#06x} in the snapshot, {ir[0]:#06x} in register 0")
+    print("status", f"{snap[0]:#06x}")
+    print("bits", " ".join(f"{w:#06x}" for w in snap[1:6]))
+    print("scans", snap[6] << 16 | snap[7])
+    print("readings", snap[16], snap[17])
+    print("fingerprint", f"{snap[39]:04X}")
+    words = ok(c.read_input_registers(256, count=125, slave=SLAVE), "04 program").registers
+    words += ok(c.read_input_registers(381, count=3, slave=SLAVE), "04 program end").registers
+    print("program", "".join(f"{w:04X}" for w in words))
+    for start, n in [(63, 2), (103, 2), (104, 1), (255, 2), (383, 2), (384, 1)]:
+        exception(c.read_input_registers(start, count=n, slave=SLAVE), 2, f"04 {start} x {n}")
+    print("ALL OK")
+
+
 def bus(c, n):
     for s in range(1, n + 1):
         # Coil 8 + s is U(s): with PU. .PY, output Y(s) of slave s only.
@@ -177,6 +199,8 @@ def main():
         functions(c)
     elif what == "wire":
         wire(c)
+    elif what == "windows":
+        windows(c)
     elif what == "bus":
         bus(c, int(sys.argv[3]))
     elif what == "poll":

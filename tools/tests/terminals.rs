@@ -9,11 +9,11 @@
 //! LDT (which must not clear the presets), and a pasted listing that must arrive whole.
 //! A program that is not installed (`./x setup` installs them all) fails the test.
 
-mod vnano_util;
+mod support;
 
 use std::path::Path;
 use std::time::{Duration, Instant};
-use vnano_util::*;
+use support::vnano::*;
 
 /// Time limit of each wait.
 const T: Duration = Duration::from_secs(40);

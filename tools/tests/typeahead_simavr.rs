@@ -7,7 +7,7 @@
 //! time (each after the screen has settled) are printed for BENCHMARKS.md
 //! (`cargo test -p utile-tools --test typeahead_simavr -- --nocapture`).
 
-mod vnano_util;
+mod support;
 
 use utile_core::opcodes;
 use utile_kit::simavr::{Chip, CpuState, RX_FIXED_CYCLES_PER_BYTE};
@@ -17,7 +17,7 @@ const MS: u64 = 16_000;
 
 /// Power up and wait for the main screen.
 fn boot() -> Chip {
-    let mut nano = Chip::load(&vnano_util::firmware_elf()).expect("load the firmware");
+    let mut nano = Chip::load(&support::vnano::firmware_elf()).expect("load the firmware");
     let mut seen = Vec::new();
     for _ in 0..2000 {
         assert_eq!(nano.run_for(MS), CpuState::Running);

@@ -2,9 +2,9 @@
 //! (SPEC §15) in listings (`asm`/`dis`/`fmt`) and in `utile sim` (timeline levels on A6/A7,
 //! the C, CQ, A6/A7 and H signals in the VCD and the SVG).
 
-mod utile_support;
+mod support;
 
-use utile_support::*;
+use support::utile::*;
 
 /// Debounce plus a scan: the latest an output may follow an input change.
 const REACT_MS: u32 = 10;

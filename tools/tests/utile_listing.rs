@@ -1,11 +1,11 @@
 //! `utile asm` / `dis` / `fmt`: the listing format, every error message, and round trips.
 
-mod utile_support;
+mod support;
 
+use support::utile::*;
 use utile_core::engine::Program;
 use utile_core::opcodes::{self, BLANK, NOP};
 use utile_kit::listing;
-use utile_support::*;
 
 /// `asm` of a listing must fail with exactly these `file:line: problem` lines.
 fn expect_errors(text: &str, expected: &[(usize, &str)]) {

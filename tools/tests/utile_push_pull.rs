@@ -3,16 +3,17 @@
 //! loaders (every open resets the chip, the boot loader waits, then uTile), with the
 //! refusals a user must be able to trust: a running program, a bad file, no uTile.
 
-mod vnano_util;
+mod support;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
+use support::vnano::*;
 use utile_core::Program;
 use utile_kit::listing;
+use utile_kit::setup;
 use utile_kit::simavr::ArduinoBoot;
-use vnano_util::*;
 
 const UTILE: &str = env!("CARGO_BIN_EXE_utile");
 const T: Duration = Duration::from_secs(20);
@@ -40,23 +41,6 @@ fn example(name: &str) -> (PathBuf, Program) {
     let text = std::fs::read_to_string(&path).expect("example");
     let prog = listing::parse(name, &text).expect("example parses");
     (path, prog)
-}
-
-/// The boot loader's hex is installed (always in CI).
-fn installed(boot: ArduinoBoot) -> bool {
-    if boot.hex_path().is_file() {
-        return true;
-    }
-    assert!(
-        std::env::var_os("CI").is_none(),
-        "in CI: `./x setup` installs arduino-core-avr"
-    );
-    eprintln!(
-        "SKIPPED {}: {} missing",
-        boot.name(),
-        boot.hex_path().display()
-    );
-    false
 }
 
 /// Push `file`, pull it back as a listing and as hex: both equal what was pushed.
@@ -157,7 +141,7 @@ fn push_store_puts_the_program_in_the_eeprom() {
 #[test]
 fn push_and_pull_behind_each_boot_loader_with_the_port_open_reset() {
     for boot in ArduinoBoot::ALL {
-        if !installed(boot) {
+        if !setup::boot_loader_installed(boot) {
             continue;
         }
         let dir = scratch(&format!("push-pull-{}", boot.name()));
@@ -189,7 +173,7 @@ fn a_running_program_is_refused_and_keeps_running_unless_stop_is_asked() {
         "--eeprom",
         ee.to_str().unwrap(),
     ]);
-    if !installed(ArduinoBoot::Optiboot) {
+    if !setup::boot_loader_installed(ArduinoBoot::Optiboot) {
         return;
     }
     let port = nano.path.to_str().unwrap().to_string();

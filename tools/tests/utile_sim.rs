@@ -3,13 +3,10 @@
 //!
 //! Expectations come from the manual's descriptions. Tolerances: an input change reaches
 //! An after the 5 ms debounce, and a timer falls within 10 ms of preset x unit (SPEC §6-7).
-//!
-//! Long (about 520 lines) on purpose: one test per ch. 11 program and one per timeline error
-//! message, each short; the file is a catalogue in the manual's order.
 
-mod utile_support;
+mod support;
 
-use utile_support::*;
+use support::utile::*;
 
 /// Debounce plus a scan: the latest an output may follow an input change.
 const REACT_MS: u32 = 10;

@@ -2,11 +2,11 @@
 //! `--a7` set the levels at start, the rig keys `6`/`7` and `^`/`&` step them by 0.1 V, the
 //! status line shows them, and `H6.`/`H7.` see them through the chip's ADC.
 
-mod vnano_util;
+mod support;
 
 use std::io::Write;
 use std::time::Duration;
-use vnano_util::*;
+use support::vnano::*;
 
 const T: Duration = Duration::from_secs(60);
 

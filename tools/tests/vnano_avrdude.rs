@@ -6,35 +6,23 @@
 //!
 //! Skipped with a message when avrdude or the boot loaders are missing, unless `CI` is set.
 
-mod vnano_util;
+mod support;
 
 use std::io::Write;
 use std::os::fd::AsRawFd;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
+use support::vnano::*;
+use utile_kit::setup;
 use utile_kit::simavr::ArduinoBoot;
-use vnano_util::*;
 
 const T: Duration = Duration::from_secs(20);
 const PAGE: &str = "*** User File 0 ***";
 
-/// avrdude and the boot loader's hex file are installed; else skip (never in CI).
+/// avrdude and the boot loader's hex file are installed (always in CI).
 fn tools_present(boot: ArduinoBoot) -> bool {
-    let avrdude = Command::new("avrdude").arg("-?").output().is_ok();
-    let hex = boot.hex_path().is_file();
-    if avrdude && hex {
-        return true;
-    }
-    let why = format!(
-        "avrdude {}, {} {}: `./x setup` installs avrdude and arduino-core-avr",
-        if avrdude { "found" } else { "missing" },
-        boot.hex_path().display(),
-        if hex { "found" } else { "missing" },
-    );
-    assert!(std::env::var_os("CI").is_none(), "in CI: {why}");
-    eprintln!("SKIPPED {}: {why}", boot.name());
-    false
+    setup::installed("avrdude", setup::on_path("avrdude")) && setup::boot_loader_installed(boot)
 }
 
 /// The image avrdude writes, beside the ELF `cargo fw` made.

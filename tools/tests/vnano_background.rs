@@ -3,10 +3,10 @@
 //! SIGTTOU/SIGTTIN), serve its pty, take no rig keys from the shell's terminal, and end on
 //! SIGTERM. Driven in tmux with an interactive bash (job control on, `stty tostop`).
 
-mod vnano_util;
+mod support;
 
 use std::time::{Duration, Instant};
-use vnano_util::*;
+use support::vnano::*;
 
 const T: Duration = Duration::from_secs(30);
 

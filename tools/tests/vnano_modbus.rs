@@ -1,34 +1,27 @@
 //! Real Modbus masters against the real image in the virtual Nano, over its pty (SPEC §13,
-//! issue 16): pymodbus (`modbus_master.py`: every function and exception, values, writes)
-//! and mbpoll. A program with U0 as a remote start and a counter, and the tank example whose
+//! issue 16; SPEC §17, issue 24): pymodbus (`modbus_master.py`: every function and
+//! exception, values, writes, the snapshot and program windows) and mbpoll. A program with U0 as a remote start and a counter, and the tank example whose
 //! behaviour a written set-point changes. `./x setup` installs both masters; without them
 //! the tests say so and pass, unless `CI` is set.
 
-mod vnano_util;
+mod support;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 use std::time::{Duration, Instant};
 
+use support::vnano::*;
 use utile_core::engine::Program;
-use utile_core::store;
+use utile_core::modbus::snapshot;
 use utile_kit::listing;
-use utile_kit::sim::SimBoard;
-use vnano_util::*;
+use utile_kit::setup;
 
 const T: Duration = Duration::from_secs(30);
 
 /// Whether `what` can run here; in CI it must.
 fn have(what: &str, check: &mut Command) -> bool {
     let ok = check.output().map(|o| o.status.success()).unwrap_or(false);
-    if !ok {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "{what} is missing (./x setup installs it)"
-        );
-        eprintln!("skipped: {what} is missing (./x setup installs it)");
-    }
-    ok
+    setup::installed(what, ok)
 }
 
 fn pymodbus() -> bool {
@@ -36,15 +29,6 @@ fn pymodbus() -> bool {
         "pymodbus",
         Command::new("python3").args(["-c", "import pymodbus, serial"]),
     )
-}
-
-/// An EEPROM file holding `prog` as STORE leaves it.
-fn eeprom_file(name: &str, prog: &Program) -> PathBuf {
-    let mut b = SimBoard::new();
-    store::store(prog, &mut b).expect("STORE");
-    let path = scratch(name).join("eeprom.bin");
-    std::fs::write(&path, &b.eeprom).expect("write EEPROM file");
-    path
 }
 
 /// The virtual Nano autostarting `prog`, plus extra options; waits out the RUN screen.
@@ -131,16 +115,95 @@ fn a_master_starts_and_stops_an_output_and_reads_a_counter() {
     }
 }
 
+/// The tank example's listing (examples/tank-fill.utl) as a program.
+fn tank() -> Program {
+    let tank = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/tank-fill.utl"),
+    )
+    .expect("tank example");
+    listing::parse("tank-fill", &tank).expect("tank listing")
+}
+
+#[test]
+fn pymodbus_reads_the_snapshot_and_the_program_of_a_listing() {
+    if !pymodbus() {
+        return;
+    }
+    let prog = tank();
+    // Level 1.0 V (204 counts): below the low mark, pump and alarm on.
+    let n = nano("windows.eeprom", &prog, &["--a6", "1.0", "--a7", "1.0"]);
+    let out = master(&n.path, &["windows"]);
+    assert!(out.contains("ALL OK"), "{out}");
+    let field = |name: &str| -> String {
+        out.lines()
+            .find_map(|l| l.strip_prefix(name).map(|v| v.trim().to_string()))
+            .unwrap_or_else(|| panic!("no {name} in {out}"))
+    };
+    let fingerprint = format!("{:04X}", snapshot::fingerprint(&prog.uf));
+    assert_eq!(
+        field("fingerprint "),
+        fingerprint,
+        "the listing's own fingerprint"
+    );
+    let uf: String = prog.uf.iter().map(|b| format!("{b:02X}")).collect();
+    assert_eq!(field("program "), uf, "the program window is the listing");
+    // Y0, Y1 (pump and alarm) in the high byte of register 65; A0..A5 open.
+    assert_eq!(field("bits ").split(' ').next(), Some("0x033f"), "{out}");
+    assert_eq!(field("status "), "0x0005", "running, a stored image");
+}
+
+#[test]
+fn mbpoll_reads_the_snapshot_and_the_program() {
+    if !have("mbpoll", Command::new("mbpoll").arg("-V")) {
+        return;
+    }
+    let prog = tank();
+    let n = nano("mbpoll-windows.eeprom", &prog, &[]);
+    let port = n.path.to_str().unwrap().to_string();
+    // Input registers (-t 3) in hex, 1-based references: 65..104 and 257..381.
+    let read = |r: &str, c: &str| {
+        let out = Command::new("mbpoll")
+            .args([
+                "-m", "rtu", "-b", "19200", "-P", "none", "-a", "1", "-t", "3:hex",
+            ])
+            .args(["-r", r, "-c", c, "-1"])
+            .arg(&port)
+            .output()
+            .expect("run mbpoll");
+        let text = String::from_utf8_lossy(&out.stdout).into_owned();
+        assert!(out.status.success(), "{text}");
+        text
+    };
+    let value = |text: &str, reference: u16| -> u16 {
+        let tag = format!("[{reference}]:");
+        let line = text
+            .lines()
+            .find(|l| l.starts_with(&tag))
+            .unwrap_or_else(|| panic!("no {tag} in {text}"));
+        let hex = line[tag.len()..].trim().trim_start_matches("0x");
+        u16::from_str_radix(hex, 16).unwrap_or_else(|e| panic!("{line}: {e}"))
+    };
+    let snap = read("65", "40");
+    assert_eq!(value(&snap, 104), snapshot::fingerprint(&prog.uf), "{snap}");
+    assert_eq!(
+        value(&snap, 65) & 0b101,
+        0b101,
+        "running, a stored image: {snap}"
+    );
+    let program = read("257", "125");
+    for n in 0..125u16 {
+        let line = usize::from(n) * 2;
+        let expected = u16::from_be_bytes([prog.uf[line], prog.uf[line + 1]]);
+        assert_eq!(value(&program, 257 + n), expected, "register {}", 256 + n);
+    }
+}
+
 #[test]
 fn a_set_point_written_by_the_master_changes_what_the_tank_does() {
     if !pymodbus() {
         return;
     }
-    let tank = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/tank-fill.utl"),
-    )
-    .expect("tank example");
-    let prog = listing::parse("tank-fill", &tank).expect("tank listing");
+    let prog = tank();
     // Level 2.0 V (409 counts), between the low mark (300) and the high mark (800): the
     // pump has not started.
     let mut n = nano("tank.eeprom", &prog, &["--a6", "2.0", "--a7", "2.0"]);

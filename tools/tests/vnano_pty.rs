@@ -1,11 +1,11 @@
 //! The real firmware image in the virtual Nano, through its pseudo-terminal (as minicom,
 //! picocom or C-Kermit would see it) and its console status line.
 
-mod vnano_util;
+mod support;
 
 use std::io::Write;
 use std::time::Duration;
-use vnano_util::*;
+use support::vnano::*;
 
 const T: Duration = Duration::from_secs(30);
 const TITLE: &str = "<<<< Nano - u T I L E - ATmega328 >>>>";

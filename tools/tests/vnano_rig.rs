@@ -4,12 +4,12 @@
 //! and start options, simavr's port-write quirk, the warm reset, EEPROM load/save, the
 //! pty (bursts, reconnects, the symlink) and the error messages.
 
-mod vnano_util;
+mod support;
 
 use std::io::Write;
 use std::process::{Command, Stdio};
 use std::time::Duration;
-use vnano_util::*;
+use support::vnano::*;
 
 const T: Duration = Duration::from_secs(20);
 

@@ -3,10 +3,10 @@
 //! screen read back with `tmux capture-pane`. Checks the manual's screens (§2.5, §3.1),
 //! the editing keys (SPEC §8) and the rig's status line below the uTile screen.
 
-mod vnano_util;
+mod support;
 
 use std::time::{Duration, Instant};
-use vnano_util::*;
+use support::vnano::*;
 
 const T: Duration = Duration::from_secs(20);
 const TITLE: &str = "<<<< Nano - u T I L E - ATmega328 >>>>";

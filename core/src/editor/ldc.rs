@@ -120,16 +120,17 @@ impl Editor {
         };
         let mut drawn = false;
         let readings = b.analog_readings();
-        for i in 0..shown.len() {
-            // Masks, not checks: the indices are in range by construction.
-            let v = if i < COUNTERS {
-                eng.count[i & 7]
+        // u8 cells: the indices are in range by construction (masks, not checks).
+        for i in 0..CELLS {
+            let v = if i < COUNTERS as u8 {
+                eng.count[usize::from(i & 7)]
             } else {
-                readings[i & 1]
+                readings[usize::from(i & 1)]
             };
-            if all || v != shown[i] {
-                shown[i] = v;
-                let (row, col) = cell_pos(i as u8);
+            let seen = &mut shown[usize::from(i)];
+            if all || v != *seen {
+                *seen = v;
+                let (row, col) = cell_pos(i);
                 goto(b, row + 1, col);
                 value(b, v, false);
                 drawn = true;

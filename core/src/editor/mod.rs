@@ -272,7 +272,7 @@ impl Editor {
         let before = discriminant(&self.screen);
         self.echo_only = false;
         let mode = self.key_inner(byte, eng, &mut t);
-        if t.dropped {
+        if t.dropped() {
             // Redraw what this key may have changed: the prompt line after an echo, the
             // values, the page and the status line after a command, all after a new screen.
             let from = if discriminant(&self.screen) != before {
@@ -287,7 +287,7 @@ impl Editor {
         if mode == Mode::Edit {
             if self.render < STEPS {
                 self.catch_up(eng, &mut t);
-            } else if t.sent && !self.echo_only {
+            } else if t.sent() && !self.echo_only {
                 self.park(&mut t);
             }
         }
@@ -357,14 +357,14 @@ impl Editor {
     /// Draw the steps of a redraw still under way, until done or until input is waiting
     /// (then the step is drawn again next time); done, the cursor goes back to the prompt.
     fn catch_up<B: Board>(&mut self, eng: &Engine, t: &mut Tracked<'_, B>) {
-        if self.render >= STEPS || t.mute {
+        if self.render >= STEPS || t.mute() {
             return;
         }
         // Output cut short may have left reverse video on.
         normal(t);
         while self.render < STEPS {
             self.step(self.render, eng, t);
-            if t.mute {
+            if t.mute() {
                 return;
             }
             self.render += 1;

@@ -226,46 +226,46 @@ impl Editor {
 
     /// INS: lines from the cursor move down one, NOP at the cursor, line 255 is lost.
     pub(super) fn insert_line<B: Board>(&mut self, eng: &mut Engine, b: &mut B) {
-        let c = usize::from(self.cursor);
-        let uf = &mut eng.prog.uf;
-        // A loop rather than `copy_within`, whose bounds checks LLVM kept (a panic path).
-        let mut i = LINES - 1;
-        while i > c {
-            uf[i] = uf[i - 1];
-            i -= 1;
-        }
-        uf[c] = NOP;
-        // Line i changed if it differs from what it held: now at i + 1.
-        self.redraw_changed(eng, b, |uf, i| {
-            i == 255 || uf[usize::from(i)] != uf[usize::from(i) + 1]
-        });
+        self.shift_lines(true, eng, b);
     }
 
     /// DEL: lines below the cursor move up one, NOP at line 255.
     pub(super) fn delete_line<B: Board>(&mut self, eng: &mut Engine, b: &mut B) {
-        let c = usize::from(self.cursor);
-        let uf = &mut eng.prog.uf;
-        for i in c..LINES - 1 {
-            uf[i] = uf[i + 1];
-        }
-        uf[LINES - 1] = NOP;
-        let cur = self.cursor;
-        // Line i (> cursor) held what line i - 1 holds now.
-        self.redraw_changed(eng, b, |uf, i| {
-            i == cur || uf[usize::from(i)] != uf[usize::from(i.wrapping_sub(1))]
-        });
+        self.shift_lines(false, eng, b);
     }
 
-    /// Redraw the entries of the shown page, from the cursor on, for which `changed` holds.
-    pub(super) fn redraw_changed<B: Board>(
-        &mut self,
-        eng: &Engine,
-        b: &mut B,
-        changed: impl Fn(&[u8; LINES], u8) -> bool,
-    ) {
-        // u8 lines: indexing a 256-entry program with them has no panic path.
-        for i in self.cursor..=self.cursor | 31 {
-            if changed(&eng.prog.uf, i) {
+    /// INS (`insert`) or DEL, and the entries of the shown page that changed redrawn.
+    fn shift_lines<B: Board>(&mut self, insert: bool, eng: &mut Engine, b: &mut B) {
+        let cur = self.cursor;
+        let uf = &mut eng.prog.uf;
+        // Index loops rather than `copy_within`, whose bounds checks LLVM kept (a panic
+        // path); u8 lines index the 256-line program with no check at all.
+        if insert {
+            let mut i = u8::MAX;
+            while i > cur {
+                uf[usize::from(i)] = uf[usize::from(i - 1)];
+                i -= 1;
+            }
+            uf[usize::from(cur)] = NOP;
+        } else {
+            let mut i = cur;
+            while i < u8::MAX {
+                uf[usize::from(i)] = uf[usize::from(i + 1)];
+                i += 1;
+            }
+            uf[usize::from(u8::MAX)] = NOP;
+        }
+        // Line i changed if it differs from what its neighbour held: INS moved line i to
+        // i + 1, DEL moved line i + 1 to i (the cursor line and the end always redrawn).
+        for i in cur..=cur | 31 {
+            let other = if insert {
+                i.wrapping_add(1)
+            } else {
+                i.wrapping_sub(1)
+            };
+            let end = if insert { i == u8::MAX } else { i == cur };
+            let uf = &eng.prog.uf;
+            if end || uf[usize::from(i)] != uf[usize::from(other)] {
                 self.entry(eng, b, i, true);
             }
         }

@@ -8,8 +8,9 @@ use super::*;
 pub(super) enum ReadPhase {
     /// Taking records.
     Receiving,
-    /// Throwing input away until it is quiet; then show the result (`None` = success).
-    Draining(Option<Txt>),
+    /// Throwing input away until it is quiet; then show the result: `READ_DONE`, or why
+    /// the file was refused.
+    Draining(Txt),
     /// Result shown; a CR returns.
     Waiting,
 }
@@ -50,19 +51,16 @@ impl Editor {
             let quiet = now.wrapping_sub(rs.last_ms);
             match rs.phase {
                 ReadPhase::Receiving if quiet >= READ_TIMEOUT_MS => {
-                    rs.phase = ReadPhase::Draining(Some(text::WHY_TIMEOUT));
+                    rs.phase = ReadPhase::Draining(text::WHY_TIMEOUT);
                     rs.last_ms = now.wrapping_sub(DRAIN_QUIET_MS);
                 }
                 ReadPhase::Draining(result) if quiet >= DRAIN_QUIET_MS => {
                     rs.phase = ReadPhase::Waiting;
                     goto(b, ROW_STATUS, COL_STATUS_A);
-                    match result {
-                        None => text::READ_DONE.send(b),
-                        Some(why) => {
-                            text::READ_ERROR.send(b);
-                            why.send(b);
-                        }
+                    if result != text::READ_DONE {
+                        text::READ_ERROR.send(b);
                     }
+                    result.send(b);
                     text::FOR_MENU.send(b);
                     ceol(b);
                 }
@@ -84,7 +82,7 @@ impl Editor {
             ReadPhase::Receiving => {
                 rs.last_ms = now;
                 if byte == b'/' {
-                    rs.phase = ReadPhase::Draining(Some(text::WHY_ABORT));
+                    rs.phase = ReadPhase::Draining(text::WHY_ABORT);
                     return None;
                 }
                 match rs.reader.feed(byte) {
@@ -92,12 +90,12 @@ impl Editor {
                     HexEvent::Done { len } => {
                         let staged = rs.reader.data();
                         let got = staged.get(..usize::from(len)).unwrap_or(staged);
-                        rs.phase = match decode_into(got, &mut eng.prog) {
-                            Ok(()) => ReadPhase::Draining(None),
-                            Err(e) => ReadPhase::Draining(Some(image_reason(e))),
-                        };
+                        rs.phase = ReadPhase::Draining(match decode_into(got, &mut eng.prog) {
+                            Ok(()) => text::READ_DONE,
+                            Err(e) => image_reason(e),
+                        });
                     }
-                    HexEvent::Error(e) => rs.phase = ReadPhase::Draining(Some(hex_reason(e))),
+                    HexEvent::Error(e) => rs.phase = ReadPhase::Draining(hex_reason(e)),
                 }
             }
             ReadPhase::Draining(_) => rs.last_ms = now,

@@ -1,46 +1,70 @@
 //! Every text the editor sends, kept in flash as one progmem blob.
 //!
-//! A text is named by a [`Txt`] (bit offset and symbol count in the blob), computed at compile
-//! time, so RAM holds no strings and no per-text pointers.
+//! A text is named by a [`Txt`], one byte: its number in a progmem table of where each text
+//! starts (a coded text's first bit, or a plain text's first byte), so a call site loads one
+//! register and RAM holds no strings and no per-text pointers. Coded texts end with the
+//! code's END symbol, plain texts with a NUL.
 //!
-//! Long (about 410 lines) on purpose: the `texts!` list is every string the editor sends, one
-//! per line; the coder lives in `huffman.rs`.
+//! The `texts!` list is every string the editor sends, one per line; the coder lives in
+//! `huffman.rs`.
+
+use core::num::NonZeroU8;
 
 use avr_progmem::progmem;
 
 use super::super::board::Board;
-use super::huffman::{self, Code, RUN, RUN_BITS};
+use super::huffman::{self, Code, END, RUN, RUN_BITS};
 
-/// A text in the flash blob: a coded text's first bit and number of symbols, or a plain
-/// text's first byte and length (with [`PLAIN_TEXT`]).
+/// A text: its number in [`STARTS`] (never 0, so an `Option<Txt>` is one byte too).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Txt {
-    at: u16,
-    len: u16,
-}
+pub struct Txt(NonZeroU8);
 
-/// [`Txt::len`] flag: a plain text, its bytes as they are.
+/// [`STARTS`] flag: a plain text, its bytes as they are.
 const PLAIN_TEXT: u16 = 0x8000;
 
 impl Txt {
+    /// The text numbered `n` (1..[`TEXTS`], which fit a byte).
+    const fn nth(n: usize) -> Self {
+        match NonZeroU8::new(n as u8) {
+            Some(v) => Txt(v),
+            None => Txt(NonZeroU8::MAX),
+        }
+    }
+
     /// Hand every byte of the text, unpacked, to `f`.
     pub fn each(self, mut f: impl FnMut(u8)) {
-        let plain = self.len & PLAIN_TEXT != 0;
-        let mut bits = Bits::at(if plain { 0 } else { self.at });
-        for i in 0..self.len & !PLAIN_TEXT {
-            let (mut c, mut n) = if plain {
-                (rom(PLAIN_AT as u16 + self.at + i), 1)
+        let i = usize::from(self.0.get());
+        let start = if i < STARTS.len() {
+            STARTS.load_at(i)
+        } else {
+            0
+        };
+        let plain = start & PLAIN_TEXT != 0;
+        let mut at = PLAIN_AT as u16 + (start & !PLAIN_TEXT);
+        let mut bits = Bits::at(start);
+        // The reader's state stays in registers: its steps are inlined once each here, so
+        // `send` needs no stack frame.
+        let mut n = 1;
+        loop {
+            let c = if plain {
+                at = at.wrapping_add(1);
+                rom(at.wrapping_sub(1))
             } else {
-                (bits.symbol(), 1)
+                bits.symbol()
             };
+            if c == END {
+                break;
+            }
             if c == RUN && !plain {
+                // The count, then the symbol it repeats.
                 n = bits.take(RUN_BITS);
-                c = bits.symbol();
+                continue;
             }
             // One call of `f`, so that `send` inlines the board's output once.
             for _ in 0..n {
                 f(c);
             }
+            n = 1;
         }
     }
 
@@ -74,17 +98,18 @@ struct Bits {
 
 impl Bits {
     /// Reading from bit `bit` of the blob.
+    #[inline(always)]
     fn at(bit: u16) -> Self {
-        let mut at = Bits {
-            next: bit >> 3,
-            byte: 0,
-            left: 0,
-        };
-        at.take(bit as u8 & 7);
-        at
+        let skip = bit as u8 & 7;
+        Bits {
+            next: (bit >> 3).wrapping_add(1),
+            byte: rom(TEXT_AT as u16 + (bit >> 3)) << skip,
+            left: 8 - skip,
+        }
     }
 
     /// The next bit (0 past the blob).
+    #[inline(always)]
     fn bit(&mut self) -> u8 {
         if self.left == 0 {
             self.byte = rom(TEXT_AT as u16 + self.next);
@@ -110,6 +135,7 @@ impl Bits {
     /// The next symbol of the canonical Huffman code: the counts give the number of codes of
     /// each length, the symbols come in code order. `d` is how far the bits read so far lie
     /// past the first code of their length.
+    #[inline(always)]
     fn symbol(&mut self) -> u8 {
         let (mut d, mut index) = (0u8, 0u8);
         for &count in &COUNTS {
@@ -134,43 +160,49 @@ macro_rules! build_date {
     };
 }
 
-/// Declares the texts: each becomes a public [`Txt`] constant; all go into one blob.
+/// Declares the texts: each becomes a public [`Txt`] constant, numbered in order (plain
+/// ones first), and its words a `&str` of the same name in [`source`]; all go into one blob.
 macro_rules! texts {
     (
         plain { $($(#[$pm:meta])* $pname:ident = $ps:expr;)* }
         $($(#[$m:meta])* $name:ident = $s:expr;)*
     ) => {
-        const PLAIN: &[&str] = &[$($ps),*];
-        const PARTS: &[&str] = &[$($s),*];
+        /// Every text as written, for host code that looks for it on the screen (the
+        /// `utile` tool's push and pull, tests). The firmware sends the texts from the blob;
+        /// these constants are only the compiler's input to it, so they cost no flash.
+        pub mod source {
+            $(
+                $(#[$pm])*
+                pub const $pname: &str = $ps;
+            )*
+            $(
+                $(#[$m])*
+                pub const $name: &str = $s;
+            )*
+        }
+        const PLAIN: &[&str] = &[$(source::$pname),*];
+        const PARTS: &[&str] = &[$(source::$name),*];
         #[allow(non_camel_case_types, clippy::upper_case_acronyms, dead_code)]
-        enum PlainIndex { $($pname),* }
-        #[allow(non_camel_case_types, clippy::upper_case_acronyms, dead_code)]
-        enum Index { $($name),* }
+        enum Index { NoText, $($pname,)* $($name),* }
         $(
             $(#[$pm])*
-            pub const $pname: Txt = Txt {
-                at: plain_offset(PlainIndex::$pname as usize) as u16,
-                len: PLAIN[PlainIndex::$pname as usize].len() as u16 | PLAIN_TEXT,
-            };
+            pub const $pname: Txt = Txt::nth(Index::$pname as usize);
         )*
         $(
             $(#[$m])*
-            pub const $name: Txt = Txt {
-                at: huffman::offset_of(&CODE, PARTS, Index::$name as usize) as u16,
-                len: huffman::coded_len(&CODE, PARTS[Index::$name as usize].as_bytes()).1 as u16,
-            };
+            pub const $name: Txt = Txt::nth(Index::$name as usize);
         )*
         /// Every text with its source, for the unpacking test.
         #[cfg(test)]
-        const ALL: &[(Txt, &str)] = &[$(($pname, $ps),)* $(($name, $s)),*];
+        const ALL: &[(Txt, &str)] = &[$(($pname, source::$pname),)* $(($name, source::$name)),*];
     };
 }
 
-/// Bytes of the plain texts before `PLAIN[n]`.
+/// Bytes of the plain texts before `PLAIN[n]`, each with its NUL.
 const fn plain_offset(n: usize) -> usize {
     let (mut i, mut sum) = (0, 0);
     while i < n {
-        sum += PLAIN[i].len();
+        sum += PLAIN[i].len() + 1;
         i += 1;
     }
     sum
@@ -356,15 +388,20 @@ const TEXT_AT: usize = PLAIN_AT + PLAIN_LEN;
 /// Bytes in [`ROM`].
 const ROM_LEN: usize = TEXT_AT + BLOB_LEN;
 const _: () = assert!(ROM_LEN <= u16::MAX as usize);
+const _: () = assert!(PLAIN_LEN < PLAIN_TEXT as usize);
 
-/// Byte `i` of the plain texts back to back.
+/// Byte `i` of the plain texts back to back, each ended by a NUL.
 const fn plain_byte(mut i: usize) -> u8 {
     let mut p = 0;
-    while i >= PLAIN[p].len() {
-        i -= PLAIN[p].len();
+    while i > PLAIN[p].len() {
+        i -= PLAIN[p].len() + 1;
         p += 1;
     }
-    PLAIN[p].as_bytes()[i]
+    if i == PLAIN[p].len() {
+        0
+    } else {
+        PLAIN[p].as_bytes()[i]
+    }
 }
 
 /// The symbols in code order, the plain texts and the coded texts, in one array so one
@@ -386,9 +423,32 @@ const fn tables() -> [u8; ROM_LEN] {
     out
 }
 
+/// Number of texts, with the unused number 0.
+const TEXTS: usize = 1 + PLAIN.len() + PARTS.len();
+const _: () = assert!(TEXTS <= 256, "text numbers are bytes");
+
+/// Where each text starts: a plain text's first byte after [`PLAIN_AT`] (with
+/// [`PLAIN_TEXT`]), a coded text's first bit of the blob.
+const fn starts() -> [u16; TEXTS] {
+    let mut out = [0u16; TEXTS];
+    let mut i = 0;
+    while i < PLAIN.len() {
+        out[1 + i] = plain_offset(i) as u16 | PLAIN_TEXT;
+        i += 1;
+    }
+    let mut j = 0;
+    while j < PARTS.len() {
+        out[1 + PLAIN.len() + j] = huffman::offset_of(&CODE, PARTS, j) as u16;
+        j += 1;
+    }
+    out
+}
+
 progmem! {
     /// Every text of the editor, coded, after the code's tables.
     static progmem ROM: [u8; ROM_LEN] = tables();
+    /// Where each text starts.
+    static progmem STARTS: [u16; TEXTS] = starts();
 }
 
 /// Byte `i` of [`ROM`] (0 past its end); out of line, as the one reader of the texts.

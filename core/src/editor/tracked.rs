@@ -13,28 +13,44 @@ const SEQ_ROOM: u8 = 16;
 /// and mutes its output rather than keep received bytes waiting.
 pub(super) struct Tracked<'a, B: Board> {
     pub(super) b: &'a mut B,
-    /// Something went out.
-    pub(super) sent: bool,
-    /// Muting is allowed (not while LIST or WRITE send their text).
-    pub(super) may_mute: bool,
-    /// Output is dropped from now on.
-    pub(super) mute: bool,
-    /// Something was dropped: the screen is behind.
-    pub(super) dropped: bool,
+    /// [`SENT`], [`MAY_MUTE`], [`MUTE`], [`DROPPED`]: one byte, so each entry point sets up
+    /// its `Tracked` with two stores.
+    flags: u8,
     /// The last byte sent (muting never cuts an `ESC [ n ; n X` sequence in half).
     last: u8,
 }
+
+/// Something went out.
+const SENT: u8 = 1;
+/// Muting is allowed (not while LIST or WRITE send their text).
+const MAY_MUTE: u8 = 2;
+/// Output is dropped from now on.
+const MUTE: u8 = 4;
+/// Something was dropped: the screen is behind.
+const DROPPED: u8 = 8;
 
 impl<'a, B: Board> Tracked<'a, B> {
     pub(super) fn new(b: &'a mut B, may_mute: bool) -> Self {
         Self {
             b,
-            sent: false,
-            may_mute,
-            mute: false,
-            dropped: false,
+            flags: if may_mute { MAY_MUTE } else { 0 },
             last: 0,
         }
+    }
+
+    /// Something went out.
+    pub(super) fn sent(&self) -> bool {
+        self.flags & SENT != 0
+    }
+
+    /// Output is dropped from now on.
+    pub(super) fn mute(&self) -> bool {
+        self.flags & MUTE != 0
+    }
+
+    /// Something was dropped: the screen is behind.
+    pub(super) fn dropped(&self) -> bool {
+        self.flags & DROPPED != 0
     }
 }
 
@@ -78,14 +94,17 @@ impl<B: Board> Board for Tracked<'_, B> {
             (_, 0x1B | b'[' | b'0'..=b'9' | b';') => 0,
             _ => 1,
         };
-        if self.may_mute && !self.mute && self.b.tx_room() < need && self.b.rx_pending() {
-            self.mute = true;
+        if self.flags & (MAY_MUTE | MUTE) == MAY_MUTE
+            && self.b.tx_room() < need
+            && self.b.rx_pending()
+        {
+            self.flags |= MUTE;
         }
-        if self.mute {
-            self.dropped = true;
+        if self.mute() {
+            self.flags |= DROPPED;
             return;
         }
-        self.sent = true;
+        self.flags |= SENT;
         self.last = byte;
         self.b.tx(byte)
     }
@@ -99,7 +118,7 @@ impl<B: Board> Board for Tracked<'_, B> {
         self.b.eeprom_update(addr, value)
     }
     fn tx_dropped(&mut self) -> bool {
-        self.mute
+        self.mute()
     }
     fn rx_pending(&mut self) -> bool {
         self.b.rx_pending()

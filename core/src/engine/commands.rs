@@ -264,8 +264,10 @@ pub(super) fn bit_mask(op: u8) -> u8 {
     BITS[usize::from(op & 7)]
 }
 
-/// `1 << m` for a flip-flop or timer number m = 0..15, without a shift loop.
-#[inline(always)]
+/// `1 << m` for a flip-flop or timer number m = 0..15, without a shift loop. Out of line:
+/// on the chip only EDIT mode's commands use it (RUN mode is `scan.S`), and its four inlined
+/// copies cost 38 B more.
+#[inline(never)]
 pub(super) fn bit16(m: u8) -> u16 {
     let b = u16::from(bit_mask(m));
     if m & 8 == 0 {

@@ -180,6 +180,16 @@ impl Engine {
     /// [`Engine::clear_runtime`] except the counts, which a warm reset keeps (SPEC §14): the
     /// counter outputs are recomputed from them, and the first END counts nothing.
     pub fn clear_runtime_keeping_counts<B: Board>(&mut self, b: &mut B) {
+        self.reset_runtime();
+        b.set_points(self.prog.set_points);
+        b.resync_inputs();
+        b.write_outputs(0);
+    }
+
+    /// The engine's part of [`Engine::clear_runtime_keeping_counts`], out of line: the
+    /// firmware's boot and the editor's autostart call the board's part with two board types.
+    #[inline(never)]
+    fn reset_runtime(&mut self) {
         // Field by field: rebuilding the whole Engine would put two copies of the 272-byte
         // Program on the AVR stack.
         self.bs = 0;
@@ -198,9 +208,6 @@ impl Engine {
         self.cr = 0;
         self.refresh_counter_outputs();
         self.scan_end = END;
-        b.set_points(self.prog.set_points);
-        b.resync_inputs();
-        b.write_outputs(0);
     }
 
     /// Retire every timer whose time has passed. Each scan does this when it starts (once per

@@ -33,16 +33,18 @@ pub trait Map {
     fn id_len(&self) -> u8;
     /// Byte `i` of that text.
     fn id_byte(&self, i: u8) -> u8;
-}
 
-/// Whether every address of `start .. start + qty` exists in `table`.
-pub fn covers<M: Map + ?Sized>(map: &M, table: Table, start: u16, qty: u16) -> bool {
-    let mut addr = start;
-    for _ in 0..qty {
-        if !map.contains(table, addr) {
-            return false;
+    /// Whether every address of `start .. start + qty` exists in `table` (`qty` ≥ 1, the
+    /// range inside the 16-bit address space). Address by address, unless the map knows
+    /// a shorter way.
+    fn covers(&self, table: Table, start: u16, qty: u16) -> bool {
+        let mut addr = start;
+        for _ in 0..qty {
+            if !self.contains(table, addr) {
+                return false;
+            }
+            addr = addr.wrapping_add(1);
         }
-        addr = addr.wrapping_add(1);
+        true
     }
-    true
 }

@@ -1,13 +1,16 @@
 //! The map of SPEC §13 on top of the engine's own state (no second copy of the I/O image):
 //! coils Y/U/V, discrete inputs A/Q/TQ/CQ/H, holding registers for the presets and
-//! set-points, input registers for status, STAT's figures, counts, readings, time left.
+//! set-points, input registers for status, STAT's figures, counts, readings, time left;
+//! and SPEC §17's snapshot and program windows of input registers ([`super::snapshot`]).
 
 use crate::analog;
 use crate::board::Board;
-use crate::engine::{Engine, COUNTERS, SET_POINTS, UNITS};
+use crate::engine::{Engine, COUNTERS, LINES, SET_POINTS, UNITS};
 use crate::stats::{self, ScanStats};
 
+use super::crc::Crc16;
 use super::map::{Map, Table};
+use super::snapshot::{at, PROGRAM, PROGRAM_LEN, SNAPSHOT, SNAPSHOT_LEN};
 
 /// Input register 0, bit 0: the program runs.
 pub const STATUS_RUNNING: u16 = 1 << 0;
@@ -22,6 +25,8 @@ pub const STATUS_OVERRUN: u16 = 1 << 3;
 pub const HR_COUNTER_PRESETS: u16 = UNITS as u16;
 /// First holding register of the set-points.
 pub const HR_SET_POINTS: u16 = HR_COUNTER_PRESETS + COUNTERS as u16;
+/// Input register of the mean scan time.
+const IR_MEAN: u16 = 2;
 /// First input register of the counts.
 pub const IR_COUNTS: u16 = 8;
 /// First input register of the analog readings.
@@ -29,32 +34,77 @@ pub const IR_READINGS: u16 = IR_COUNTS + COUNTERS as u16;
 /// First input register of the timers' time left.
 pub const IR_TIME_LEFT: u16 = 32;
 
-/// Input registers 0..7, kept up to date by the firmware: status bits, STAT's scan times,
-/// the scan count, receive overruns and dropped frames.
+/// What the firmware keeps for the input registers the engine does not hold: input
+/// registers 0..7 (status bits, STAT's scan times, the scan count, receive overruns,
+/// dropped frames), SPEC §17's registers 64..71 taken together between two scans, and the
+/// program's fingerprint.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Status {
-    /// The registers, in address order.
+    /// Input registers 0..7, in address order, but the mean scan time (2), which is worked
+    /// out when it is read: a division is too long to make at every request.
     pub regs: [u16; 8],
+    /// Milliseconds since RUN, for the mean.
+    pub run_ms: u32,
+    /// Input registers 64..71 (status, every bit, the scan count) as [`Status::take_scan`]
+    /// took them: one scan's, however late in a reply they are read.
+    pub scan: [u16; 8],
+    /// The running program's fingerprint ([`super::snapshot::fingerprint`]), taken at its start:
+    /// a running CRC, so no other copy of one is needed (`.value()` is the register).
+    pub fingerprint: Crc16,
 }
 
 impl Status {
-    /// The registers for `flags` (`STATUS_*` bits), STAT's figures since RUN (min/max in
-    /// Timer1 ticks of 0.5 µs, scans, run time), overruns since reset and frames dropped.
+    /// Input registers 0..7 for `flags` (`STATUS_*` bits), STAT's figures since RUN (min/max
+    /// in Timer1 ticks of 0.5 µs, scans, run time), overruns since reset and frames dropped.
     pub fn new(flags: u16, st: &ScanStats, overruns: u16, dropped: u16) -> Self {
+        let mut status = Self::default();
+        status.refresh(flags, st, overruns, dropped);
+        status
+    }
+
+    /// The program `uf` starts (RUN, EX0, autostart): its fingerprint.
+    #[inline(never)]
+    pub fn start(&mut self, uf: &[u8; LINES]) {
+        self.fingerprint = Crc16::new();
+        for &line in uf {
+            self.fingerprint.update(line);
+        }
+    }
+
+    /// Input registers 0..7 as [`Status::new`] makes them; the rest kept.
+    pub fn refresh(&mut self, flags: u16, st: &ScanStats, overruns: u16, dropped: u16) {
         // No scan yet shows 0.
         let us = |ticks: u16| if st.count == 0 { 0 } else { ticks >> 1 };
-        Self {
-            regs: [
-                flags,
-                us(st.min),
-                stats::per_1000(st.run_ms, st.count).min(0xFFFF) as u16,
-                us(st.max),
-                (st.count >> 16) as u16,
-                st.count as u16,
-                overruns,
-                dropped,
-            ],
-        }
+        self.run_ms = st.run_ms;
+        self.regs = [
+            flags,
+            us(st.min),
+            0,
+            us(st.max),
+            (st.count >> 16) as u16,
+            st.count as u16,
+            overruns,
+            dropped,
+        ];
+    }
+
+    /// Registers 64..71 now, between two scans and just after [`Status::refresh`]: the
+    /// status, the inputs and thresholds, every port, flip-flop, timer and counter output,
+    /// and the scan count, all of one scan (SPEC §17).
+    #[inline(never)]
+    pub fn take_scan<B: Board>(&mut self, eng: &Engine, b: &mut B) {
+        let thresholds = b.analog_bits() >> analog::FIRST_CHANNEL;
+        let inputs = (b.inputs() & 0x3F) | (thresholds << 6);
+        self.scan = [
+            self.regs[0],
+            u16::from_le_bytes([inputs, eng.py]),
+            u16::from_le_bytes([eng.pu, eng.pv]),
+            eng.q,
+            eng.tq,
+            u16::from(eng.cq),
+            self.regs[4],
+            self.regs[5],
+        ];
     }
 }
 
@@ -100,6 +150,26 @@ fn bit16(word: u16, n: u16) -> u16 {
     (word >> (n & 15)) & 1
 }
 
+/// The window of `table` that holds `addr`, by its first address. The map's addresses are
+/// runs with gaps between them, so a range lies in the map when both its ends lie in one
+/// window.
+fn window(table: Table, addr: u16) -> Option<u16> {
+    let first = match table {
+        Table::Coils if addr < 24 => 0,
+        Table::DiscreteInputs if addr < 6 => 0,
+        Table::DiscreteInputs if (8..50).contains(&addr) => 8,
+        Table::HoldingRegisters if addr < HR_SET_POINTS + SET_POINTS as u16 => 0,
+        Table::InputRegisters if addr < IR_READINGS + SET_POINTS as u16 => 0,
+        Table::InputRegisters if (IR_TIME_LEFT..IR_TIME_LEFT + UNITS as u16).contains(&addr) => {
+            IR_TIME_LEFT
+        }
+        Table::InputRegisters if (SNAPSHOT..SNAPSHOT + SNAPSHOT_LEN).contains(&addr) => SNAPSHOT,
+        Table::InputRegisters if (PROGRAM..PROGRAM + PROGRAM_LEN).contains(&addr) => PROGRAM,
+        _ => return None,
+    };
+    Some(first)
+}
+
 impl<B: Board> PlcMap<'_, B> {
     /// The port byte that coil `addr` (0..23) lives in.
     fn port(&mut self, addr: u16) -> &mut u8 {
@@ -110,11 +180,42 @@ impl<B: Board> PlcMap<'_, B> {
         }
     }
 
-    fn input_register(&mut self, addr: u16) -> u16 {
-        let a = usize::from(addr);
+    fn input_register(&mut self, mut addr: u16) -> u16 {
+        let mut a = usize::from(addr);
         // Masks instead of checks: `contains` has kept the address in range.
-        if addr < IR_COUNTS {
-            self.status.regs[a & 7]
+        if addr >= PROGRAM {
+            // Two lines per register, line 2n in the high byte.
+            let uf = &self.eng.prog.uf;
+            let line = (a << 1) & (LINES - 2);
+            return u16::from_le_bytes([uf[line | 1], uf[line]]);
+        }
+        if addr >= SNAPSHOT {
+            // The snapshot: the registers of one scan, the fingerprint, and the rest as
+            // the §13 register it repeats.
+            let offset = addr - SNAPSHOT;
+            if offset < at::ONE_SCAN_END {
+                return self.status.scan[a & 7];
+            }
+            if offset == at::FINGERPRINT {
+                return self.status.fingerprint.value();
+            }
+            addr = if offset < at::TIME_LEFT {
+                offset
+            } else if offset < at::SCAN_TIMES {
+                offset - at::TIME_LEFT + IR_TIME_LEFT
+            } else if offset < at::OVERRUNS {
+                offset - at::SCAN_TIMES + 1
+            } else {
+                offset - at::OVERRUNS + 6
+            };
+            a = usize::from(addr);
+        }
+        let s = self.status;
+        if addr == IR_MEAN {
+            let scans = u32::from(s.regs[4]) << 16 | u32::from(s.regs[5]);
+            stats::per_1000(s.run_ms, scans).min(0xFFFF) as u16
+        } else if addr < IR_COUNTS {
+            s.regs[a & 7]
         } else if addr < IR_READINGS {
             self.eng.count[a & 7]
         } else if addr < IR_TIME_LEFT {
@@ -130,15 +231,13 @@ impl<B: Board> PlcMap<'_, B> {
 
 impl<B: Board> Map for PlcMap<'_, B> {
     fn contains(&self, table: Table, addr: u16) -> bool {
-        match table {
-            Table::Coils => addr < 24,
-            Table::DiscreteInputs => addr < 6 || (8..50).contains(&addr),
-            Table::HoldingRegisters => addr < HR_SET_POINTS + SET_POINTS as u16,
-            Table::InputRegisters => {
-                addr < IR_READINGS + SET_POINTS as u16
-                    || (IR_TIME_LEFT..IR_TIME_LEFT + UNITS as u16).contains(&addr)
-            }
-        }
+        window(table, addr).is_some()
+    }
+
+    fn covers(&self, table: Table, start: u16, qty: u16) -> bool {
+        // One check for any length: a read of 125 registers is judged between two scans.
+        let first = window(table, start);
+        first.is_some() && first == window(table, start.wrapping_add(qty - 1))
     }
 
     fn read(&mut self, table: Table, addr: u16) -> u16 {
@@ -195,20 +294,21 @@ impl<B: Board> Map for PlcMap<'_, B> {
                     *byte &= !mask;
                 }
             }
-            // Masks instead of checks: `contains` has kept the address in range. Outputs
-            // and thresholds follow the new values at once, as after LDT or LDC.
+            // Masks instead of checks: `contains` has kept the address in range. Counter
+            // outputs and thresholds follow new presets and set-points at once, as after
+            // LDC (only theirs: a write of 16 timer presets stays short between two scans).
             Table::HoldingRegisters => {
                 let (p, a) = (&mut self.eng.prog, usize::from(addr));
                 if addr < HR_COUNTER_PRESETS {
                     p.presets[a & 15] = value as u8;
                 } else if addr < HR_SET_POINTS {
                     p.counter_presets[a & 7] = value;
+                    self.eng.refresh_counter_outputs();
                 } else {
                     p.set_points[a & 1] = value;
+                    let sp = p.set_points;
+                    self.b.set_points(sp);
                 }
-                self.eng.refresh_counter_outputs();
-                let sp = self.eng.prog.set_points;
-                self.b.set_points(sp);
             }
             // Read-only tables: the codec never writes them.
             Table::DiscreteInputs | Table::InputRegisters => {}

@@ -1,7 +1,7 @@
 //! A request checked in the specification's order — function (exception 01), quantity and
 //! form (03), addresses (02), values (03) — and, only when all of it is good, its writes.
 
-use super::map::{covers, Map, Table};
+use super::map::{Map, Table};
 use super::*;
 
 /// Most coils or discrete inputs one read may ask for.
@@ -87,7 +87,7 @@ fn check<M: Map + ?Sized>(function: u8, pdu: &[u8], map: &mut M) -> Result<Answe
             if len != 5 || b == 0 || b > max {
                 return Err(Exception::IllegalDataValue);
             }
-            if !fits(a, b) || !covers(map, table, a, b) {
+            if !fits(a, b) || !map.covers(table, a, b) {
                 return Err(Exception::IllegalDataAddress);
             }
             Ok(Answer::Read {
@@ -127,16 +127,22 @@ fn check<M: Map + ?Sized>(function: u8, pdu: &[u8], map: &mut M) -> Result<Answe
             if b == 0 || b > max || u16::from(count) != bytes || len != 6 + usize::from(count) {
                 return Err(Exception::IllegalDataValue);
             }
-            if !fits(a, b) || !covers(map, table, a, b) {
+            if !fits(a, b) || !map.covers(table, a, b) {
                 return Err(Exception::IllegalDataAddress);
             }
-            // Value i: a bit of the packed coils (first in bit 0), or a register.
+            // Value i: a bit of the packed coils (first in bit 0), or a register. The length
+            // was checked above: the values are all there.
+            let values = pdu.get(6..).unwrap_or(&[]);
             let value = |i: u16| {
+                let i = usize::from(i);
                 if coils {
-                    let byte = pdu.get(6 + usize::from(i >> 3)).copied().unwrap_or(0);
+                    let byte = values.get(i >> 3).copied().unwrap_or(0);
                     u16::from((byte >> (i & 7)) & 1)
                 } else {
-                    word(pdu, 6 + 2 * usize::from(i))
+                    match values.get(2 * i..2 * i + 2) {
+                        Some(&[hi, lo]) => u16::from_be_bytes([hi, lo]),
+                        _ => 0,
+                    }
                 }
             };
             // Every value is checked before the first write: an exception changes nothing.

@@ -143,4 +143,10 @@ impl Slave {
     pub fn master_active(&self, now_ms: u32) -> bool {
         self.heard && now_ms.wrapping_sub(self.last_ms) < ACTIVE_MS
     }
+
+    /// Whether the terminal must wait: a frame is coming in or waits to be judged, its reply
+    /// is being sent, or a master is active (SPEC §13: nothing but replies meanwhile).
+    pub fn line_busy(&self, now_ms: u32) -> bool {
+        self.receiving() || self.replying || self.master_active(now_ms)
+    }
 }

@@ -1,104 +1,30 @@
 //! The fuzz harness of the Modbus codec (`utile_core::modbus`): arbitrary bytes, gaps and
 //! frame ends into the receiver, every taken frame through the request handler against a map
-//! of SPEC §13's shape, and every reply checked as a master would check it.
+//! of SPEC §13's and §17's shape ([`TestMap`]), and every reply checked as a master would
+//! check it.
 //!
 //! Invariants: no panic; no read or write outside the map (the map records any); an
 //! exception or a dropped frame changes nothing; every reply is a valid frame (CRC,
 //! address, function or function | 0x80, a length that agrees with its byte count).
 
 use std::format;
-use std::string::String;
 use std::vec::Vec;
 
-use utile_core::modbus::crc::crc16_modbus;
 use utile_core::modbus::frame::{Receiver, Verdict as FrameVerdict};
-use utile_core::modbus::map::{Map, Table};
 use utile_core::modbus::reply::Reply;
 use utile_core::modbus::request::{handle, Answer};
 
 use super::Verdict;
+use crate::modbus::map::TestMap;
+use crate::modbus::{crc_ok, with_crc};
 
 /// The slave address the harness answers as.
 const ADDRESS: u8 = 1;
 
-/// §13's map, recording any access outside it instead of trusting the codec.
-#[derive(Clone, Debug, PartialEq, Eq)]
-struct ShapedMap {
-    coils: [u16; 24],
-    holding: [u16; 26],
-    outside: Option<String>,
-}
-
-impl ShapedMap {
-    fn new() -> Self {
-        Self {
-            coils: [0; 24],
-            holding: [0; 26],
-            outside: None,
-        }
-    }
-
-    fn note(&mut self, what: String) {
-        if self.outside.is_none() {
-            self.outside = Some(what);
-        }
-    }
-}
-
-impl Map for ShapedMap {
-    fn contains(&self, table: Table, addr: u16) -> bool {
-        match table {
-            Table::Coils => addr < 24,
-            Table::DiscreteInputs => addr < 6 || (8..50).contains(&addr),
-            Table::HoldingRegisters => addr < 26,
-            Table::InputRegisters => addr < 18 || (32..48).contains(&addr),
-        }
-    }
-    fn read(&mut self, table: Table, addr: u16) -> u16 {
-        if !self.contains(table, addr) {
-            self.note(format!("read of {table:?} {addr} outside the map"));
-            return 0;
-        }
-        match table {
-            Table::Coils => self.coils[usize::from(addr)],
-            Table::HoldingRegisters => self.holding[usize::from(addr)],
-            Table::DiscreteInputs => addr & 1,
-            Table::InputRegisters => addr.wrapping_mul(257),
-        }
-    }
-    fn accepts(&self, addr: u16, value: u16) -> bool {
-        match addr {
-            0..=15 => value <= 255,
-            16..=23 => true,
-            _ => value <= 1023,
-        }
-    }
-    fn write(&mut self, table: Table, addr: u16, value: u16) {
-        match table {
-            Table::Coils if addr < 24 && value <= 1 => self.coils[usize::from(addr)] = value,
-            Table::HoldingRegisters if addr < 26 && self.accepts(addr, value) => {
-                self.holding[usize::from(addr)] = value
-            }
-            _ => self.note(format!(
-                "write of {value} to {table:?} {addr} outside the map"
-            )),
-        }
-    }
-    fn running(&self) -> bool {
-        true
-    }
-    fn id_len(&self) -> u8 {
-        5
-    }
-    fn id_byte(&self, i: u8) -> u8 {
-        b"uTile".get(usize::from(i)).copied().unwrap_or(0)
-    }
-}
-
 /// Check one reply as a master would.
 fn check_reply(reply: &[u8], pdu: &[u8], answer: Answer) -> Verdict {
     let function = pdu.first().copied().unwrap_or(0);
-    if reply.len() < 5 || crc16_modbus(reply) != 0 || reply[0] != ADDRESS {
+    if reply.len() < 5 || !crc_ok(reply) || reply[0] != ADDRESS {
         return Err(format!(
             "reply {reply:02X?} to {pdu:02X?} is not a valid frame"
         ));
@@ -160,10 +86,9 @@ fn line_events(data: &[u8]) -> Vec<Line> {
                     1 => 2,
                     _ => ADDRESS,
                 };
-                let mut frame = std::vec![to];
-                frame.extend(pairs.by_ref().take(usize::from(value % 40)).map(|p| p[1]));
-                frame.extend_from_slice(&crc16_modbus(&frame).to_le_bytes());
-                events.extend(frame.into_iter().map(|b| Line::Byte(b, false)));
+                let mut body = std::vec![to];
+                body.extend(pairs.by_ref().take(usize::from(value % 40)).map(|p| p[1]));
+                events.extend(with_crc(&body).into_iter().map(|b| Line::Byte(b, false)));
                 events.push(Line::End);
             }
         }
@@ -175,7 +100,7 @@ fn line_events(data: &[u8]) -> Vec<Line> {
 /// taken through the request handler and its reply checked.
 pub fn modbus(data: &[u8]) -> Verdict {
     let mut rx = Receiver::new();
-    let mut map = ShapedMap::new();
+    let mut map = TestMap::new();
     for event in line_events(data) {
         if let Line::Byte(byte, gap) = event {
             rx.push(byte, gap);
@@ -185,7 +110,7 @@ pub fn modbus(data: &[u8]) -> Verdict {
         match rx.end() {
             FrameVerdict::Frame { len } => {
                 let frame = rx.frame().to_vec();
-                if frame.len() != usize::from(len) || crc16_modbus(&frame) != 0 {
+                if frame.len() != usize::from(len) || !crc_ok(&frame) {
                     return Err(format!("frame {frame:02X?} taken with a bad CRC"));
                 }
                 let pdu = &frame[1..frame.len() - 2];
@@ -220,8 +145,11 @@ pub fn modbus(data: &[u8]) -> Verdict {
 ///
 /// Invariants: no panic; a request changes only what the map names (PY, PU, PV, the
 /// presets and set-points, and the counter outputs a preset moves), an exception or a
-/// dropped frame nothing; set-points stay ≤ 1023; every reply is a valid frame.
+/// dropped frame nothing; set-points stay ≤ 1023; every reply is a valid frame; a read of
+/// §17's windows shows the engine as it was when the frame was judged, the program two
+/// lines per register and the program's fingerprint.
 pub fn modbus_plc(data: &[u8]) -> Verdict {
+    use utile_core::board::Board;
     use utile_core::engine::Engine;
     use utile_core::modbus::plc::{PlcMap, Status, STATUS_RUNNING};
     use utile_core::modbus::slave::{Event, Slave};
@@ -230,15 +158,22 @@ pub fn modbus_plc(data: &[u8]) -> Verdict {
     let mut b = crate::sim::SimBoard::new();
     eng.clear_runtime(&mut b);
     let mut slave = Slave::new();
-    let status = Status::new(STATUS_RUNNING, &utile_core::stats::ScanStats::new(), 0, 0);
+    let mut status = Status::new(STATUS_RUNNING, &utile_core::stats::ScanStats::new(), 0, 0);
+    status.start(&eng.prog.uf);
+    // The bytes since the last frame end: the request, if it was one.
+    let mut frame = Vec::new();
     for event in line_events(data) {
         if let Line::Byte(byte, gap) = event {
             slave.push(byte, gap);
+            frame.push(byte);
             continue;
         }
+        let request = std::mem::take(&mut frame);
         b.run_for(&mut eng, 1, 1);
         let before = eng.clone();
+        let (inputs, thresholds) = (b.inputs(), b.analog_bits());
         let now = b.ticker.now_ms();
+        status.take_scan(&eng, &mut b);
         let mut map = PlcMap {
             eng: &mut eng,
             b: &mut b,
@@ -270,11 +205,20 @@ pub fn modbus_plc(data: &[u8]) -> Verdict {
         }
         match event {
             Event::Reply => {
-                if reply.len() < 5 || crc16_modbus(&reply) != 0 || reply[0] != ADDRESS {
+                if reply.len() < 5 || !crc_ok(&reply) || reply[0] != ADDRESS {
                     return Err(format!("reply {reply:02X?} is not a valid frame"));
                 }
                 if reply[1] & 0x80 != 0 && eng != before {
                     return Err(format!("exception {reply:02X?} changed the engine"));
+                }
+                if reply[1] == 0x04 {
+                    let judged = Judged {
+                        eng: &before,
+                        inputs,
+                        thresholds,
+                        status: &status,
+                    };
+                    check_windows(&request, &reply, &judged)?;
                 }
             }
             Event::Dropped | Event::Slash | Event::None => {
@@ -287,6 +231,58 @@ pub fn modbus_plc(data: &[u8]) -> Verdict {
                     return Err("a broadcast was answered".into());
                 }
             }
+        }
+    }
+    Ok(())
+}
+
+/// What a frame's judgement saw: the engine, the inputs and thresholds, the status.
+struct Judged<'a> {
+    eng: &'a utile_core::engine::Engine,
+    inputs: u8,
+    thresholds: u8,
+    status: &'a utile_core::modbus::plc::Status,
+}
+
+/// An FC04 reply against SPEC §17: registers 64..71 are the engine's as it was judged,
+/// 103 the fingerprint of its program, 256..383 its lines, two per register.
+fn check_windows(request: &[u8], reply: &[u8], j: &Judged<'_>) -> Verdict {
+    use utile_core::analog::FIRST_CHANNEL;
+    use utile_core::modbus::snapshot::{at, fingerprint, PROGRAM, PROGRAM_LEN, SNAPSHOT};
+
+    let word = |i: usize| u16::from_be_bytes([request[i], request[i + 1]]);
+    let start = word(2);
+    let e = j.eng;
+    let io = u16::from((j.inputs & 0x3F) | (j.thresholds >> FIRST_CHANNEL) << 6);
+    let one_scan = [
+        j.status.regs[0],
+        io | u16::from(e.py) << 8,
+        u16::from(e.pu) | u16::from(e.pv) << 8,
+        e.q,
+        e.tq,
+        u16::from(e.cq),
+        j.status.regs[4],
+        j.status.regs[5],
+    ];
+    let values = reply.get(3..reply.len() - 2).unwrap_or(&[]);
+    for (k, pair) in values.chunks_exact(2).enumerate() {
+        let addr = start.wrapping_add(k as u16);
+        let got = u16::from_be_bytes([pair[0], pair[1]]);
+        let expected = if (PROGRAM..PROGRAM + PROGRAM_LEN).contains(&addr) {
+            let line = usize::from(addr - PROGRAM) * 2;
+            Some(u16::from_be_bytes([e.prog.uf[line], e.prog.uf[line + 1]]))
+        } else if (SNAPSHOT..SNAPSHOT + at::ONE_SCAN_END).contains(&addr) {
+            Some(one_scan[usize::from(addr - SNAPSHOT)])
+        } else if addr == SNAPSHOT + at::FINGERPRINT {
+            Some(fingerprint(&e.prog.uf))
+        } else {
+            None
+        };
+        if expected.is_some_and(|v| v != got) {
+            return Err(format!(
+                "input register {addr} read {got:#06X}, expected {:#06X}",
+                expected.unwrap_or(0)
+            ));
         }
     }
     Ok(())

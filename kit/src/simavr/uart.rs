@@ -25,9 +25,10 @@ const IOCTL_UART0_GET_FLAGS: u32 = ioctl_def(b'u', b'a', b'g', b'0');
 /// How queued UART input goes down the line into the firmware.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum RxPacing {
-    /// One byte per frame time at 19200 baud, and only once the firmware has read the
-    /// previous one: no byte is ever lost (about 17.5 kbaud of simulated time). What a user
-    /// sees.
+    /// One byte per frame time at 19200 baud (10 bits, as on the line), and only once the
+    /// firmware has read the previous one: no byte is ever lost. What a user sees. (It once
+    /// took 11 bits a byte, simavr's count: a sender at the true baud ran ahead of it, and
+    /// the silences it left, such as before a lone `/`, were lost in the backlog.)
     #[default]
     AfterRead,
     /// One byte every [`RX_FIXED_CYCLES_PER_BYTE`], whatever the firmware does: a steady
@@ -197,22 +198,32 @@ impl Chip {
     /// On every instruction: a flag and a compare unless a byte is due.
     #[inline(always)]
     pub(crate) fn feed_uart(&mut self) {
-        if let RxPacing::Line { .. } = self.rx.pacing {
-            if self.frame_time_stale() {
-                self.line_frame_time();
+        match self.rx.pacing {
+            RxPacing::Line { .. } => {
+                if self.frame_time_stale() {
+                    self.line_frame_time();
+                }
+                if self
+                    .rx
+                    .timed
+                    .front()
+                    .is_some_and(|&(at, _)| self.cycle() >= at)
+                {
+                    self.feed_line();
+                }
+                return;
             }
-            if self
-                .rx
-                .timed
-                .front()
-                .is_some_and(|&(at, _)| self.cycle() >= at)
-            {
-                self.feed_line();
+            RxPacing::AfterRead => {
+                if self.frame_time_stale() {
+                    self.line_frame_time();
+                }
             }
-        } else if !self.rx.queue.is_empty()
+            RxPacing::Fixed | RxPacing::Fifo => {}
+        }
+        // (`Fifo` waits while simavr's FIFO is full: most of a long input's time.)
+        if !self.rx.queue.is_empty()
             && !(self.link.uart.rx_full && self.rx.pacing == RxPacing::Fifo)
         {
-            // (`Fifo` waits while simavr's FIFO is full: most of a long input's time.)
             self.feed_paced();
         }
     }
@@ -265,10 +276,10 @@ impl Chip {
         set != self.rx.frame_set || self.frame_regs() != self.rx.frame_regs
     }
 
-    /// [`RxPacing::Line`]: simavr's UART counts 11 bits per 8N1 frame (it always counts a
-    /// parity bit), so the firmware could send only one byte per 11 bit times; on the real
-    /// line a frame is 10 bits. Set again whenever UBRR0 or U2X0 changed or simavr set its
-    /// own figure.
+    /// [`RxPacing::Line`] and [`RxPacing::AfterRead`]: simavr's UART counts 11 bits per 8N1
+    /// frame (it always counts a parity bit), so bytes came one per 11 bit times both ways;
+    /// on the real line a frame is 10 bits. Set again whenever UBRR0 or U2X0 changed or
+    /// simavr set its own figure.
     fn line_frame_time(&mut self) {
         if self.rx.uart.is_null() {
             return;

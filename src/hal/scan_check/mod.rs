@@ -5,7 +5,9 @@
 //! clock bits, output image and out_sense), runs one scan of the kept engine in assembly,
 //! poses the same world again and runs one `Engine::scan` of a copy of the engine as it was
 //! before (one check in 16 is a burst instead: sixteen scans in one call of the assembly,
-//! with the state carried in registers, against sixteen core scans). Both engines, the edge
+//! with the state carried in registers, against sixteen core scans; of the single scans,
+//! half end as every 16th scan does and half as the Modbus line's wish ends any scan,
+//! `want.rs`). Both engines, the edge
 //! bits left and the output image and pins must then be equal. The verdict goes out on the UART: `scan-check PASS trials=.. scans=..` with
 //! coverage counters, or `scan-check FAIL trial T scan S` with the case in hex
 //! (tests/simavr_scan_check.rs reads it).
@@ -21,7 +23,8 @@ use avr_device::interrupt;
 use avr_progmem::wrapper::ProgMem;
 
 use super::scan::{self, Exit, RunState};
-use super::{drive_pins, publish, regs, serial, wr, Nano, ANALOG_BITS, LAST_PY, OUTPUTS, TICKER};
+use super::{drive_pins, publish, regs, serial, want, wr, Nano};
+use super::{ANALOG_BITS, LAST_PY, OUTPUTS, TICKER};
 use utile_core::engine::{offsets, Engine, Flow, Program, COUNTERS, LINES, SET_POINTS, UNITS};
 use utile_core::opcodes::{is_valid, BLANK, END, NOP, POP_TK, SET};
 use utile_core::ticker::{Ticker, INPUT_MASK};
@@ -88,6 +91,7 @@ fn check_scan(
     board: &mut Nano,
     w: &World,
     burst: bool,
+    by_line: bool,
     cov: &mut Coverage,
 ) -> Result<(), Mismatch> {
     avr_device::asm::wdr();
@@ -100,8 +104,17 @@ fn check_scan(
     w.pose();
     let mut st = RunState::new(0);
     // Every 16th scan ends the call (`want`): from 15, exactly one scan; from 0, sixteen.
-    st.scans = if burst { 0 } else { 15 };
+    // The line's wish, made before the call, ends it after the first scan: from 7, one.
+    st.scans = if burst {
+        0
+    } else if by_line {
+        interrupt::free(want::now);
+        7
+    } else {
+        15
+    };
     let exit = scan::run(eng, &mut st, true);
+    interrupt::free(want::taken);
     let asm = Seen::now();
 
     w.pose();
@@ -118,6 +131,7 @@ fn check_scan(
     let after = bytes(eng);
     cov.scans += 1;
     cov.bursts += u16::from(burst);
+    cov.by_line += u16::from(by_line);
     cov.py += u16::from(before.get(offsets::PY) != after.get(offsets::PY));
     cov.q += u16::from(le16(&before, offsets::Q) != eng.q);
     let deadlines = offsets::DEADLINE..offsets::DEADLINE + 4 * UNITS;
@@ -185,7 +199,8 @@ pub fn run(eng: &mut Engine, board: &mut Nano) -> ! {
         for scan in 0..SCANS {
             next_world(eng, &mut rng, &mut w, &mut cov);
             let burst = rng.one_in(16);
-            if let Err(m) = check_scan(eng, reference, board, &w, burst, &mut cov) {
+            let by_line = !burst && rng.one_in(2);
+            if let Err(m) = check_scan(eng, reference, board, &w, burst, by_line, &mut cov) {
                 report(trial, scan, &w, &m, eng, reference);
                 failed = true;
                 break 'trials;

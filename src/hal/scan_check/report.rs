@@ -132,6 +132,8 @@ pub(super) fn pass(cov: &Coverage) {
     tx_dec(u32::from(cov.wraps));
     say!(b" bursts=");
     tx_dec(u32::from(cov.bursts));
+    say!(b" by_line=");
+    tx_dec(u32::from(cov.by_line));
     say!(b" counted=");
     tx_dec(u32::from(cov.counted));
     say!(b" counter_resets=");

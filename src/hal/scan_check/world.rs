@@ -153,6 +153,8 @@ pub(super) struct Coverage {
     pub(super) wraps: u16,
     /// Checks of a burst of [`BURST`] scans rather than one.
     pub(super) bursts: u16,
+    /// Single scans ended by the Modbus line's wish rather than as every 16th scan.
+    pub(super) by_line: u16,
 }
 
 /// The engine as bytes (for the diff and the coverage counters).

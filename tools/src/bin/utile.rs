@@ -8,13 +8,19 @@
 //!           [--signals A0,Y0,TQ0,C0,A6,H6] [--svg out.svg] [--vcd out.vcd]
 //! utile push prog.utl|prog.hex --port /dev/ttyUSB0 [--store] [--stop]
 //! utile pull --port /dev/ttyUSB0 [-o prog.utl] [--hex]
+//! utile live --port /dev/ttyUSB0 [--units 1,2,3 | --scan] [--http ADDR:PORT] [--tcp ADDR:PORT]
 //! ```
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use utile_kit::{diagram, listing, simulate};
-use utile_tools::link;
+use utile_tools::{link, live};
+
+/// The usage text: the commands here, then `live`'s.
+fn usage() -> String {
+    format!("{USAGE}\n{}", live::args::USAGE)
+}
 
 const USAGE: &str = "usage:
   utile asm PROG.utl [-o PROG.hex]     listing -> Intel HEX image (as WRITE sends it)
@@ -293,7 +299,7 @@ fn sim(words: &[String]) -> Result<(), Failure> {
 fn main() -> ExitCode {
     let words: Vec<String> = std::env::args().skip(1).collect();
     let Some((cmd, rest)) = words.split_first() else {
-        eprintln!("{USAGE}");
+        eprintln!("{}", usage());
         return ExitCode::from(2);
     };
     let result = match cmd.as_str() {
@@ -303,8 +309,9 @@ fn main() -> ExitCode {
         "sim" => sim(rest),
         "push" => push(rest),
         "pull" => pull(rest),
+        "live" => live::main(rest),
         "-h" | "--help" | "help" => {
-            println!("{USAGE}");
+            println!("{}", usage());
             Ok(())
         }
         other => Err(format!("unknown command '{other}'\n{USAGE}")),

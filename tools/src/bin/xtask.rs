@@ -2,7 +2,8 @@
 //!
 //! `cargo fw [--features F]` builds the release firmware for the ATmega328P, writes
 //! `out/m328-nano-utile.hex` and `out/m328-nano-utile.elf` (with features: `m328-nano-utile-F.*`)
-//! and prints flash and RAM use against the budgets of `memory.x`.
+//! and prints flash and RAM use against the budgets of `memory.x`, and the flash left under
+//! each boot loader (old: 30,720 B; Optiboot in 1 KB: 31,744 B; Optiboot in 512 B: 32,256 B).
 //!
 //! `cargo fw --size` adds the flash of each room (scan, engine, each editor file, storage,
 //! hal, main loop, runtime, progmem tables …), largest first (`tools/src/xtask/size.rs`).
@@ -22,6 +23,8 @@ mod size;
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 
+use utile_tools::elf;
+
 /// A region length from `memory.x` (`__NAME__ = 1152;` or `= 30K;`), so the printed budgets
 /// are the ones the linker enforces.
 fn budget(symbol: &str) -> Result<u64, String> {
@@ -40,6 +43,15 @@ fn budget(symbol: &str) -> Result<u64, String> {
 }
 /// RAM of the ATmega328P.
 const RAM_TOTAL: u64 = 2048;
+/// Flash left to the application under each boot loader (32 KB less its boot section): the
+/// old Nano boot loader (2 KB at 0x7800, the budget of `memory.x`), Optiboot as the virtual
+/// Nano and `./x` install it (relinked into the 1 KB section at 0x7C00), and the 496-byte
+/// Optiboot of the README's recipe (512 B section at 0x7E00).
+const BOOT_LOADERS: [(&str, u64); 3] = [
+    ("the old Nano boot loader (2 KB at 0x7800)", 30_720),
+    ("Optiboot as installed (1 KB at 0x7C00)", 31_744),
+    ("the README's 512 B Optiboot (0x7E00)", 32_256),
+];
 /// Static data plus worst-case stack must stay within this (SPEC §11).
 const RAM_BUDGET: u64 = 1536;
 
@@ -64,6 +76,36 @@ fn root() -> PathBuf {
     tools.parent().unwrap_or(tools).to_path_buf()
 }
 
+/// Where the AVR build sees this repository: every source path under the root is remapped
+/// to this one (`--remap-path-prefix`), and so are the cargo home's and the toolchain's, so
+/// nothing of the folder a clone sits in reaches the compiler's output (debug info, and any
+/// panic location or `file!()` that might reach the image). The report by room and the
+/// panic guard read the debug info with this root.
+const REMAP_ROOT: &str = "/utile";
+
+/// The `--remap-path-prefix` flags of the AVR build: the repository, the cargo home (the
+/// registry's sources) and the toolchain (`build-std`'s sources).
+fn remap_flags() -> Vec<String> {
+    let mut from_to = vec![(root().display().to_string(), REMAP_ROOT.to_string())];
+    let home = std::env::var("CARGO_HOME")
+        .ok()
+        .or_else(|| std::env::var("HOME").ok().map(|h| format!("{h}/.cargo")));
+    if let Some(home) = home {
+        from_to.push((home, "/cargo".into()));
+    }
+    let rustc = std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into());
+    if let Ok(out) = Command::new(rustc).args(["--print", "sysroot"]).output() {
+        let sysroot = String::from_utf8_lossy(&out.stdout).trim().to_string();
+        if out.status.success() && !sysroot.is_empty() {
+            from_to.push((sysroot, "/rust".into()));
+        }
+    }
+    from_to
+        .into_iter()
+        .map(|(from, to)| format!("--remap-path-prefix={from}={to}"))
+        .collect()
+}
+
 /// `cargo build` of the AVR firmware, with optional features and environment.
 fn avr_build(features: Option<&str>, memory_x: Option<&Path>) -> Command {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
@@ -83,6 +125,11 @@ fn avr_build(features: Option<&str>, memory_x: Option<&Path>) -> Command {
     if let Some(f) = features {
         cmd.args(["--features", f]);
     }
+    // Added to `.cargo/config.toml`'s AVR rustflags (cargo joins the two lists).
+    cmd.arg("--config").arg(format!(
+        "target.avr-atmega328p.rustflags={:?}",
+        remap_flags()
+    ));
     // Debian's avr-gcc 5.4 does not know `-no-pie`: rustc retries the link without it and
     // logs a warning on every build (`./x run` showed it before starting). The retry is the
     // intended path, so that one log line is silenced; a user's RUSTC_LOG is kept.
@@ -123,7 +170,7 @@ fn fw(args: &[String]) -> Result<(), String> {
         return Err("firmware build failed".into());
     }
     let root = root();
-    let elf = root.join("target/avr-atmega328p/release/utile-fw.elf");
+    let built = root.join("target/avr-atmega328p/release/utile-fw.elf");
     let out = root.join("out");
     std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
     let stem = match &features {
@@ -132,7 +179,7 @@ fn fw(args: &[String]) -> Result<(), String> {
     };
     let out_elf = out.join(format!("{stem}.elf"));
     let out_hex = out.join(format!("{stem}.hex"));
-    std::fs::copy(&elf, &out_elf).map_err(|e| format!("cannot copy {}: {e}", elf.display()))?;
+    std::fs::copy(&built, &out_elf).map_err(|e| format!("cannot copy {}: {e}", built.display()))?;
     // Only flash contents: .text and the initial values of .data (never .noinit/.eeprom).
     let status = Command::new("avr-objcopy")
         .args(["-O", "ihex", "-j", ".text", "-j", ".data"])
@@ -143,11 +190,14 @@ fn fw(args: &[String]) -> Result<(), String> {
     if !status.success() {
         return Err("avr-objcopy failed".into());
     }
-    let sizes = section_sizes(&out_elf)?;
-    let get = |name: &str| sizes.iter().find(|(n, _)| n == name).map_or(0, |(_, s)| *s);
-    let (text, data, bss, noinit) = (get(".text"), get(".data"), get(".bss"), get(".noinit"));
-    let flash = text + data;
-    let ram = data + bss + noinit;
+    let sections = elf::sections(&out_elf)?;
+    let elf::Sections {
+        text,
+        data,
+        bss,
+        noinit,
+    } = sections;
+    let (flash, ram) = (sections.flash(), sections.ram());
     let flash_budget = budget("__TEXT_REGION_LENGTH__")?;
     let static_budget = budget("__DATA_REGION_LENGTH__")?;
     println!("firmware: {}", rel(&out_hex));
@@ -156,6 +206,11 @@ fn fw(args: &[String]) -> Result<(), String> {
         "flash: {flash:>6} bytes = .text {text} + .data {data}   budget {flash_budget} ({:.1} % used)",
         percent(flash, flash_budget)
     );
+    for (k, (loader, room)) in BOOT_LOADERS.into_iter().enumerate() {
+        let free = room as i64 - flash as i64;
+        let label = if k == 0 { "free:" } else { "" };
+        println!("{label:<6} {free:>6} bytes of {room} under {loader}");
+    }
     println!(
         "RAM:   {ram:>6} bytes = .data {data} + .bss {bss} + .noinit {noinit}   static budget {static_budget} ({:.1} % used)",
         percent(ram, static_budget)
@@ -168,32 +223,24 @@ fn fw(args: &[String]) -> Result<(), String> {
         println!("       scan dispatch table at 0x{table:04X}; {gap} bytes of alignment gap in front of it");
     }
     if by_room {
-        size::print(&size::rooms(&out_elf, &root, text, data)?, flash_budget);
+        let remapped = Path::new(REMAP_ROOT);
+        size::print(&size::rooms(&out_elf, remapped, text, data)?, flash_budget);
     }
     println!("built in {:.1} s", started.elapsed().as_secs_f64());
     if flash > flash_budget || ram > static_budget {
         return Err("over budget".into());
     }
-    panics::guard(&out_elf, &root)?;
+    panics::guard(&out_elf, Path::new(REMAP_ROOT))?;
     println!("no panic path linked");
     Ok(())
 }
 
 /// Address of the threaded scan's dispatch table (src/hal/scan.S) and the bytes of padding
 /// its 512-byte alignment left after the cold code in front of it.
-fn scan_table_gap(elf: &Path) -> Option<(u64, u64)> {
-    let out = Command::new("avr-nm").arg(elf).output().ok()?;
-    let text = String::from_utf8_lossy(&out.stdout);
-    let addr = |name: &str| {
-        text.lines().find_map(|l| {
-            let mut w = l.split_whitespace();
-            let a = w.next()?;
-            let _kind = w.next()?;
-            (w.next()? == name).then(|| u64::from_str_radix(a, 16).ok())?
-        })
-    };
-    let table = addr("utile_scan_table")?;
-    let cold_end = addr("utile_scan_cold_end")?;
+fn scan_table_gap(out_elf: &Path) -> Option<(u64, u64)> {
+    let syms = elf::symbols(out_elf).ok()?;
+    let table = elf::address(&syms, "utile_scan_table")?;
+    let cold_end = elf::address(&syms, "utile_scan_cold_end")?;
     Some((table, table.saturating_sub(cold_end)))
 }
 
@@ -205,28 +252,6 @@ fn percent(used: u64, budget: u64) -> f64 {
 fn rel(p: &Path) -> String {
     let root = root();
     p.strip_prefix(&root).unwrap_or(p).display().to_string()
-}
-
-/// `(section, size)` from `avr-size -A`.
-fn section_sizes(elf: &Path) -> Result<Vec<(String, u64)>, String> {
-    let out = Command::new("avr-size")
-        .arg("-A")
-        .arg(elf)
-        .output()
-        .map_err(|e| format!("cannot run avr-size (binutils-avr): {e}"))?;
-    if !out.status.success() {
-        return Err("avr-size failed".into());
-    }
-    let text = String::from_utf8_lossy(&out.stdout);
-    Ok(text
-        .lines()
-        .filter_map(|l| {
-            let mut w = l.split_whitespace();
-            let name = w.next()?;
-            let size = w.next()?.parse().ok()?;
-            name.starts_with('.').then(|| (name.to_string(), size))
-        })
-        .collect())
 }
 
 /// A linker message saying that a section does not fit its memory region.

@@ -109,14 +109,24 @@ pub fn find(hay: &[u8], needle: &[u8]) -> Option<usize> {
     hay.windows(needle.len()).position(|w| w == needle)
 }
 
+/// Position of the last `needle` in `hay`.
+pub fn find_last(hay: &[u8], needle: &[u8]) -> Option<usize> {
+    if needle.is_empty() || needle.len() > hay.len() {
+        return None;
+    }
+    hay.windows(needle.len()).rposition(|w| w == needle)
+}
+
 #[cfg(test)]
 mod tests {
-    use super::find;
+    use super::{find, find_last};
 
     #[test]
     fn find_gives_the_first_position() {
         assert_eq!(find(b"abcabc", b"bc"), Some(1));
         assert_eq!(find(b"abc", b"x"), None);
         assert_eq!(find(b"", b"x"), None);
+        assert_eq!(find_last(b"abcabc", b"bc"), Some(4));
+        assert_eq!(find_last(b"a", b"abc"), None);
     }
 }

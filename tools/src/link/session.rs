@@ -1,37 +1,39 @@
 //! A session with uTile's editor over a serial port: wait out the boot loader after the
 //! port-open reset, make sure the editor's page is there (a running program is refused
 //! unless stopping it was asked for), then READ (push) or WRITE (pull) as the Kermit
-//! scripts do (SPEC §10), checking every answer.
+//! scripts do (SPEC §10), checking every answer. The screen texts it looks for are the
+//! editor's own (`utile_core::editor::text::source`).
 
 use std::time::Duration;
 
+use utile_core::editor::text::source as text;
 use utile_core::Program;
 use utile_kit::listing;
 
 use super::port::{find, Port};
 
-/// The editor's title, on every full screen (`editor::text::TITLE`).
-const TITLE: &[u8] = b"Nano - u T I L E";
-/// On the editor's page (`USER_FILE`).
-const PAGE: &[u8] = b"*** User File 0 ***";
-/// On the RUN screen (`RUNNING`).
-const RUNNING: &[u8] = b"*** Running User File Program ***";
-/// After `/` has stopped a program (`STRIKE`).
-const STRIKE: &[u8] = b"Strike any key";
-/// READ's and WRITE's screens (`READ_PROMPT`, `WRITE_PROMPT`).
-const READ_PROMPT: &[u8] = b"Reading file";
-const WRITE_PROMPT: &[u8] = b"File write";
-/// A command the editor did not take (`UNRECOGNIZED`).
-const UNRECOGNIZED: &[u8] = b"Unrecognized Input";
-/// READ's results (`READ_DONE`, `READ_ERROR`, `FOR_MENU`).
-const READ_DONE: &[u8] = b"File read completed";
-const READ_ERROR: &[u8] = b"Read error! - ";
-const FOR_MENU: &[u8] = b" - 'CR' for menu -->";
+/// The editor's title, on every full screen.
+pub const TITLE: &[u8] = text::TITLE.as_bytes();
+/// On the editor's page.
+pub const PAGE: &[u8] = text::USER_FILE.as_bytes();
+/// On the RUN screen.
+pub const RUNNING: &[u8] = text::RUNNING.as_bytes();
+/// After `/` has stopped a program.
+pub const STRIKE: &[u8] = text::STRIKE.as_bytes();
+/// READ's and WRITE's screens.
+const READ_PROMPT: &[u8] = text::READ_PROMPT.as_bytes();
+const WRITE_PROMPT: &[u8] = text::WRITE_PROMPT.as_bytes();
+/// A command the editor did not take.
+const UNRECOGNIZED: &[u8] = text::UNRECOGNIZED.as_bytes();
+/// READ's results: done, or the error's reason between these two.
+const READ_DONE: &[u8] = text::READ_DONE.as_bytes();
+const READ_ERROR: &[u8] = text::READ_ERROR.as_bytes();
+const FOR_MENU: &[u8] = text::FOR_MENU.as_bytes();
 /// WRITE's end-of-file record.
 const EOF_RECORD: &[u8] = b":00000001FF";
-/// STORE's results (`STORED`, `STORE_FAILED`).
-const STORED: &[u8] = b"UF0 stored in EEPROM";
-const STORE_FAILED: &[u8] = b"STORE failed";
+/// STORE's results.
+const STORED: &[u8] = text::STORED.as_bytes();
+const STORE_FAILED: &[u8] = text::STORE_FAILED.as_bytes();
 
 /// Ctrl-L: the editor draws its whole screen again.
 const REDRAW: u8 = 0x0C;

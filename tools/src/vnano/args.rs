@@ -34,7 +34,9 @@ options:
   --bus N             N Nanos (2..8) on one RS-485 line on the pty (implies --pty): the
                       client is the Modbus master; slave addresses 1..N, D8 fitted, each
                       running the --eeprom program (default: PU. .PY KEY END, outputs =
-                      coils 8..15); two drivers (D10) at once are reported
+                      coils 8..15); two drivers (D10) at once are reported;
+                      --a6/--a7/--press set every Nano; the rig keys work the
+                      Nano that @N picked last (Nano 1 at first)
   --dtr-reset         with --pty: reset the chip when a client opens the port (the default
                       with --bootloader)
   --pty               put the UART on a pseudo-terminal (connect minicom, picocom or

@@ -1,7 +1,9 @@
 //! `cargo nano --bus N`: N virtual Nanos on one RS-485 line (the kit's [`Bus`]), the line on
 //! a pty whose client is the Modbus master (an HMI, pymodbus, mbpoll). Each Nano has slave
 //! address i + 1 (`ADDR`'s EEPROM cell), the D8 jumper fitted, and the `--eeprom` program
-//! (by default `PU. .PY KEY END`: outputs Y0..Y7 follow coils 8..15).
+//! (by default `PU. .PY KEY END`: outputs Y0..Y7 follow coils 8..15). `--a6`/`--a7` and
+//! `--press` set every Nano's rig at start; the console's rig keys (as with `--pty`) work the
+//! Nano that `@N` picked last (Nano 1 until then), and each change prints its status line.
 
 use std::io::Write;
 use std::path::Path;
@@ -13,7 +15,9 @@ use utile_kit::sim::SimBoard;
 use utile_kit::simavr::{Bus, Chip, RigPin, F_CPU};
 
 use super::args::Options;
+use super::io::{self, STDIN};
 use super::pty::Pty;
+use super::rig::{self, RigAction, RigView};
 use super::term;
 
 /// Simulated time per step: 1 ms.
@@ -45,6 +49,12 @@ pub fn run(o: &Options, n: usize, elf: &Path) -> Result<(), String> {
         let mut c = Chip::load(elf).map_err(|e| e.to_string())?;
         c.set_eeprom(0, &eeprom(o, i)?);
         c.hold_low(RigPin::D8, true);
+        for n in 0..6u8 {
+            c.hold_low(RigPin::Switch(n), o.pressed & (1 << n) != 0);
+        }
+        for (pin, &mv) in (6u8..).zip(&o.analog_mv) {
+            c.set_analog_mv(pin, mv);
+        }
         chips.push(c);
     }
     let mut bus = Bus::new(chips, 19_200).with_driver_enable();
@@ -61,8 +71,16 @@ pub fn run(o: &Options, n: usize, elf: &Path) -> Result<(), String> {
     let limit = o.run_for.map(|secs| (secs * F_CPU as f64) as u64);
     let (wall0, sim0) = (Instant::now(), bus.cycle());
     let mut collisions = 0;
+    let mut keys = Keys {
+        selected: 0,
+        at: false,
+        analog_mv: vec![o.analog_mv; n],
+    };
     loop {
         if term::quit_requested() || limit.is_some_and(|l| bus.cycle() >= l) {
+            break;
+        }
+        if keys.read(&mut bus, &mut out) {
             break;
         }
         let mut bytes = Vec::new();
@@ -95,4 +113,65 @@ pub fn run(o: &Options, n: usize, elf: &Path) -> Result<(), String> {
         bus.cycle() as f64 / F_CPU as f64
     );
     Ok(())
+}
+
+/// The console's rig keys on a bus: `@N` picks Nano N, the rest work it as with `--pty`.
+struct Keys {
+    /// The Nano the keys work (index).
+    selected: usize,
+    /// `@` was typed: a Nano's number follows.
+    at: bool,
+    /// Levels on A6 and A7 of each Nano, mV.
+    analog_mv: Vec<[u32; 2]>,
+}
+
+impl Keys {
+    /// Reads the console without waiting; true when `q` asks to quit.
+    fn read(&mut self, bus: &mut Bus, out: &mut std::io::Stdout) -> bool {
+        if !io::readable(STDIN) {
+            return false;
+        }
+        let mut buf = [0u8; 64];
+        let Ok(got) = io::read(STDIN, &mut buf) else {
+            return false;
+        };
+        for &b in &buf[..got] {
+            if std::mem::take(&mut self.at) {
+                if let Some(i) = (b as char).to_digit(10).map(|d| d as usize) {
+                    if (1..=bus.len()).contains(&i) {
+                        self.selected = i - 1;
+                    }
+                }
+                continue;
+            }
+            if b == b'@' {
+                self.at = true;
+                continue;
+            }
+            let chip = bus.chip_mut(self.selected);
+            match rig::rig_key(b) {
+                Some(RigAction::Toggle(pin)) => {
+                    let now = chip.is_held_low(pin);
+                    chip.hold_low(pin, !now);
+                }
+                Some(RigAction::Analog(pin, up)) => {
+                    let level = &mut self.analog_mv[self.selected][usize::from(pin - 6) & 1];
+                    *level = if up {
+                        (*level + rig::ANALOG_STEP_MV).min(utile_kit::simavr::VCC_MV)
+                    } else {
+                        level.saturating_sub(rig::ANALOG_STEP_MV)
+                    };
+                    chip.set_analog_mv(pin, *level);
+                }
+                Some(RigAction::Reset) => chip.reset(utile_kit::simavr::Reset::External),
+                Some(RigAction::Quit) => return true,
+                _ => continue,
+            }
+            let chip = bus.chip(self.selected);
+            let view = RigView::of(chip, self.analog_mv[self.selected]);
+            let _ = writeln!(out, "Nano {}: {}", self.selected + 1, view.status_line(""));
+            let _ = out.flush();
+        }
+        false
+    }
 }

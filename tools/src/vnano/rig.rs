@@ -2,7 +2,7 @@
 //! rig keys, the one-line status display, and a tracker of the firmware's VT100 output so
 //! the status line is only drawn between escape sequences.
 
-use utile_kit::simavr::RigPin;
+use utile_kit::simavr::{Chip, RigPin};
 
 /// The hot-key prefix in terminal mode: Ctrl-] (as telnet's escape key; uTile has no use
 /// for it). Press it twice to send one Ctrl-] to the firmware.
@@ -108,6 +108,21 @@ pub struct RigView {
     pub outputs: u8,
     /// Levels on A6 and A7 in millivolts (0..5000).
     pub analog_mv: [u32; 2],
+}
+
+impl RigView {
+    /// The rig of `chip` as it is now, with `analog_mv` on A6 and A7.
+    pub fn of(chip: &Chip, analog_mv: [u32; 2]) -> RigView {
+        RigView {
+            switches: (0..6u8)
+                .filter(|&n| chip.is_held_low(RigPin::Switch(n)))
+                .fold(0, |m, n| m | 1 << n),
+            d8_low: chip.is_held_low(RigPin::D8),
+            d9_low: chip.is_held_low(RigPin::D9),
+            outputs: chip.outputs(),
+            analog_mv,
+        }
+    }
 }
 
 /// Millivolts as volts with two decimals (`2.50V`).

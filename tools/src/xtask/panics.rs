@@ -28,29 +28,16 @@ pub fn is_panic_symbol(name: &str) -> bool {
 
 /// `Err` listing the panic paths when `elf` links any.
 pub fn guard(elf: &Path, root: &Path) -> Result<(), String> {
-    let out = Command::new("avr-nm")
-        .arg(elf)
-        .output()
-        .map_err(|e| format!("cannot run avr-nm (binutils-avr): {e}"))?;
-    let text = String::from_utf8_lossy(&out.stdout);
-    let panics: Vec<(String, String)> = text
-        .lines()
-        .filter_map(|l| {
-            let w: Vec<&str> = l.split_whitespace().collect();
-            match w.as_slice() {
-                [addr, _, name] if is_panic_symbol(name) => Some((
-                    addr.trim_start_matches('0').to_string(),
-                    (*name).to_string(),
-                )),
-                _ => None,
-            }
-        })
+    let panics: Vec<String> = utile_tools::elf::symbols(elf)?
+        .into_iter()
+        .filter(|s| is_panic_symbol(&s.name))
+        .map(|s| s.name)
         .collect();
     if panics.is_empty() {
         return Ok(());
     }
     let mut msg = String::from("the firmware links a panic path:\n");
-    for (_, name) in &panics {
+    for name in &panics {
         msg.push_str(&format!("  {name}\n"));
     }
     let callers = callers(elf, &panics, root);
@@ -66,7 +53,7 @@ pub fn guard(elf: &Path, root: &Path) -> Result<(), String> {
 
 /// The source lines (with their inlining chain) of calls and jumps into a panic symbol from
 /// code outside the panic machinery.
-fn callers(elf: &Path, panics: &[(String, String)], root: &Path) -> Vec<String> {
+fn callers(elf: &Path, panics: &[String], root: &Path) -> Vec<String> {
     let Ok(out) = Command::new("avr-objdump").arg("-d").arg(elf).output() else {
         return Vec::new();
     };
@@ -84,7 +71,7 @@ fn callers(elf: &Path, panics: &[(String, String)], root: &Path) -> Vec<String> 
         let calls_panic = (line.contains("call") || line.contains("jmp"))
             && panics
                 .iter()
-                .any(|(_, name)| line.contains(&format!("<{name}>")));
+                .any(|name| line.contains(&format!("<{name}>")));
         if calls_panic {
             if let Some(addr) = line.split(':').next() {
                 sites.push((addr.trim().to_string(), current.clone()));

@@ -14,47 +14,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::process::Command;
 
-/// One symbol from `avr-nm -n -S`.
-struct Sym {
-    addr: u64,
-    size: Option<u64>,
-    kind: char,
-    name: String,
-}
-
-/// The symbols of `elf`, sorted by address.
-fn symbols(elf: &Path) -> Result<Vec<Sym>, String> {
-    let out = Command::new("avr-nm")
-        .args(["-n", "-S"])
-        .arg(elf)
-        .output()
-        .map_err(|e| format!("cannot run avr-nm (binutils-avr): {e}"))?;
-    if !out.status.success() {
-        return Err("avr-nm failed".into());
-    }
-    let text = String::from_utf8_lossy(&out.stdout);
-    let mut syms = Vec::new();
-    for line in text.lines() {
-        let w: Vec<&str> = line.split_whitespace().collect();
-        let (addr, size, kind, name) = match w.as_slice() {
-            [a, s, k, n] => (a, Some(s), k, n),
-            [a, k, n] => (a, None, k, n),
-            _ => continue,
-        };
-        let Ok(addr) = u64::from_str_radix(addr, 16) else {
-            continue;
-        };
-        let size = size.and_then(|s| u64::from_str_radix(s, 16).ok());
-        let kind = kind.chars().next().unwrap_or('?');
-        syms.push(Sym {
-            addr,
-            size,
-            kind,
-            name: (*name).to_string(),
-        });
-    }
-    Ok(syms)
-}
+use utile_tools::elf::{self, Symbol};
 
 /// The identifiers of a v0-mangled Rust path from its first crate on:
 /// `_RNvNtCsX_10utile_core5stats3div` gives `["utile_core", "stats", "div"]`. Empty for a
@@ -278,12 +238,12 @@ pub fn rooms(
     text: u64,
     data: u64,
 ) -> Result<Vec<(String, u64, u64)>, String> {
-    let syms = symbols(elf)?;
+    let syms = elf::symbols(elf)?;
     // room -> (bytes, of which inlined into the main loop, autostart or an ISR)
     let mut rooms: BTreeMap<String, (u64, u64)> = BTreeMap::new();
     // .text: each address range [symbol, next symbol) to the symbol's room; labels at one
     // address count once (the sized one if any).
-    let mut code: Vec<&Sym> = syms
+    let mut code: Vec<&Symbol> = syms
         .iter()
         .filter(|s| matches!(s.kind, 't' | 'T' | 'W' | 'w') && s.addr < text)
         .collect();

@@ -1,0 +1,269 @@
+//! `utile live`'s budgets (issue 25) on the virtual Nano: refreshes per second of one uTile
+//! and of three on a bus, the line's use while polling, click → shown and rig switch →
+//! shown, and what the Modbus TCP gateway adds to a request. The virtual Nano (the release
+//! `vnano` binary beside this one) runs on a pty; `utile live` runs in this process on it.
+//!
+//! The simulation may run slower than the wall clock; its own time is read from the
+//! uTile: a free-running timer (`TQ0. ! .TK0`, T0 = 25.5 s) whose time left is in every
+//! snapshot. Rates are counted per simulated second, and the latencies are scaled by the
+//! simulation's pace over the same run (wall time × simulated / wall).
+
+use std::io::Write;
+use std::net::TcpStream;
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use utile_core::store;
+use utile_kit::listing;
+use utile_kit::sim::SimBoard;
+
+use crate::live::{self, args, queue::Job, queue::Origin, state::Input, Running};
+
+use super::Spread;
+
+/// What one run measured.
+pub struct LiveFigures {
+    /// Pictures per simulated second of each uTile.
+    pub refresh_per_s: Vec<f64>,
+    /// Share of the line's (simulated) time in use while polling.
+    pub busy: f64,
+    /// Simulated seconds per wall second over the run.
+    pub pace: f64,
+    /// A coil written → the new value in the state the page's events carry, ms of
+    /// simulated time.
+    pub click_ms: Spread,
+    /// A rig switch pressed → shown, ms of simulated time.
+    pub rig_ms: Spread,
+    /// What the gateway adds to a TCP request beyond its wait for the line and its time
+    /// on it: mean and largest, ms.
+    pub gateway_ms: (f64, f64),
+    /// A TCP request's round trip while the page polls: spread, ms (wall).
+    pub tcp_rtt_ms: Spread,
+}
+
+/// The program: a free-running 25.5 s timer as a clock, U0 driving Y0.
+fn program() -> utile_core::engine::Program {
+    let mut p = listing::commands(&["TQ0.", "!", ".TK0", "U0.", ".Y0", "END"]);
+    p.presets[0] = 255;
+    p
+}
+
+/// The virtual Nano (`units` of them on a bus when more than one), autostarting the program.
+fn start_nano(dir: &Path, link: &Path, units: usize) -> Result<Child, String> {
+    let vnano = std::env::current_exe()
+        .map_err(|e| e.to_string())?
+        .with_file_name("vnano");
+    if !vnano.is_file() {
+        return Err(format!(
+            "{} is missing: cargo build --release --bin vnano",
+            vnano.display()
+        ));
+    }
+    let mut b = SimBoard::new();
+    store::store(&program(), &mut b).map_err(|e| format!("{e:?}"))?;
+    let ee = dir.join("live-bench.eeprom");
+    std::fs::write(&ee, &b.eeprom).map_err(|e| e.to_string())?;
+    let elf = utile_kit::setup::firmware_elf();
+    let mut cmd = Command::new(vnano);
+    cmd.arg("--elf").arg(&elf).arg("--eeprom").arg(&ee);
+    cmd.arg("--link").arg(link);
+    if units > 1 {
+        cmd.args(["--bus", &units.to_string()]);
+    } else {
+        cmd.args(["--pty", "--d8-low"]);
+    }
+    cmd.stdin(Stdio::piped())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .map_err(|e| format!("vnano: {e}"))
+}
+
+/// Unit `addr`'s value `signal` in the state, if it has a picture.
+fn value(r: &Running, addr: u8, signal: &str) -> Option<u32> {
+    let mut live = r.shared.lock();
+    let u = live.unit_mut(addr)?;
+    let (s, _) = u.snap.as_ref()?;
+    let h = u.holdings;
+    live::signals::values(s, h.as_ref())
+        .into_iter()
+        .find(|(k, _)| k == signal)
+        .map(|(_, v)| v)
+}
+
+/// Waits until `ok` holds (checked every millisecond); the wall time it took.
+fn until(limit: Duration, mut ok: impl FnMut() -> bool) -> Option<Duration> {
+    let t0 = Instant::now();
+    while t0.elapsed() < limit {
+        if ok() {
+            return Some(t0.elapsed());
+        }
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    None
+}
+
+/// The simulated clock: tenths of a second since `from` (T0's time left counts down from
+/// 255 and restarts).
+fn sim_tenths(r: &Running, from: u32) -> Option<u32> {
+    let now = value(r, 1, "TL0")?;
+    Some((from + 255 - now) % 255)
+}
+
+/// Measures `units` uTiles (1, or a bus of 2..8) for `secs` of the simulation's time.
+pub fn measure_live(units: usize, secs: u32) -> Result<LiveFigures, String> {
+    let dir = std::env::temp_dir().join(format!("utile-live-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    let link = dir.join("tty");
+    let mut nano = start_nano(&dir, &link, units)?;
+    let result = run(&mut nano, &link, units, secs);
+    let _ = nano.kill();
+    let _ = nano.wait();
+    let _ = std::fs::remove_dir_all(&dir);
+    result
+}
+
+fn run(nano: &mut Child, link: &Path, units: usize, secs: u32) -> Result<LiveFigures, String> {
+    let rt = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .map_err(|e| e.to_string())?;
+    let list: Vec<String> = (1..=units).map(|u| u.to_string()).collect();
+    let words: Vec<String> = [
+        "--port",
+        link.to_str().unwrap_or(""),
+        "--units",
+        &list.join(","),
+        "--http",
+        "127.0.0.1:0",
+        "--tcp",
+        "127.0.0.1:0",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let opts = args::parse(&words)?;
+    std::thread::sleep(Duration::from_millis(500));
+    let running = rt.block_on(live::start(&opts, &mut |_| {}))?;
+    let all_online = || {
+        let live = running.shared.lock();
+        live.units.iter().all(|u| u.online && u.snap.is_some())
+    };
+    until(Duration::from_secs(60), all_online)
+        .ok_or("the uTiles did not come online within 60 s")?;
+    // Let the slack and pace settle.
+    std::thread::sleep(Duration::from_secs(2));
+
+    // Refreshes and the line's use over `secs` of simulated time.
+    let tl0 = value(&running, 1, "TL0").ok_or("no clock")?;
+    let pictures =
+        |r: &Running| -> Vec<u64> { r.shared.lock().units.iter().map(|u| u.pictures).collect() };
+    let (p0, b0, w0) = (
+        pictures(&running),
+        running.shared.lock().line_bytes,
+        Instant::now(),
+    );
+    until(Duration::from_secs(u64::from(secs) * 20), || {
+        sim_tenths(&running, tl0).is_some_and(|t| t >= secs * 10)
+    })
+    .ok_or("the simulated clock did not move")?;
+    let sim = f64::from(sim_tenths(&running, tl0).unwrap_or(secs * 10)) / 10.0;
+    let wall = w0.elapsed().as_secs_f64();
+    let p1 = pictures(&running);
+    let b1 = running.shared.lock().line_bytes;
+    let refresh_per_s = p0
+        .iter()
+        .zip(&p1)
+        .map(|(a, b)| (b - a) as f64 / sim)
+        .collect();
+    let busy = (b1 - b0) as f64 * 10.0 / f64::from(live::rtu::BAUD) / sim;
+    let pace = sim / wall;
+
+    // Click → shown: U0 written, the picture shows it.
+    let mut click = Vec::new();
+    for i in 0..20u32 {
+        let on = i % 2 == 0;
+        std::thread::sleep(Duration::from_millis(37 + u64::from(i * 7 % 50)));
+        let (job, _rx) = Job::new(1, vec![5, 0, 8, if on { 0xFF } else { 0 }, 0], Origin::Page);
+        let t0 = Instant::now();
+        running
+            .shared
+            .inputs
+            .send(Input::Job(job))
+            .map_err(|e| e.to_string())?;
+        let want = u32::from(on);
+        if until(Duration::from_secs(5), || {
+            value(&running, 1, "U0") == Some(want)
+        })
+        .is_some()
+        {
+            click.push(t0.elapsed().as_secs_f64() * 1e3 * pace);
+        }
+    }
+
+    // Rig switch → shown: A0 pressed and released on the virtual Nano's console.
+    let mut rig = Vec::new();
+    let keys = nano.stdin.as_mut().ok_or("vnano's console")?;
+    for i in 0..20u32 {
+        std::thread::sleep(Duration::from_millis(113 + u64::from(i * 13 % 60)));
+        let want = u32::from(i % 2 == 1);
+        let t0 = Instant::now();
+        keys.write_all(b"0")
+            .and_then(|()| keys.flush())
+            .map_err(|e| e.to_string())?;
+        if until(Duration::from_secs(5), || {
+            value(&running, 1, "A0") == Some(want)
+        })
+        .is_some()
+        {
+            rig.push(t0.elapsed().as_secs_f64() * 1e3 * pace);
+        }
+    }
+
+    // The gateway: FC03 requests from one TCP client while the page polls.
+    let tcp = running.tcp.ok_or("no gateway")?;
+    let mut s = TcpStream::connect(tcp).map_err(|e| e.to_string())?;
+    s.set_nodelay(true).map_err(|e| e.to_string())?;
+    s.set_read_timeout(Some(Duration::from_secs(10)))
+        .map_err(|e| e.to_string())?;
+    let mut rtts = Vec::new();
+    for id in 0..50u16 {
+        let t0 = Instant::now();
+        // A request that meets a busy moment gets 0x0B: only the answered ones count.
+        if tcp_read(&mut s, id)? {
+            rtts.push(t0.elapsed().as_secs_f64() * 1e3);
+        }
+    }
+    let gateway_ms = running.shared.tcp.overhead_ms();
+    drop(running);
+    Ok(LiveFigures {
+        refresh_per_s,
+        busy,
+        pace,
+        click_ms: Spread::of(&click).ok_or("no click was shown")?,
+        rig_ms: Spread::of(&rig).ok_or("no rig switch was shown")?,
+        gateway_ms,
+        tcp_rtt_ms: Spread::of(&rtts).ok_or("no TCP reply")?,
+    })
+}
+
+/// One Modbus TCP read of holding registers 0..3 of unit 1: whether it was answered
+/// (exception 0x0B: the uTile did not answer in time).
+fn tcp_read(s: &mut TcpStream, id: u16) -> Result<bool, String> {
+    use std::io::Read;
+    let mut req = id.to_be_bytes().to_vec();
+    req.extend_from_slice(&[0, 0, 0, 6, 1, 3, 0, 0, 0, 4]);
+    s.write_all(&req).map_err(|e| e.to_string())?;
+    let mut head = [0u8; 7];
+    s.read_exact(&mut head).map_err(|e| e.to_string())?;
+    let len = usize::from(u16::from_be_bytes([head[4], head[5]])).saturating_sub(1);
+    let mut pdu = vec![0u8; len];
+    s.read_exact(&mut pdu).map_err(|e| e.to_string())?;
+    match pdu.as_slice() {
+        [3, ..] => Ok(true),
+        [0x83, 0x0B] => Ok(false),
+        _ => Err(format!("the gateway answered {pdu:?}")),
+    }
+}

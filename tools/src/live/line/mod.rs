@@ -1,0 +1,220 @@
+//! The line's owner: one thread holds the serial port and does everything on it in turn:
+//! opening it (again, after an unplug) and waiting out the boot loader, the terminal's bytes
+//! both ways, the page's polls and the queued requests, one transaction at a time with the
+//! 3.5-character gaps. Polling pauses while the editor has the line and resumes when a
+//! program runs; an address that does not answer is polled once a second.
+//!
+//! Here the line's state and its loop; the port's life and who has the line in [`life`],
+//! the bytes on the wire (the gap, one transaction, what replies teach) in [`wire`], the
+//! polls and the queued requests in [`serve`].
+
+mod life;
+mod serve;
+mod wire;
+
+use std::collections::HashMap;
+use std::collections::VecDeque;
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use serialport::TTYPort;
+use tokio::sync::mpsc;
+
+use super::queue::{Failure, Next, Queue};
+use super::rtu;
+use super::screen::{Mode, Screen};
+use super::state::{Input, Shared};
+
+/// Ctrl-L: the editor redraws its screen (how a silent line is asked which mode it is in).
+const REDRAW: u8 = 0x0C;
+/// How often a closed port is tried again.
+const REOPEN: Duration = Duration::from_millis(300);
+/// The longest wait for anything when nothing is due.
+const IDLE: Duration = Duration::from_millis(2);
+/// After the boot wait, how long the editor has to answer Ctrl-L.
+const ASK_WAIT: Duration = Duration::from_millis(1500);
+/// A gateway request to an address that just missed is answered 0x0B at once for this
+/// long, so a client polling a dead address cannot hold the line.
+const DEAD_FOR: Duration = Duration::from_secs(1);
+/// The time-out slack of `--scan`'s requests (a uTile answers within 5 ms).
+const SCAN_SLACK: Duration = Duration::from_millis(30);
+/// Window of the line's busy figure.
+const BUSY_WINDOW: Duration = Duration::from_secs(2);
+/// The most the gap between frames is stretched (see `Line::pace`).
+const MAX_PACE: f64 = 20.0;
+/// The longest silence inside a reply that is on its way.
+const INTER_BYTE: Duration = Duration::from_millis(100);
+/// The most a reply may be late before it counts as missing.
+const SLACK_MAX: Duration = Duration::from_millis(1500);
+
+/// How the line starts.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// The serial port.
+    pub path: String,
+    /// The longest wait for uTile's first screen after the port opens.
+    pub boot_wait: Duration,
+    /// Look for uTiles on 1..247 (report server ID) before polling.
+    pub scan: bool,
+}
+
+/// Where the port is in its life.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Phase {
+    /// Closed; tried again at this time.
+    Closed(Instant),
+    /// Open, waiting for uTile's first screen until this time (`asked`: Ctrl-L sent).
+    Booting { until: Instant, asked: bool },
+    /// Open and served.
+    Open,
+}
+
+/// Why a transaction failed.
+enum Miss {
+    /// No whole reply in time (`crc`: a frame from the address came with a wrong CRC).
+    Timeout { crc: bool },
+    /// The port failed: it is closed.
+    Port,
+}
+
+/// The line's owner.
+struct Line {
+    opts: Options,
+    shared: Arc<Shared>,
+    inputs: mpsc::UnboundedReceiver<Input>,
+    queue: Queue,
+    keys: Vec<u8>,
+    port: Option<TTYPort>,
+    phase: Phase,
+    mode: Mode,
+    screen: Screen,
+    /// When the line last fell quiet (the next frame waits 3.5 characters after it).
+    quiet: Instant,
+    /// Addresses that missed lately (gateway requests to them answered at once).
+    dead: HashMap<u8, Instant>,
+    /// Line time used, by when.
+    busy: VecDeque<(Instant, Duration)>,
+    /// How late a reply may be (beyond its time on the line) before it is missing: learnt
+    /// from the replies (a USB adapter's latency, a simulated Nano slower than the clock).
+    slack: Duration,
+    /// The latest reply's lateness, a slowly falling maximum.
+    late: Duration,
+    /// When a reply last came.
+    answered: Option<Instant>,
+    /// `--scan` under way: the next address and this pass's reply slack. Its requests take
+    /// turns with the polls of the uTiles found so far.
+    scan: Option<(u8, Duration)>,
+    /// The last turn went to the scan.
+    scan_turn: bool,
+    /// How much slower than the line's own time replies come (1 on a real line; more on a
+    /// simulated Nano running behind the clock): the gap between frames is stretched by it,
+    /// so every Nano on a bus hears the 3.5 characters of silence in its own time.
+    pace: f64,
+}
+
+/// Starts the line's owner on its own thread.
+pub fn spawn(
+    opts: Options,
+    shared: Arc<Shared>,
+    inputs: mpsc::UnboundedReceiver<Input>,
+) -> std::io::Result<JoinHandle<()>> {
+    std::thread::Builder::new()
+        .name("utile-line".into())
+        .spawn(move || {
+            let now = Instant::now();
+            Line {
+                opts,
+                shared,
+                inputs,
+                queue: Queue::default(),
+                keys: Vec::new(),
+                port: None,
+                phase: Phase::Closed(now),
+                mode: Mode::Unknown,
+                screen: Screen::new(),
+                quiet: now,
+                dead: HashMap::new(),
+                busy: VecDeque::new(),
+                slack: rtu::ANSWER_SLACK,
+                late: Duration::ZERO,
+                answered: None,
+                scan: None,
+                scan_turn: false,
+                pace: 1.0,
+            }
+            .run()
+        })
+}
+
+impl Line {
+    fn run(mut self) {
+        while !self.shared.stopping() {
+            self.take_inputs();
+            let now = Instant::now();
+            match self.phase {
+                Phase::Closed(at) => {
+                    self.queue.fail_all(&Failure::PortClosed);
+                    if now >= at {
+                        self.open(now);
+                    } else {
+                        std::thread::sleep((at - now).min(Duration::from_millis(20)));
+                    }
+                    continue;
+                }
+                Phase::Booting { until, asked } => {
+                    self.queue.fail_all(&Failure::NoAnswer);
+                    self.send_keys();
+                    self.listen(Duration::from_millis(5));
+                    self.boot_step(until, asked);
+                    continue;
+                }
+                Phase::Open => {}
+            }
+            self.send_keys();
+            if let Some(m) = self.screen.settled(now) {
+                self.set_mode(m);
+            }
+            if self.mode != Mode::Run || self.screen.pending() {
+                // The editor has the line: a frame would be typed into it.
+                self.queue.fail_all(&Failure::Editing);
+                self.listen(IDLE);
+                continue;
+            }
+            if let Some((addr, slack)) = self.scan {
+                // The scan takes every other turn (all of them while nothing is found).
+                let others = !self.queue.is_empty() || self.due_unit(now).is_some();
+                self.scan_turn = !self.scan_turn;
+                if self.scan_turn || !others {
+                    self.scan_step(addr, slack);
+                    continue;
+                }
+            }
+            let due = self.due_unit(now);
+            match self.queue.next(due.is_some()) {
+                Next::Job(job) => self.serve(job),
+                Next::Poll => {
+                    if let Some(addr) = due {
+                        self.poll(addr);
+                    }
+                }
+                Next::Idle => {
+                    let wait = self.next_due().map_or(IDLE, |t| {
+                        t.saturating_duration_since(Instant::now()).min(IDLE)
+                    });
+                    self.listen(wait.max(Duration::from_millis(1)));
+                }
+            }
+        }
+    }
+
+    /// Everything waiting in the channel: requests into the queue, keys to send.
+    fn take_inputs(&mut self) {
+        while let Ok(input) = self.inputs.try_recv() {
+            match input {
+                Input::Job(job) => self.queue.push(job),
+                Input::Keys(k) => self.keys.extend_from_slice(&k),
+            }
+        }
+    }
+}

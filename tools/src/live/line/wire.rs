@@ -1,0 +1,197 @@
+//! The bytes on the wire: the terminal's share, writes after the 3.5-character gap, one
+//! request and its reply, and what the replies teach about the line's pace.
+
+use std::io::{Read as _, Write as _};
+use std::time::{Duration, Instant};
+
+use serialport::SerialPort;
+use utile_kit::modbus;
+
+use super::super::rtu::{self, Scan};
+use super::{Line, Miss, BUSY_WINDOW, INTER_BYTE, MAX_PACE, SLACK_MAX};
+
+impl Line {
+    /// Reads whatever comes within `wait`: the editor's screen.
+    pub(super) fn listen(&mut self, wait: Duration) {
+        let mut buf = [0u8; 1024];
+        let Some(p) = self.port.as_mut() else {
+            return;
+        };
+        let _ = p.set_timeout(wait);
+        match p.read(&mut buf) {
+            Ok(0) => {}
+            Ok(n) => {
+                self.quiet = Instant::now();
+                self.terminal(&buf[..n]);
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {}
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => self.close(&format!("reading: {e}")),
+        }
+    }
+
+    /// Bytes for the terminal (and the screen tracker).
+    pub(super) fn terminal(&mut self, bytes: &[u8]) {
+        if bytes.is_empty() {
+            return;
+        }
+        self.shared.terminal.output(bytes);
+        if let Some(m) = self.screen.feed(bytes, Instant::now()) {
+            self.set_mode(m);
+        }
+    }
+
+    /// Writes `bytes` after the 3.5-character gap.
+    pub(super) fn write(&mut self, bytes: &[u8]) -> bool {
+        let gap = rtu::frame_gap().mul_f64(self.pace.min(MAX_PACE));
+        let since = self.quiet.elapsed();
+        if since < gap {
+            std::thread::sleep(gap - since);
+        }
+        let Some(p) = self.port.as_mut() else {
+            return false;
+        };
+        match p.write_all(bytes) {
+            Ok(()) => {
+                self.quiet = Instant::now() + rtu::line_time(bytes.len());
+                true
+            }
+            Err(e) => {
+                self.close(&format!("writing: {e}"));
+                false
+            }
+        }
+    }
+
+    /// Keys from a page's terminal, as their own frame (between two transactions).
+    pub(super) fn send_keys(&mut self) {
+        if self.keys.is_empty() {
+            return;
+        }
+        let keys = std::mem::take(&mut self.keys);
+        self.write(&keys);
+    }
+
+    /// Counts line time for the busy figure.
+    pub(super) fn used(&mut self, bytes: usize) -> Duration {
+        let now = Instant::now();
+        let t = rtu::line_time(bytes);
+        self.busy.push_back((now, t));
+        while self
+            .busy
+            .front()
+            .is_some_and(|(at, _)| now.duration_since(*at) > BUSY_WINDOW)
+        {
+            self.busy.pop_front();
+        }
+        let sum: Duration = self.busy.iter().map(|(_, d)| *d).sum();
+        let mut live = self.shared.lock();
+        live.busy = (sum.as_secs_f64() / BUSY_WINDOW.as_secs_f64()).min(1.0);
+        live.line_bytes += bytes as u64;
+        t
+    }
+
+    /// One request and its reply: the reply's PDU and the round trip, or why not. Bytes
+    /// around the reply go to the terminal.
+    pub(super) fn transact(
+        &mut self,
+        addr: u8,
+        pdu: &[u8],
+        slack: Duration,
+    ) -> Result<(Vec<u8>, Duration), Miss> {
+        // What came before the request is the editor's (or the RUN screen's).
+        while self
+            .port
+            .as_ref()
+            .is_some_and(|p| p.bytes_to_read().unwrap_or(0) > 0)
+        {
+            self.listen(Duration::from_millis(1));
+        }
+        let frame = modbus::frame(addr, pdu);
+        if !self.write(&frame) {
+            return Err(Miss::Port);
+        }
+        let t0 = Instant::now();
+        let mut deadline = t0 + rtu::reply_timeout(&frame, slack);
+        // A reply on its way is waited for while its bytes keep coming (a slow adapter or
+        // simulation), never longer than this: a request sent into it would collide.
+        let last_chance = t0 + rtu::reply_timeout(&frame, SLACK_MAX * 2);
+        let mut got = Vec::new();
+        let mut buf = [0u8; 512];
+        loop {
+            let now = Instant::now();
+            if let Scan::Reply { start, end } = rtu::find_reply(&got, addr, &frame) {
+                self.quiet = now;
+                let reply = got[start + 1..end - 2].to_vec();
+                self.stray(&got[..start]);
+                self.stray(&got[end..]);
+                let on_line = self.used(frame.len() + end - start);
+                self.learn(now - t0, on_line, now);
+                return Ok((reply, now - t0));
+            }
+            if now >= deadline {
+                break;
+            }
+            let Some(p) = self.port.as_mut() else {
+                return Err(Miss::Port);
+            };
+            let _ = p.set_timeout((deadline - now).min(Duration::from_millis(20)));
+            match p.read(&mut buf) {
+                Ok(n) => {
+                    got.extend_from_slice(&buf[..n]);
+                    if n > 0 {
+                        deadline = deadline.max(Instant::now() + INTER_BYTE).min(last_chance);
+                    }
+                }
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        std::io::ErrorKind::TimedOut | std::io::ErrorKind::Interrupted
+                    ) => {}
+                Err(e) => {
+                    self.close(&format!("reading: {e}"));
+                    return Err(Miss::Port);
+                }
+            }
+            if got.len() > 4 * rtu::MAX_FRAME {
+                break;
+            }
+        }
+        self.used(frame.len());
+        let f = pdu.first().copied().unwrap_or(0);
+        let crc = got.windows(2).any(|w| w[0] == addr && (w[1] & 0x7F) == f);
+        self.stray(&got);
+        if !got.is_empty() {
+            self.quiet = Instant::now();
+        }
+        Err(Miss::Timeout { crc })
+    }
+
+    /// A reply came `rtt` after the request went out, for `on_line` of bytes on the line:
+    /// the slack follows the latest replies' lateness (three times the recent worst, at least
+    /// [`rtu::ANSWER_SLACK`]), the pace their slowness.
+    pub(super) fn learn(&mut self, rtt: Duration, on_line: Duration, now: Instant) {
+        self.answered = Some(now);
+        let late = rtt.saturating_sub(on_line);
+        // A uTile starts its reply within 5 ms: only what is beyond that is slowness.
+        let allowed = on_line + Duration::from_millis(5);
+        let ratio = rtt.as_secs_f64() / allowed.as_secs_f64();
+        self.pace = (self.pace * 0.8 + ratio * 0.2).max(1.0);
+        self.late = late.max(self.late.mul_f64(0.98));
+        self.slack =
+            (self.late * 3 + Duration::from_millis(30)).clamp(rtu::ANSWER_SLACK, SLACK_MAX);
+        let mut live = self.shared.lock();
+        live.slack = self.slack;
+        live.pace = self.pace;
+    }
+
+    /// Bytes that were not a reply: the editor's screen when they carry its text, else
+    /// noise (counted); the terminal shows them either way.
+    pub(super) fn stray(&mut self, bytes: &[u8]) {
+        if bytes.is_empty() {
+            return;
+        }
+        self.shared.lock().stray += bytes.len() as u64;
+        self.terminal(bytes);
+    }
+}

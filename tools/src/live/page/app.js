@@ -1,0 +1,95 @@
+// uTile live: the page's entry. It follows the server-sent events of /api/events (one
+// `state` event per change, the JSON of /api/state), keeps one card per uTile, the program
+// view and the terminal, and says in words what a user must do.
+
+import { Card } from "/card.js";
+import { ProgramView } from "/program.js";
+import { openTerminal } from "/terminal.js";
+
+const cards = new Map();
+const programs = new Map();
+let terminalOpen = false;
+
+const $ = (id) => document.getElementById(id);
+
+function showTab(name) {
+  for (const b of document.querySelectorAll(".tabs button")) {
+    b.setAttribute("aria-selected", String(b.dataset.tab === name));
+  }
+  for (const s of document.querySelectorAll(".tab-page")) {
+    s.hidden = s.id !== name;
+  }
+  if (name === "terminal" && !terminalOpen) {
+    terminalOpen = true;
+    openTerminal($("xterm"));
+  }
+}
+
+for (const b of document.querySelectorAll(".tabs button")) {
+  b.addEventListener("click", () => showTab(b.dataset.tab));
+}
+
+// What the line is doing, in words a user acts on.
+function banner(state) {
+  const el = $("banner");
+  let text = "";
+  let bad = false;
+  if (!state.open) {
+    text = `The serial port is not open: ${state.message}`;
+    bad = true;
+  } else if (state.mode === "edit") {
+    text = "uTile is in EDIT mode: the program is not running: start it here (the Terminal tab: " +
+      "RUN or EX0), or fit D8 for autostart (STORE the program first).";
+  } else if (state.mode === "unknown") {
+    text = state.message;
+  }
+  if (state.read_only) {
+    text = (text ? text + " " : "") + "Read-only: writes are refused.";
+  }
+  el.hidden = text === "";
+  el.textContent = text;
+  el.classList.toggle("bad", bad);
+}
+
+function header(state) {
+  $("port").textContent = state.port;
+  const mode = $("mode");
+  const word = !state.open ? "closed" : state.mode;
+  mode.textContent = { run: "run", edit: "edit mode", unknown: "starting", closed: "port closed" }[word];
+  mode.className = `pill ${word}`;
+  mode.dataset.value = word;
+  $("busy").textContent = `${Math.round(state.line.busy * 100)} %`;
+  $("tcp").textContent = String(state.line.tcp_clients);
+  $("stray").textContent = String(state.line.stray_bytes);
+  $("notes").textContent = state.notes.join(" · ");
+}
+
+function update(state) {
+  header(state);
+  banner(state);
+  for (const u of state.units) {
+    let card = cards.get(u.addr);
+    if (!card) {
+      card = new Card(u.addr, state.read_only);
+      cards.set(u.addr, card);
+      $("plant").append(card.root);
+      const view = new ProgramView(u.addr);
+      programs.set(u.addr, view);
+      $("program").append(view.root);
+    }
+    card.update(u);
+    programs.get(u.addr).update(u);
+  }
+}
+
+function connect() {
+  const events = new EventSource("/api/events");
+  events.addEventListener("state", (e) => update(JSON.parse(e.data)));
+  events.onerror = () => {
+    // The browser reconnects by itself; meanwhile nothing on the page is current.
+    $("mode").textContent = "no server";
+    $("mode").className = "pill closed";
+  };
+}
+
+connect();

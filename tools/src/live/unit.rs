@@ -1,0 +1,384 @@
+//! One uTile on the line: what was last read from it (the snapshot, the presets, the
+//! program), whether it answers, when it is next polled (a dead address backs off to one poll
+//! a second), and the link's health as the page shows it.
+
+use std::collections::VecDeque;
+use std::time::{Duration, Instant};
+
+use utile_core::engine::LINES;
+use utile_core::modbus::snapshot::{self, Snapshot, PROGRAM, PROGRAM_LEN, SNAPSHOT, SNAPSHOT_LEN};
+use utile_kit::modbus::registers;
+
+use super::signals::{Holdings, HOLDINGS};
+
+/// Misses in a row after which a uTile is shown offline.
+const OFFLINE_AFTER: u32 = 3;
+/// The longest back-off of an address that does not answer: one poll a second.
+const BACK_OFF_MAX: Duration = Duration::from_secs(1);
+/// Presets and set-points are read again this often (LDC on the chip, another master).
+const HOLDINGS_EVERY: Duration = Duration::from_secs(2);
+/// The trend keeps a point this often, for this long.
+pub const TREND_STEP: Duration = Duration::from_millis(250);
+/// How much trend is kept: ten minutes.
+pub const TREND_POINTS: usize = 2_400;
+/// The window over which refreshes per second and the line's share are counted.
+const WINDOW: Duration = Duration::from_secs(2);
+
+/// A read the live view makes of one uTile.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Read {
+    /// SPEC §17's snapshot: FC04, input registers 64–103.
+    Snapshot,
+    /// Firmware without §17 (version 2): the same picture from §13's map in five reads.
+    Legacy(u8),
+    /// Presets and set-points: FC03, holding registers 0–25.
+    Holdings,
+    /// Half of the program window (FC04 256–319, 320–383).
+    Program(u8),
+}
+
+impl Read {
+    /// The request's PDU.
+    pub fn pdu(self) -> Vec<u8> {
+        let read = |f: u8, start: u16, n: u16| {
+            let [s0, s1] = start.to_be_bytes();
+            let [n0, n1] = n.to_be_bytes();
+            vec![f, s0, s1, n0, n1]
+        };
+        let half = PROGRAM_LEN / 2;
+        match self {
+            Read::Snapshot => read(4, SNAPSHOT, SNAPSHOT_LEN),
+            Read::Legacy(0) => read(4, 0, 18),
+            Read::Legacy(1) => read(4, 32, 16),
+            Read::Legacy(2) => read(1, 0, 24),
+            Read::Legacy(3) => read(2, 0, 6),
+            Read::Legacy(_) => read(2, 8, 42),
+            Read::Holdings => read(3, 0, HOLDINGS as u16),
+            Read::Program(h) => read(4, PROGRAM + u16::from(h) * half, half),
+        }
+    }
+}
+
+/// The link's health, as counted by the master.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct Link {
+    /// Requests sent to this address.
+    pub requests: u64,
+    /// Requests that got no (whole, right) reply in time.
+    pub timeouts: u64,
+    /// Replies from this address with a wrong CRC (among the time-outs).
+    pub crc_errors: u64,
+    /// Exceptions answered.
+    pub exceptions: u64,
+    /// Round trip of the last answered request, ms (request out to the reply's last byte).
+    pub rtt_ms: f64,
+    /// Share of the line's time this address used over the last two seconds (0..1).
+    pub share: f64,
+}
+
+/// One uTile as the live view knows it.
+pub struct Unit {
+    /// Slave address.
+    pub addr: u8,
+    /// Answering (a snapshot arrived since the last misses).
+    pub online: bool,
+    /// Misses in a row.
+    misses: u32,
+    /// When it is polled next.
+    pub due: Instant,
+    /// The last snapshot and when it came.
+    pub snap: Option<(Snapshot, Instant)>,
+    /// Presets and set-points, when read.
+    pub holdings: Option<Holdings>,
+    holdings_at: Option<Instant>,
+    /// The running program: the snapshot's fingerprint it was read for, the lines, and
+    /// whether the lines give that fingerprint.
+    pub program: Option<(u16, [u8; LINES], bool)>,
+    /// Half the program window read so far.
+    program_half: Option<Vec<u16>>,
+    /// The firmware has no §17 window (exception 02 to the snapshot read).
+    pub legacy: bool,
+    /// The legacy read that comes next.
+    legacy_step: u8,
+    legacy_regs: [u16; SNAPSHOT_LEN as usize],
+    /// The link's counters.
+    pub link: Link,
+    /// When snapshots came (for refreshes per second).
+    refreshes: VecDeque<Instant>,
+    /// Line time used, by when.
+    line_use: VecDeque<(Instant, Duration)>,
+    /// Scans per second, from two snapshots.
+    pub scans_per_s: f64,
+    /// Trend points (time, A6, A7, C0..C7).
+    pub trend: VecDeque<(Instant, [u16; 10])>,
+    /// What went wrong last, for the card.
+    pub reason: Option<String>,
+    /// Pictures taken since the start.
+    pub pictures: u64,
+}
+
+impl Unit {
+    /// A uTile at `addr`, polled at once.
+    pub fn new(addr: u8, now: Instant) -> Unit {
+        Unit {
+            addr,
+            online: false,
+            misses: 0,
+            due: now,
+            snap: None,
+            holdings: None,
+            holdings_at: None,
+            program: None,
+            program_half: None,
+            legacy: false,
+            legacy_step: 0,
+            legacy_regs: [0; SNAPSHOT_LEN as usize],
+            link: Link::default(),
+            refreshes: VecDeque::new(),
+            line_use: VecDeque::new(),
+            scans_per_s: 0.0,
+            trend: VecDeque::new(),
+            reason: None,
+            pictures: 0,
+        }
+    }
+
+    /// What to read next, once due: the program when its fingerprint is new, the presets
+    /// when stale, else the picture.
+    pub fn next_read(&self, now: Instant) -> Read {
+        if !self.online {
+            return if self.legacy {
+                Read::Legacy(self.legacy_step)
+            } else {
+                Read::Snapshot
+            };
+        }
+        if let Some((s, _)) = &self.snap {
+            if !self.legacy
+                && self
+                    .program
+                    .as_ref()
+                    .is_none_or(|(fp, _, _)| *fp != s.fingerprint)
+            {
+                return Read::Program(u8::from(self.program_half.is_some()));
+            }
+        }
+        if self
+            .holdings_at
+            .is_none_or(|t| now.duration_since(t) >= HOLDINGS_EVERY)
+        {
+            return Read::Holdings;
+        }
+        if self.legacy {
+            Read::Legacy(self.legacy_step)
+        } else {
+            Read::Snapshot
+        }
+    }
+
+    /// The presets are read again before the next picture (after a write).
+    pub fn holdings_stale(&mut self) {
+        self.holdings_at = None;
+    }
+
+    /// Counts a transaction's line time.
+    pub fn used_line(&mut self, now: Instant, time: Duration) {
+        self.line_use.push_back((now, time));
+        while self
+            .line_use
+            .front()
+            .is_some_and(|(t, _)| now.duration_since(*t) > WINDOW)
+        {
+            self.line_use.pop_front();
+        }
+        let used: Duration = self.line_use.iter().map(|(_, d)| *d).sum();
+        self.link.share = used.as_secs_f64() / WINDOW.as_secs_f64();
+    }
+
+    /// Refreshes per second over the last two seconds.
+    pub fn refresh_rate(&self, now: Instant) -> f64 {
+        let n = self
+            .refreshes
+            .iter()
+            .filter(|t| now.duration_since(**t) <= WINDOW)
+            .count();
+        n as f64 / WINDOW.as_secs_f64()
+    }
+
+    /// An answer to `read`: its reply PDU (which may be an exception). `rtt` is the round
+    /// trip. Returns whether a new picture came.
+    pub fn answered(&mut self, read: Read, pdu: &[u8], rtt: Duration, now: Instant) -> bool {
+        self.link.rtt_ms = rtt.as_secs_f64() * 1e3;
+        self.misses = 0;
+        if pdu.first().is_some_and(|f| f & 0x80 != 0) {
+            self.link.exceptions += 1;
+            let code = pdu.get(1).copied().unwrap_or(0);
+            if read == Read::Snapshot && code == 2 {
+                // Version-2 firmware: no §17 window; read §13's map instead.
+                self.legacy = true;
+                self.reason = Some(
+                    "firmware without the snapshot of SPEC §17: four reads a refresh, no \
+                     program view (update the firmware)"
+                        .into(),
+                );
+                self.online = true;
+                return false;
+            }
+            self.reason = Some(format!(
+                "uTile refused a read: {}",
+                super::rtu::exception_text(code)
+            ));
+            self.due = now;
+            return false;
+        }
+        let regs = registers(pdu);
+        self.due = now;
+        match read {
+            Read::Snapshot => {
+                let Ok(r) = <[u16; SNAPSHOT_LEN as usize]>::try_from(regs.as_slice()) else {
+                    return false;
+                };
+                self.picture(Snapshot::from_registers(&r), now);
+                true
+            }
+            Read::Legacy(step) => self.legacy_step(step, pdu, &regs, now),
+            Read::Holdings => {
+                self.holdings = Holdings::from_registers(&regs);
+                self.holdings_at = Some(now);
+                false
+            }
+            Read::Program(0) => {
+                self.program_half = Some(regs);
+                false
+            }
+            Read::Program(_) => {
+                let Some(mut all) = self.program_half.take() else {
+                    return false;
+                };
+                all.extend_from_slice(&regs);
+                if let (Ok(r), Some((s, _))) = (
+                    <[u16; PROGRAM_LEN as usize]>::try_from(all.as_slice()),
+                    &self.snap,
+                ) {
+                    let uf = snapshot::program_from_registers(&r);
+                    let same = snapshot::fingerprint(&uf) == s.fingerprint;
+                    self.program = Some((s.fingerprint, uf, same));
+                }
+                false
+            }
+        }
+    }
+
+    /// One of the five legacy reads; the last completes a picture.
+    fn legacy_step(&mut self, step: u8, pdu: &[u8], regs: &[u16], now: Instant) -> bool {
+        use snapshot::at;
+        self.legacy_step = (step + 1) % 5;
+        let r = &mut self.legacy_regs;
+        let bits = pdu.get(2..).unwrap_or_default();
+        let byte = |i: usize| u16::from(bits.get(i).copied().unwrap_or(0));
+        match step {
+            0 if regs.len() == 18 => {
+                r[usize::from(at::STATUS)] = regs[0];
+                r[usize::from(at::SCAN_TIMES)..][..3].copy_from_slice(&regs[1..4]);
+                r[usize::from(at::SCANS)..][..2].copy_from_slice(&regs[4..6]);
+                r[usize::from(at::OVERRUNS)] = regs[6];
+                r[usize::from(at::DROPPED)] = regs[7];
+                r[usize::from(at::COUNTS)..][..10].copy_from_slice(&regs[8..18]);
+            }
+            1 if regs.len() == 16 => {
+                r[usize::from(at::TIME_LEFT)..][..16].copy_from_slice(regs);
+            }
+            2 => {
+                r[usize::from(at::INPUTS_OUTPUTS)] &= 0x00FF;
+                r[usize::from(at::INPUTS_OUTPUTS)] |= byte(0) << 8;
+                r[usize::from(at::VIRTUAL)] = byte(1) | byte(2) << 8;
+            }
+            3 => {
+                r[usize::from(at::INPUTS_OUTPUTS)] &= 0xFFC0;
+                r[usize::from(at::INPUTS_OUTPUTS)] |= byte(0) & 0x3F;
+            }
+            4 => {
+                // Discrete inputs 8..49: Q, TQ, CQ, then H6 and H7.
+                let h = (byte(5) & 3) << 6;
+                r[usize::from(at::INPUTS_OUTPUTS)] &= 0xFF3F;
+                r[usize::from(at::INPUTS_OUTPUTS)] |= h;
+                r[usize::from(at::FLIP_FLOPS)] = byte(0) | byte(1) << 8;
+                r[usize::from(at::TIMER_OUTPUTS)] = byte(2) | byte(3) << 8;
+                r[usize::from(at::COUNTER_OUTPUTS)] = byte(4);
+                let s = Snapshot::from_registers(r);
+                self.picture(s, now);
+                return true;
+            }
+            _ => {}
+        }
+        false
+    }
+
+    /// A new picture.
+    fn picture(&mut self, s: Snapshot, now: Instant) {
+        if let Some((old, at)) = &self.snap {
+            let dt = now.duration_since(*at).as_secs_f64();
+            if dt > 0.0 && s.scans >= old.scans {
+                let rate = f64::from(s.scans - old.scans) / dt;
+                // Smoothed: one snapshot's scan count is taken at one scan's end.
+                self.scans_per_s = if self.scans_per_s == 0.0 {
+                    rate
+                } else {
+                    self.scans_per_s * 0.8 + rate * 0.2
+                };
+            }
+        }
+        let keep = self
+            .trend
+            .back()
+            .is_none_or(|(t, _)| now.duration_since(*t) >= TREND_STEP);
+        if keep {
+            let mut p = [0u16; 10];
+            p[..2].copy_from_slice(&s.readings);
+            p[2..].copy_from_slice(&s.counts);
+            self.trend.push_back((now, p));
+            if self.trend.len() > TREND_POINTS {
+                self.trend.pop_front();
+            }
+        }
+        self.snap = Some((s, now));
+        self.pictures += 1;
+        self.online = true;
+        self.reason = None;
+        self.refreshes.push_back(now);
+        while self
+            .refreshes
+            .front()
+            .is_some_and(|t| now.duration_since(*t) > WINDOW)
+        {
+            self.refreshes.pop_front();
+        }
+    }
+
+    /// No whole reply in time (`crc`: one came with a wrong CRC). After a few in a row the
+    /// uTile is offline and polled at most once a second, so it never slows the others.
+    pub fn missed(&mut self, crc: bool, now: Instant) {
+        self.link.timeouts += 1;
+        if crc {
+            self.link.crc_errors += 1;
+        }
+        self.misses += 1;
+        self.program_half = None;
+        self.legacy_step = 0;
+        if self.misses >= OFFLINE_AFTER {
+            self.went_offline("no answer");
+        }
+        self.due = if self.online { now } else { now + BACK_OFF_MAX };
+    }
+
+    /// Offline for `why` (the port closed, no answers): its picture is old from now on.
+    pub fn went_offline(&mut self, why: &str) {
+        self.online = false;
+        self.reason = Some(why.to_string());
+    }
+
+    /// Counts a request sent.
+    pub fn sent(&mut self) {
+        self.link.requests += 1;
+    }
+}

@@ -1,0 +1,124 @@
+//! `utile live` in a real browser (issue 25): headless Chromium (Debian's `chromium`, driven
+//! by Playwright from `live_page.py`) against the real image in the virtual Nano, one uTile
+//! with the port-open reset and a bus of three: a rig switch shows on the page, clicking U0
+//! drives an output through the program, editing S6 changes when the tank example's pump
+//! stops, the terminal tab types a program and runs it, offline and back; mbpoll -m tcp and
+//! pymodbus's TCP client through the gateway while the page polls. `./x setup` installs
+//! chromium, Playwright, pymodbus and mbpoll: without them these tests fail, they never skip.
+
+mod support;
+
+use std::io::{BufRead, BufReader, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::sync::Mutex;
+
+use support::live::{tank, tank_path, tank_with_remote, Live, NanoSpec};
+
+/// The browser scenarios share two cores: one at a time.
+static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
+
+/// Chromium, Playwright, pymodbus and mbpoll must be there (`./x setup`).
+fn need_the_browser() {
+    assert!(
+        Path::new("/usr/bin/chromium").is_file(),
+        "/usr/bin/chromium is missing: ./x setup installs Debian's chromium"
+    );
+    let ok = Command::new("python3")
+        .args(["-c", "import playwright.sync_api, pymodbus"])
+        .status()
+        .is_ok_and(|s| s.success());
+    assert!(
+        ok,
+        "Python's playwright or pymodbus is missing: ./x setup installs them"
+    );
+    let ok = Command::new("mbpoll")
+        .arg("-V")
+        .output()
+        .is_ok_and(|o| o.status.success());
+    assert!(ok, "mbpoll is missing: ./x setup installs it");
+}
+
+/// Where the test's screenshot goes: `UTILE_SCREENSHOT`, else `out/live-page.png`.
+fn screenshot() -> PathBuf {
+    std::env::var_os("UTILE_SCREENSHOT").map_or_else(
+        || Path::new(env!("CARGO_MANIFEST_DIR")).join("../out/live-page.png"),
+        PathBuf::from,
+    )
+}
+
+/// Runs `live_page.py SCENARIO` against `utile live` on the Nano of `spec`, doing the rig
+/// keys, kills and restarts it asks for.
+fn drive(scenario: &str, spec: &NanoSpec, live_args: &[&str], page_args: &[&str]) {
+    need_the_browser();
+    let mut nano = Some(spec.start());
+    let live = Live::start(&spec.link, live_args);
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/live_page.py");
+    let tcp = live.tcp.to_string();
+    let mut py = Command::new("python3")
+        .arg(&script)
+        .arg(scenario)
+        .args(["--url", &live.url, "--tcp", &tcp])
+        .args(page_args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::inherit())
+        .spawn()
+        .expect("run python3 live_page.py");
+    let mut answers = py.stdin.take().expect("stdin");
+    let lines = BufReader::new(py.stdout.take().expect("stdout"));
+    let mut transcript = String::new();
+    for line in lines.lines().map_while(Result::ok) {
+        eprintln!("[page] {line}");
+        transcript.push_str(&line);
+        transcript.push('\n');
+        let Some(command) = line.strip_prefix('@') else {
+            continue;
+        };
+        match command {
+            "kill" => nano = None,
+            "start" => nano = Some(spec.start()),
+            _ => {
+                let keys = command.strip_prefix("rig ").expect("@rig, @kill or @start");
+                nano.as_mut().expect("a running Nano").key(keys);
+            }
+        }
+        writeln!(answers, "ok").expect("answer the page script");
+    }
+    let status = py.wait().expect("live_page.py");
+    assert!(
+        status.success() && transcript.contains("ALL OK"),
+        "live_page.py {scenario} failed:\n{transcript}"
+    );
+    drop(nano);
+}
+
+#[test]
+fn one_utile_in_the_browser_with_the_port_open_reset() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let spec = NanoSpec::single("live-single", &tank(), true);
+    let program = tank_path();
+    let shot = screenshot();
+    if let Some(dir) = shot.parent() {
+        std::fs::create_dir_all(dir).expect("screenshot folder");
+    }
+    drive(
+        "single",
+        &spec,
+        &["--program", program.to_str().unwrap()],
+        &[
+            "--program",
+            program.to_str().unwrap(),
+            "--screenshot",
+            shot.to_str().unwrap(),
+        ],
+    );
+    assert!(shot.is_file(), "no screenshot at {}", shot.display());
+}
+
+#[test]
+fn three_utiles_on_a_bus_in_the_browser() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let spec = NanoSpec::bus("live-bus", 3, &tank_with_remote());
+    drive("bus", &spec, &["--units", "1,2,3"], &["--units", "1,2,3"]);
+}

@@ -1,0 +1,293 @@
+#!/usr/bin/env python3
+"""The real browser against `utile live` on the virtual Nano, for tools/tests/live_browser.rs.
+
+    live_page.py single|bus --url URL --tcp HOST:PORT [--units 1,2,3] [--program FILE]
+                 [--screenshot PNG]
+
+Drives Debian's chromium through Playwright (headless) as a user would: reads the cards by
+their data-unit / data-signal / data-value attributes, clicks coils, types presets, uses the
+terminal tab. The Rust test owns the virtual Nano; this script asks it for rig keys, a kill
+and a restart by printing `@rig KEYS`, `@kill`, `@start` and waiting for `ok` on stdin. The
+gateway is used at the same time with mbpoll -m tcp and pymodbus's TCP client.
+
+Exits 1 with the reason on the first check that fails; prints `ALL OK` at the end.
+"""
+
+import argparse
+import json
+import subprocess
+import sys
+import time
+import urllib.request
+
+from playwright.sync_api import sync_playwright
+from pymodbus.client import ModbusTcpClient
+
+ARGS = [
+    "--no-sandbox",
+    "--headless=new",
+    "--disable-gpu",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+]
+T = 30_000  # ms: the longest wait for anything the page must show
+
+
+def fail(why):
+    print(f"FAIL: {why}", flush=True)
+    sys.exit(1)
+
+
+def step(what):
+    print(f"-- {what}", flush=True)
+
+
+def ask(command):
+    """Asks the Rust test to do `command` to the virtual Nano."""
+    print(f"@{command}", flush=True)
+    answer = sys.stdin.readline().strip()
+    if answer != "ok":
+        fail(f"@{command}: {answer}")
+
+
+def api(url, path):
+    with urllib.request.urlopen(url + path, timeout=10) as r:
+        return json.load(r)
+
+
+class Page:
+    def __init__(self, page, url):
+        self.page = page
+        self.url = url
+
+    def sel(self, unit, signal):
+        return f'.card[data-unit="{unit}"] [data-signal="{signal}"]'
+
+    def value(self, unit, signal):
+        e = self.page.query_selector(self.sel(unit, signal))
+        return e.get_attribute("data-value") if e else None
+
+    def wait(self, unit, signal, want, timeout=T):
+        """Waits until the card of `unit` shows `want` for `signal`."""
+        try:
+            self.page.wait_for_function(
+                "([s, w]) => { const e = document.querySelector(s); return e && e.dataset.value === w; }",
+                arg=[self.sel(unit, signal), str(want)],
+                timeout=timeout,
+            )
+        except Exception:
+            state = api(self.url, "/api/state")
+            u = [x for x in state["units"] if x["addr"] == unit]
+            refusal = self.page.text_content(f'.card[data-unit="{unit}"] .refusal')
+            fail(
+                f"uTile {unit}: {signal} is {self.value(unit, signal)!r}, not {want!r} after "
+                f"{timeout} ms; the card says {refusal!r}; line: {state['mode']} "
+                f"{state['message']!r} {json.dumps(state['line'])}; unit: "
+                f"{json.dumps({k: v for k, v in (u[0] if u else {}).items() if k != 'values'})}"
+            )
+
+    def wait_text(self, selector, text, timeout=T):
+        try:
+            self.page.wait_for_function(
+                "([s, t]) => { const e = document.querySelector(s); return e && !e.hidden && e.textContent.includes(t); }",
+                arg=[selector, text],
+                timeout=timeout,
+            )
+        except Exception:
+            shown = self.page.text_content(selector)
+            fail(f"{selector} does not say {text!r}: it says {shown!r}")
+
+    def set(self, unit, signal, value):
+        field = self.page.locator(self.sel(unit, signal))
+        field.fill(str(value))
+        field.press("Enter")
+
+    def click(self, unit, signal):
+        self.page.click(self.sel(unit, signal))
+
+    def tab(self, name):
+        self.page.click(f"#tab-{name}")
+
+
+def tank(p, unit):
+    """The tank example: the pump (Y0) runs below the low mark S7 and stops at the high mark
+    S6; the level is 2.0 V (409 counts) on A6 and A7. (The pump may already run: right after
+    a reset the level reads low until the ADC has its samples, and the flip-flop keeps it.)"""
+    step(f"uTile {unit}: the tank, level 409")
+    p.wait(unit, "A6", 409)
+    p.wait(unit, "S6", 800)
+    step(f"uTile {unit}: S7 = 500 puts the level under the low mark: the pump starts")
+    p.set(unit, "S7", 500)
+    p.wait(unit, "S7", 500)
+    p.wait(unit, "Y0", 1)
+    p.wait(unit, "Y1", 1)
+    step(f"uTile {unit}: S6 = 400 puts the level over the high mark: the pump stops")
+    p.set(unit, "S6", 400)
+    p.wait(unit, "S6", 400)
+    p.wait(unit, "Y0", 0)
+    step(f"uTile {unit}: S6 = 2000 is refused with the reason, nothing written")
+    p.set(unit, "S6", 2000)
+    p.wait_text(f'.card[data-unit="{unit}"] .refusal', "0..1023")
+    time.sleep(0.5)
+    p.wait(unit, "S6", 400)
+    regs = api(p.url, "/api/state")
+    s6 = [u for u in regs["units"] if u["addr"] == unit][0]["values"]["S6"]
+    if s6 != 400:
+        fail(f"S6 is {s6} after a refused write")
+
+
+def gateway(p, tcp, unit):
+    """mbpoll -m tcp and pymodbus's TCP client through the gateway while the page polls."""
+    host, port = tcp.split(":")
+    step(f"mbpoll -m tcp reads S6, S7 of uTile {unit} while the page polls")
+    scans = int(p.value(unit, "scans"))
+    out = subprocess.run(
+        ["mbpoll", "-m", "tcp", "-p", port, "-a", str(unit), "-t", "4", "-r", "25", "-c", "2", "-1", host],
+        capture_output=True, text=True, timeout=30,
+    )
+    if out.returncode != 0 or "400" not in out.stdout or "500" not in out.stdout:
+        fail(f"mbpoll: {out.returncode}\n{out.stdout}\n{out.stderr}")
+    step(f"pymodbus TCP: reads A6 and writes U1 of uTile {unit}")
+    c = ModbusTcpClient(host, port=int(port), timeout=5)
+    if not c.connect():
+        fail("pymodbus cannot connect to the gateway")
+    rr = c.read_input_registers(16, count=1, slave=unit)
+    if rr.isError() or rr.registers[0] != 409:
+        fail(f"pymodbus: input register 16 (A6) of uTile {unit}: {rr}")
+    wr = c.write_coil(9, True, slave=unit)
+    if wr.isError():
+        fail(f"pymodbus: coil 9 (U1): {wr}")
+    p.wait(unit, "U1", 1)
+    wr = c.write_coil(9, False, slave=unit)
+    p.wait(unit, "U1", 0)
+    rr = c.read_input_registers(0, count=1, slave=200)
+    if not rr.isError() or getattr(rr, "exception_code", None) != 0x0B:
+        fail(f"pymodbus: a silent address must give exception 0x0B, got {rr}")
+    c.close()
+    # The page kept refreshing all along.
+    time.sleep(0.5)
+    if int(p.value(unit, "scans")) == scans:
+        fail("the page stopped refreshing while the gateway was used")
+
+
+def single(p, a):
+    step("the page: one card, the program running")
+    p.wait(1, "online", 1)
+    p.page.wait_for_selector('#mode[data-value="run"]', timeout=T)
+    step("the program view: the tank listing, checked against --program")
+    p.tab("program")
+    p.page.wait_for_selector('.program[data-unit="1"] td.op >> text="H6."', timeout=T)
+    p.wait_text('.program[data-unit="1"] .check', f"runs {a.program}")
+    p.page.wait_for_selector('.program[data-unit="1"] td.v[data-line="0"]:not([data-value=""])', timeout=T)
+    p.tab("plant")
+    tank(p, 1)
+    if a.screenshot:
+        time.sleep(2)  # a few seconds of trend
+        p.page.screenshot(path=a.screenshot, full_page=True)
+    step("a rig switch shows on the page")
+    ask("rig 0")
+    p.wait(1, "A0", 0)
+    ask("rig 0")
+    p.wait(1, "A0", 1)
+    gateway(p, a.tcp, 1)
+
+    step("D8 removed and reset: uTile starts in EDIT mode and the page says so")
+    ask("rig 8r")
+    p.wait_text("#banner", "EDIT mode")
+    p.wait_text("#banner", "fit D8 for autostart")
+    p.page.wait_for_selector('.card[data-unit="1"] .state[data-state="edit"]', timeout=T)
+    step("the terminal tab: a program typed in and run")
+    p.tab("terminal")
+    p.page.wait_for_selector("#xterm .xterm-screen", timeout=T)
+    p.page.wait_for_function(
+        "() => window.utileTerminal && window.utileTerminal.buffer.active.getLine(0) !== undefined",
+        timeout=T,
+    )
+    p.page.click("#xterm")
+    for line in ["FILL", "U0.", ".Y2", "A0.", "!", ".Y3", "END", "EX0"]:
+        p.page.keyboard.type(line + "\r", delay=20)
+        time.sleep(0.3)
+    p.page.wait_for_selector('#mode[data-value="run"]', timeout=T)
+    p.tab("plant")
+    step("clicking U0 drives Y2 through the typed program")
+    p.wait(1, "Y2", 0)
+    p.click(1, "U0")
+    p.wait(1, "U0", 1)
+    p.wait(1, "Y2", 1)
+    p.click(1, "U0")
+    p.wait(1, "Y2", 0)
+    p.wait(1, "Y3", 0)
+    ask("rig 0")
+    p.wait(1, "Y3", 1)
+    ask("rig 0")
+
+    step("the virtual Nano killed: the card says offline; back when it returns")
+    ask("kill")
+    p.wait(1, "online", 0)
+    p.wait_text('.card[data-unit="1"] .state', "offline")
+    ask("start")
+    p.wait(1, "online", 1, timeout=60_000)
+    p.wait(1, "A6", 409)
+
+
+def bus(p, a):
+    units = [int(u) for u in a.units.split(",")]
+    step(f"the page: a card for each of {units}")
+    for u in units:
+        p.wait(u, "online", 1)
+    step("a rig switch on Nano 3 shows on card 3 only")
+    ask("rig @30")
+    p.wait(3, "A0", 0)
+    p.wait(1, "A0", 1)
+    p.wait(2, "A0", 1)
+    ask("rig 0")
+    p.wait(3, "A0", 1)
+    step("clicking U0 on card 2 drives its Y2 through its program")
+    p.click(2, "U0")
+    p.wait(2, "Y2", 1)
+    time.sleep(0.5)
+    if p.value(1, "Y2") != "0" or p.value(3, "Y2") != "0":
+        fail("U0 of uTile 2 reached another uTile")
+    p.click(2, "U0")
+    p.wait(2, "Y2", 0)
+    pump1 = p.value(1, "Y0")
+    tank(p, 3)
+    if p.value(1, "Y0") != pump1 or p.value(1, "S6") != "800" or p.value(1, "S7") != "300":
+        fail("uTile 1 changed with uTile 3's set-points")
+    gateway(p, a.tcp, 3)
+    step("the bus killed: every card offline; all back when it returns")
+    ask("kill")
+    for u in units:
+        p.wait(u, "online", 0)
+    ask("start")
+    for u in units:
+        p.wait(u, "online", 1, timeout=60_000)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("scenario", choices=["single", "bus"])
+    ap.add_argument("--url", required=True)
+    ap.add_argument("--tcp", required=True)
+    ap.add_argument("--units", default="1,2,3")
+    ap.add_argument("--program")
+    ap.add_argument("--screenshot")
+    a = ap.parse_args()
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path="/usr/bin/chromium", args=ARGS)
+        page = browser.new_page(viewport={"width": 1300, "height": 1000})
+        errors = []
+        page.on("pageerror", lambda e: errors.append(str(e)))
+        page.goto(a.url)
+        p = Page(page, a.url.rstrip("/"))
+        (single if a.scenario == "single" else bus)(p, a)
+        if errors:
+            fail(f"the page's scripts failed: {errors}")
+        browser.close()
+    print("ALL OK", flush=True)
+
+
+if __name__ == "__main__":
+    main()

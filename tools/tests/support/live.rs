@@ -1,0 +1,262 @@
+//! The `utile live` tests' rig: the virtual Nano with a stored program on a pty link,
+//! `utile live` on it, a small HTTP client for the API and a raw Modbus TCP client.
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::{SocketAddr, TcpStream};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc::{channel, Receiver};
+use std::time::{Duration, Instant};
+
+use serde_json::Value;
+use utile_core::engine::Program;
+use utile_core::opcodes;
+use utile_kit::listing;
+
+use super::vnano::{eeprom_file, firmware_elf, scratch, PtyNano};
+
+/// The `utile` binary under test.
+pub const UTILE: &str = env!("CARGO_BIN_EXE_utile");
+
+/// The tank example (examples/tank-fill.utl), never a copy.
+pub fn tank_path() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/tank-fill.utl")
+}
+
+/// The tank example's program.
+pub fn tank() -> Program {
+    let text = std::fs::read_to_string(tank_path()).expect("the tank example");
+    listing::parse("tank-fill", &text).expect("the tank listing")
+}
+
+/// The tank example with `U0. .Y2` before its END: a remote command through the program.
+pub fn tank_with_remote() -> Program {
+    let mut p = tank();
+    let end =
+        p.uf.iter()
+            .position(|&op| op == opcodes::END)
+            .expect("the tank's END");
+    for (i, word) in ["U0.", ".Y2", "END"].iter().enumerate() {
+        p.uf[end + i] = opcodes::lookup(word.as_bytes()).expect("a command");
+    }
+    p
+}
+
+/// How a virtual Nano is started (again, after a kill).
+pub struct NanoSpec {
+    /// Its arguments after `--pty`.
+    pub args: Vec<String>,
+    /// The pty link `utile live` opens.
+    pub link: PathBuf,
+}
+
+impl NanoSpec {
+    /// The Nano (or the `extra`-described bus) running `prog` from its EEPROM, A6 = A7 =
+    /// 2.0 V, on a pty link of its own.
+    fn with(name: &str, prog: &Program, extra: &[&str]) -> NanoSpec {
+        let ee = eeprom_file(name, prog);
+        let link = scratch(&format!("{name}-link")).join("tty");
+        let elf = firmware_elf();
+        let mut args: Vec<String> = ["--elf", elf.to_str().unwrap(), "--eeprom"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        args.push(ee.to_str().unwrap().to_string());
+        args.extend(extra.iter().map(|s| s.to_string()));
+        args.extend(["--a6", "2.0", "--a7", "2.0", "--link"].map(String::from));
+        args.push(link.to_str().unwrap().to_string());
+        NanoSpec { args, link }
+    }
+
+    /// One Nano autostarting `prog` (D8 fitted), A6 = A7 = 2.0 V; `dtr`: opening the port
+    /// resets it, as a Nano's DTR does.
+    pub fn single(name: &str, prog: &Program, dtr: bool) -> NanoSpec {
+        let mut spec = Self::with(name, prog, &["--d8-low"]);
+        if dtr {
+            spec.args.push("--dtr-reset".into());
+        }
+        spec
+    }
+
+    /// `n` Nanos on one RS-485 line, each running `prog`, A6 = A7 = 2.0 V.
+    pub fn bus(name: &str, n: usize, prog: &Program) -> NanoSpec {
+        Self::with(name, prog, &["--bus", &n.to_string()])
+    }
+
+    /// Starts it.
+    pub fn start(&self) -> PtyNano {
+        let args: Vec<&str> = self.args.iter().map(String::as_str).collect();
+        PtyNano::start(&args)
+    }
+}
+
+/// A running `utile live`.
+pub struct Live {
+    /// The process (killed on drop).
+    pub child: Child,
+    /// The page's base URL, `http://127.0.0.1:PORT`.
+    pub url: String,
+    /// The page's address.
+    pub http: SocketAddr,
+    /// The gateway's address.
+    pub tcp: SocketAddr,
+    /// Its console lines.
+    pub console: Receiver<String>,
+}
+
+impl Live {
+    /// `utile live --port LINK --http 127.0.0.1:0 --tcp 127.0.0.1:0` plus `extra`; waits for
+    /// the addresses it prints.
+    pub fn start(link: &Path, extra: &[&str]) -> Live {
+        let mut child = Command::new(UTILE)
+            .arg("live")
+            .arg("--port")
+            .arg(link)
+            .args(["--http", "127.0.0.1:0", "--tcp", "127.0.0.1:0"])
+            .args(extra)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start utile live");
+        let err = BufReader::new(child.stderr.take().expect("stderr"));
+        let (tx, rx) = channel();
+        std::thread::spawn(move || {
+            for line in err.lines().map_while(Result::ok) {
+                eprintln!("[utile live] {line}");
+                if tx.send(line).is_err() {
+                    return;
+                }
+            }
+        });
+        let mut http = None;
+        let mut tcp = None;
+        let deadline = Instant::now() + Duration::from_secs(30);
+        while http.is_none() || tcp.is_none() {
+            let left = deadline.saturating_duration_since(Instant::now());
+            let line = rx
+                .recv_timeout(left)
+                .unwrap_or_else(|_| panic!("utile live printed no addresses"));
+            if let Some(rest) = line.split("http://").nth(1) {
+                http = rest.trim_end_matches('/').parse::<SocketAddr>().ok();
+            }
+            if let Some(rest) = line.split("gateway on ").nth(1) {
+                tcp = rest.split_whitespace().next().and_then(|a| a.parse().ok());
+            }
+        }
+        let http = http.unwrap();
+        Live {
+            child,
+            url: format!("http://{http}"),
+            http,
+            tcp: tcp.unwrap(),
+            console: rx,
+        }
+    }
+
+    /// `GET path`: the status and the JSON body.
+    pub fn get(&self, path: &str) -> (u16, Value) {
+        request(self.http, "GET", path, None)
+    }
+
+    /// `POST path` with a JSON body.
+    pub fn post(&self, path: &str, body: &Value) -> (u16, Value) {
+        request(self.http, "POST", path, Some(body.to_string().as_bytes()))
+    }
+
+    /// `/api/state`.
+    pub fn state(&self) -> Value {
+        self.get("/api/state").1
+    }
+
+    /// The unit `addr` of the state.
+    pub fn unit(&self, addr: u64) -> Value {
+        let s = self.state();
+        s["units"]
+            .as_array()
+            .and_then(|u| u.iter().find(|u| u["addr"] == addr).cloned())
+            .unwrap_or(Value::Null)
+    }
+
+    /// Waits until `ok(state)` holds; panics with the state after `timeout`.
+    pub fn wait(&self, what: &str, timeout: Duration, ok: impl Fn(&Value) -> bool) -> Value {
+        let t0 = Instant::now();
+        loop {
+            let s = self.state();
+            if ok(&s) {
+                return s;
+            }
+            assert!(
+                t0.elapsed() < timeout,
+                "no {what} within {timeout:?}: {s:#}"
+            );
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+
+    /// Waits until uTile `addr` shows `signal` = `value`.
+    pub fn wait_value(&self, addr: u64, signal: &str, value: u64) -> Value {
+        self.wait(
+            &format!("uTile {addr} {signal} = {value}"),
+            Duration::from_secs(30),
+            |s| {
+                s["units"].as_array().is_some_and(|u| {
+                    u.iter()
+                        .any(|u| u["addr"] == addr && u["values"][signal] == value)
+                })
+            },
+        )
+    }
+}
+
+impl Drop for Live {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// One HTTP/1.1 request, `Connection: close`: the status and the body as JSON (`Null` if the
+/// body is not JSON).
+pub fn request(addr: SocketAddr, method: &str, path: &str, body: Option<&[u8]>) -> (u16, Value) {
+    let mut s = TcpStream::connect(addr).expect("connect to utile live");
+    s.set_read_timeout(Some(Duration::from_secs(15))).unwrap();
+    let body = body.unwrap_or_default();
+    let head = format!(
+        "{method} {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\
+         Content-Type: application/json\r\nContent-Length: {}\r\n\r\n",
+        body.len()
+    );
+    s.write_all(head.as_bytes()).unwrap();
+    s.write_all(body).unwrap();
+    let mut got = Vec::new();
+    s.read_to_end(&mut got).expect("read the answer");
+    let text = String::from_utf8_lossy(&got);
+    let status = text
+        .split_whitespace()
+        .nth(1)
+        .and_then(|c| c.parse().ok())
+        .unwrap_or(0);
+    let body = text.split("\r\n\r\n").nth(1).unwrap_or("");
+    let json = serde_json::from_str(body).unwrap_or(Value::Null);
+    (status, json)
+}
+
+/// One Modbus TCP request (unit `unit`, PDU `pdu`) on `s`: the reply's PDU.
+pub fn mbap(s: &mut TcpStream, id: u16, unit: u8, pdu: &[u8]) -> Vec<u8> {
+    let mut frame = Vec::new();
+    frame.extend_from_slice(&id.to_be_bytes());
+    frame.extend_from_slice(&[0, 0]);
+    frame.extend_from_slice(&(pdu.len() as u16 + 1).to_be_bytes());
+    frame.push(unit);
+    frame.extend_from_slice(pdu);
+    s.write_all(&frame).expect("send a Modbus TCP request");
+    let mut head = [0u8; 7];
+    s.read_exact(&mut head).expect("a Modbus TCP reply");
+    assert_eq!(&head[..2], &id.to_be_bytes(), "the reply's transaction id");
+    assert_eq!(head[6], unit, "the reply's unit id");
+    let len = usize::from(u16::from_be_bytes([head[4], head[5]])) - 1;
+    let mut pdu = vec![0u8; len];
+    s.read_exact(&mut pdu).expect("the reply's PDU");
+    pdu
+}

@@ -1,0 +1,17 @@
+//! What the tests in this folder share, one file a job; a test takes what it needs with
+//! `mod support;` and `use support::vnano::...`:
+//!
+//! - [`vnano`]: starting the virtual Nano, its console and pty with timeouts, the stand-in
+//!   firmware (`vnano_*`, `terminals`, `utile_push_pull`, `kermit_roundtrip`, the
+//!   cross-checks);
+//! - [`utile`]: running the `utile` tool, scratch files, examples, its table, SVG and VCD
+//!   (`utile_*`, `crosscheck_examples`);
+//! - [`live`]: `utile live` on the virtual Nano, an HTTP client for its API, a raw Modbus
+//!   TCP client (`live_*`).
+//!
+//! Each test binary uses only part of it.
+#![allow(dead_code, unused_imports)]
+
+pub mod live;
+pub mod utile;
+pub mod vnano;
