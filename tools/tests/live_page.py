@@ -177,6 +177,8 @@ def gateway(p, tcp, unit):
         fail(f"pymodbus: coil 9 (U1): {wr}")
     p.wait(unit, "U1", 1)
     wr = c.write_coil(9, False, slave=unit)
+    if wr.isError():
+        fail(f"pymodbus: coil 9 (U1) off: {wr}")
     p.wait(unit, "U1", 0)
     rr = c.read_input_registers(0, count=1, slave=200)
     if not rr.isError() or getattr(rr, "exception_code", None) != 0x0B:

@@ -5,17 +5,19 @@
 //! each chunk is stamped with its wall-clock arrival and goes to the chip at the simulated
 //! time that keeps its distance from the last thing on the link (a chunk the client sent,
 //! or bytes the chip sent it): the master's gaps survive a slow simulation, and a master
-//! need not stretch them. A gap is kept up to [`MAX_GAP`] (every silence the firmware tells
-//! apart is far shorter), so a long pause never holds a key back; when the simulation keeps
-//! up, the time a chunk is due has already come and it goes at once.
+//! need not stretch them. A gap is kept up to [`MAX_GAP`], beyond every silence the firmware
+//! tells apart (3.5 characters end a frame, 1.5 break one): a longer pause means nothing
+//! more to it, and kept whole it would be replayed at the simulation's slower pace, holding
+//! the next request back while its master's time-out runs. When the simulation keeps up,
+//! the time a chunk is due has already come and it goes at once.
 
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use utile_kit::simavr::F_CPU;
 
-/// The longest gap kept: far beyond Modbus's 3.5 characters (1.8 ms) and 1.5 characters.
-pub const MAX_GAP: Duration = Duration::from_millis(50);
+/// The longest gap kept: beyond Modbus's 3.5 characters at 19200 baud (1.8 ms) with room.
+pub const MAX_GAP: Duration = Duration::from_millis(5);
 
 /// Chunks from the client waiting for their simulated time.
 #[derive(Debug, Default)]
@@ -112,13 +114,13 @@ mod tests {
         let t0 = Instant::now();
         let mut a = Arrivals::default();
         a.came(vec![1], t0, 0);
-        a.came(vec![2], t0 + Duration::from_millis(5), MS);
+        a.came(vec![2], t0 + Duration::from_millis(3), MS);
         a.came(vec![3], t0 + Duration::from_secs(10), 2 * MS);
         assert_eq!(a.due(0), [1]);
-        assert!(a.due(4 * MS).is_empty());
-        assert_eq!(a.due(5 * MS), [2]);
-        assert!(a.due(54 * MS).is_empty());
-        assert_eq!(a.due(55 * MS), [3]);
+        assert!(a.due(2 * MS).is_empty());
+        assert_eq!(a.due(3 * MS), [2]);
+        assert!(a.due(7 * MS).is_empty());
+        assert_eq!(a.due(8 * MS), [3]);
         a.came(vec![4], t0, 0);
         a.clear();
         assert_eq!(a.next_in(0), None);

@@ -108,7 +108,17 @@ impl Line {
                 })
             }
             Err(Miss::Timeout { .. }) => {
-                self.dead.insert(job.addr, now);
+                // An address no card shows as online is dead for a while; one that answers
+                // its polls only missed this once (a client's retry is carried out).
+                let online = self
+                    .shared
+                    .lock()
+                    .units
+                    .iter()
+                    .any(|u| u.addr == job.addr && u.online);
+                if !online {
+                    self.dead.insert(job.addr, now);
+                }
                 Err(Failure::NoAnswer)
             }
             Err(Miss::Port) => Err(Failure::PortClosed),
