@@ -64,6 +64,25 @@ impl Line {
         self.shared.touch();
     }
 
+    /// Whether a request that got no answer is sent once more: the page's writes (they set
+    /// a coil or a register to a value: sending one again is harmless, and the user sees the
+    /// outcome instead of a lost click), and the gateway's reads and writes of values to a
+    /// uTile that answers its polls (it missed this once; a dead address is not waited for
+    /// twice).
+    fn once_more(&self, job: &Job) -> bool {
+        if job.origin == Origin::Page {
+            return true;
+        }
+        let repeatable = matches!(job.pdu.first(), Some(1 | 2 | 3 | 4 | 5 | 6 | 15 | 16));
+        repeatable
+            && self
+                .shared
+                .lock()
+                .units
+                .iter()
+                .any(|u| u.addr == job.addr && u.online)
+    }
+
     /// A queued request (the page's write, the gateway's request).
     pub(super) fn serve(&mut self, job: Job) {
         let start = Instant::now();
@@ -77,9 +96,7 @@ impl Line {
             return;
         }
         let mut result = self.transact(job.addr, &job.pdu, self.slack);
-        if job.origin == Origin::Page && matches!(result, Err(Miss::Timeout { .. })) {
-            // The page's writes set a coil or a register to a value: sending one again is
-            // harmless, and the user sees the outcome instead of a lost click.
+        if matches!(result, Err(Miss::Timeout { .. })) && self.once_more(&job) {
             result = self.transact(job.addr, &job.pdu, self.slack);
         }
         let now = Instant::now();
