@@ -17,6 +17,12 @@ pub const RAMSTART: u16 = 0x0100;
 /// Byte the firmware paints over free RAM at boot (`utile::hal::STACK_PAINT`).
 pub const STACK_PAINT: u8 = 0xC5;
 
+/// An EEPROM holding `prog` as STORE leaves it, for [`Rig::eeprom`].
+pub fn stored(prog: &utile_core::engine::Program) -> &'static [u8] {
+    let eeprom = utile_kit::sim::stored_eeprom(prog, 1).expect("STORE into an erased EEPROM");
+    Box::leak(eeprom.into_boxed_slice())
+}
+
 /// Jumpers and switches at reset.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Rig {
