@@ -29,7 +29,7 @@ pub(super) const S_STATUS_A: u8 = 49;
 /// The screen's own overlay (help text, LDT, LIST / WRITE / READ prompts, `Strike any key`).
 pub(super) const S_SCREEN: u8 = 50;
 pub(super) const S_STATUS_B: u8 = 51;
-/// Number of steps; a `render` value of this means the screen is complete.
+/// Number of steps.
 pub(super) const STEPS: u8 = 52;
 
 impl Editor {
@@ -48,7 +48,7 @@ impl Editor {
     /// inlined copies cost 52 B more.
     #[inline(never)]
     pub(super) fn full_redraw(&mut self) {
-        self.render = 0;
+        self.left = STEPS;
         self.msg = None;
         self.info = INFO_NONE;
         self.len = 0;
@@ -300,7 +300,7 @@ impl Editor {
             self.msg = None;
         }
         // Lost input stays reported until a line is entered on an up-to-date screen.
-        if self.render >= STEPS {
+        if self.left == 0 {
             self.lost = false;
         }
         if self.info != INFO_NONE {
