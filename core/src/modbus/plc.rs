@@ -219,7 +219,7 @@ impl<B: Board> PlcMap<'_, B> {
         } else if addr < IR_READINGS {
             self.eng.count[a & 7]
         } else if addr < IR_TIME_LEFT {
-            self.b.analog_readings()[a & 1]
+            self.b.analog_reading(addr as u8 & 1)
         } else {
             let now = self.b.now_ms();
             let left = self.eng.time_left_ms((addr - IR_TIME_LEFT) as u8, now);
