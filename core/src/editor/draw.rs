@@ -206,19 +206,13 @@ impl Editor {
         }
         num_width(b, u32::from(line), 3);
         b.tx(b' ');
-        let op = eng.prog.uf[usize::from(line)];
-        let width = match opcodes::name(op) {
-            Some(n) => {
-                raw(b, n.as_bytes());
-                n.as_bytes().len()
-            }
-            None => {
-                text::DOTS.send(b);
-                5
-            }
-        };
+        let mut width = term::name(b, eng.prog.uf[usize::from(line)]);
+        if width == 0 {
+            text::DOTS.send(b);
+            width = opcodes::MAX_NAME as u8;
+        }
         if pad || rev {
-            for _ in width..opcodes::MAX_NAME {
+            for _ in width..opcodes::MAX_NAME as u8 {
                 b.tx(b' ');
             }
         }
