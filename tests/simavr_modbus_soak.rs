@@ -3,7 +3,8 @@
 //! The program's outputs stay right, every valid request is answered correctly, every bad
 //! frame is counted as dropped, and EEPROM does not change.
 //!
-//! Needs `out/m328-nano-utile.elf` (`cargo fw`). About four minutes of wall time.
+//! Needs `out/m328-nano-utile.elf` (`cargo fw`). About two minutes of CPU (BENCHMARKS.md,
+//! "The test loop").
 
 mod support;
 

@@ -84,6 +84,19 @@ impl Board {
     /// Execute one instruction (or one interrupt entry); panics if the CPU crashed or slept.
     pub fn step(&mut self) {
         let state = self.chip.step();
+        self.still_running(state);
+    }
+
+    /// Run for `n` CPU cycles (in the kit's run loop, which stops at a sleep); panics if the
+    /// CPU crashed or slept.
+    pub fn run_cycles(&mut self, n: u64) {
+        let state = self.chip.run_awake_for(n);
+        self.still_running(state);
+        self.collect();
+    }
+
+    /// Panics unless the CPU is still executing: not crashed, stopped or asleep.
+    fn still_running(&self, state: CpuState) {
         if state != CpuState::Running {
             panic!(
                 "simavr CPU {state:?} (crashed or stopped) at PC {:#06x}, SP {:#06x}, cycle {}",
@@ -96,15 +109,6 @@ impl Board {
             !self.chip.sleeping(),
             "the firmware went to sleep (it must never sleep)"
         );
-    }
-
-    /// Run for `n` CPU cycles.
-    pub fn run_cycles(&mut self, n: u64) {
-        let end = self.cycles() + n;
-        while self.cycles() < end {
-            self.step();
-        }
-        self.collect();
     }
 
     /// Run for `ms` milliseconds of simulated time.

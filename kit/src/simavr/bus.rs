@@ -32,14 +32,26 @@ pub struct Collision {
     pub chips: Vec<usize>,
 }
 
-/// Chips sharing one serial line at one baud rate, run in lockstep (the one furthest behind
-/// steps next), with the test as the bus master.
+/// Chips sharing one serial line at one baud rate, with the test as the bus master.
+///
+/// The chip furthest behind runs next, a stretch at a time: up to half a frame time past
+/// the next chip (a byte another chip starts later cannot end sooner than a frame after its
+/// start, so none arrives late), and no further than the end of the run, where every chip
+/// stops at its first instruction boundary at or past the end, as in instruction lockstep.
+/// A stretch also ends when the chip sends a byte (it goes to the others at once) or
+/// changes its driver-enable pin; the pins' changes are merged in time order into the
+/// [`Collision`]s.
 pub struct Bus {
     chips: Vec<Chip>,
     baud: u32,
     /// Driver-enable pins watched (D10 per chip).
     de: bool,
+    /// Each chip's driver-enable pin as of its own cycle.
     de_on: Vec<bool>,
+    /// Driver-enable changes (cycle, chip, level) not yet merged into `collisions`.
+    de_changes: Vec<(u64, usize, bool)>,
+    /// The pins as of the last merged change.
+    de_merged: Vec<bool>,
     /// Cycle the master's transmitter is free again.
     master_free: u64,
     master_rx: Vec<BusByte>,
@@ -59,6 +71,8 @@ impl Bus {
             baud,
             de: false,
             de_on: vec![false; n],
+            de_changes: Vec::new(),
+            de_merged: vec![false; n],
             master_free: 0,
             master_rx: Vec::new(),
             collisions: Vec::new(),
@@ -121,17 +135,32 @@ impl Bus {
     /// Runs every chip `cycles` further; returns the first chip that stopped, if any.
     pub fn run_for(&mut self, cycles: u64) -> Option<(usize, CpuState)> {
         let end = self.cycle().saturating_add(cycles);
+        let stopped = self.run_to(end);
+        self.merge_de_changes();
+        stopped
+    }
+
+    /// Runs the chips in stretches (see [`Bus`]) until each is at or past cycle `end`.
+    fn run_to(&mut self, end: u64) -> Option<(usize, CpuState)> {
         loop {
-            let (i, now) = self
-                .chips
-                .iter()
-                .enumerate()
-                .map(|(i, c)| (i, c.cycle()))
-                .min_by_key(|&(_, c)| c)?;
+            // The chip furthest behind (the first of equals), and the next one's cycle.
+            let (mut i, mut now, mut next) = (0, u64::MAX, u64::MAX);
+            for (j, c) in self.chips.iter().enumerate() {
+                let at = c.cycle();
+                if at < now {
+                    (i, now, next) = (j, at, now);
+                } else if at < next {
+                    next = at;
+                }
+            }
             if now >= end {
                 return None;
             }
-            let state = self.chips[i].step();
+            let horizon = end.min(next.saturating_add(self.lookahead()));
+            let (de, de_on) = (self.de, self.de_on[i]);
+            let state = self.chips[i].run_while(horizon, |c| {
+                c.output_len() > 0 || (de && c.drives_high(DE_PORT, DE_BIT) != de_on)
+            });
             if state != CpuState::Running {
                 return Some((i, state));
             }
@@ -142,6 +171,14 @@ impl Bus {
                 self.route(i);
             }
         }
+    }
+
+    /// How far a chip may run past the next one: half the shortest frame on the line (the
+    /// bus's baud rate, or a chip's faster setting), so every byte another chip may still
+    /// send ends after it.
+    fn lookahead(&self) -> u64 {
+        let fastest = self.chips.iter().map(Chip::baud).fold(self.baud, u32::max);
+        frame_cycles(fastest) / 2
     }
 
     /// Chip `i`'s new bytes go to the master and the other chips.
@@ -164,25 +201,37 @@ impl Bus {
         }
     }
 
-    /// Follows chip `i`'s driver-enable pin and opens or closes collisions.
+    /// Follows chip `i`'s driver-enable pin: a change is noted with its cycle.
     fn watch_de(&mut self, i: usize) {
         let on = self.chips[i].drives_high(DE_PORT, DE_BIT);
-        if on == self.de_on[i] {
-            return;
+        if on != self.de_on[i] {
+            self.de_on[i] = on;
+            self.de_changes.push((self.chips[i].cycle(), i, on));
         }
-        self.de_on[i] = on;
-        let now = self.chips[i].cycle();
-        let driving: Vec<usize> = (0..self.chips.len()).filter(|&j| self.de_on[j]).collect();
-        let open = self.collisions.last().is_some_and(|c| c.end.is_none());
-        if driving.len() >= 2 && !open {
-            self.collisions.push(Collision {
-                start: now,
-                end: None,
-                chips: driving,
-            });
-        } else if driving.len() < 2 && open {
-            if let Some(c) = self.collisions.last_mut() {
-                c.end = Some(now);
+    }
+
+    /// Opens and closes collisions from the driver-enable changes up to the bus time (every
+    /// chip has run that far), in the order they happened.
+    fn merge_de_changes(&mut self) {
+        let upto = self.cycle();
+        self.de_changes.sort_by_key(|&(at, i, _)| (at, i));
+        let due = self.de_changes.partition_point(|&(at, _, _)| at <= upto);
+        for (now, i, on) in self.de_changes.drain(..due) {
+            self.de_merged[i] = on;
+            let driving: Vec<usize> = (0..self.chips.len())
+                .filter(|&j| self.de_merged[j])
+                .collect();
+            let open = self.collisions.last().is_some_and(|c| c.end.is_none());
+            if driving.len() >= 2 && !open {
+                self.collisions.push(Collision {
+                    start: now,
+                    end: None,
+                    chips: driving,
+                });
+            } else if driving.len() < 2 && open {
+                if let Some(c) = self.collisions.last_mut() {
+                    c.end = Some(now);
+                }
             }
         }
     }

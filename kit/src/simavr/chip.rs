@@ -1,7 +1,8 @@
-//! One simulated ATmega328P: loading the images, running, the cycle count, resets, memory.
+//! One simulated ATmega328P: loading the images, the cycle count, memory (running and
+//! resets are in [`super::run`]).
 
 use super::flash::FlashImage;
-use super::{ioctl_def, uart, LoadError, F_CPU, VCC_MV};
+use super::{uart, LoadError, F_CPU, VCC_MV};
 use simavr_ffi as ffi;
 use std::ffi::{c_char, c_int, c_void, CString};
 use std::path::Path;
@@ -9,15 +10,6 @@ use std::ptr::NonNull;
 
 /// Data-space address of MCUSR (reset flags).
 pub(crate) const MCUSR: usize = 0x54;
-/// Data-space address of WDTCSR (the watchdog's control register).
-const WDTCSR: usize = 0x60;
-/// WDTCSR's WDIF, WDIE and WDE: the watchdog's interrupt is pending in interrupt-and-system-
-/// reset mode.
-const WD_PENDING_IN_RESET_MODE: u8 = 0xC8;
-/// The `wdr` instruction.
-const WDR: u16 = 0x95A8;
-/// simavr's watchdog-reset ioctl (the `wdr` instruction): re-arms the watchdog timer.
-const IOCTL_WATCHDOG_RESET: u32 = ioctl_def(b'w', b'd', b't', b'r');
 /// Flash size of the ATmega328P in bytes.
 pub(crate) const FLASH_SIZE: u32 = 32 * 1024;
 
@@ -114,9 +106,9 @@ pub struct Chip {
     pub(crate) pins: super::pins::Pins,
     /// Since when (cycle, or the last `wdr`) the watchdog's interrupt has waited to run in
     /// interrupt-and-system-reset mode (see [`Chip::watchdog_rule`]).
-    wd_pending: Option<u64>,
+    pub(super) wd_pending: Option<u64>,
     /// Resets so far (any kind, by the harness or by simavr's watchdog).
-    resets: u32,
+    pub(super) resets: u32,
 }
 
 /// simavr's sleep hook: the default one waits on the wall clock; pacing is ours.
@@ -298,6 +290,15 @@ impl Chip {
         unsafe { *avr.data.add(addr) }
     }
 
+    /// One I/O register (data-space address below 0x100), read without the bounds check of
+    /// [`Chip::peek`]: for the per-instruction path.
+    #[inline(always)]
+    pub(crate) fn io(&self, addr: usize) -> u8 {
+        // SAFETY: the data space holds `ramend + 1` bytes, 0x900 on the ATmega328P (the only
+        // MCU the harness makes), so every address below 0x100 is within it.
+        unsafe { *self.avr().data.add(addr & 0xFF) }
+    }
+
     /// Writes one byte of the data space directly (no I/O side effects); ignored past RAM.
     pub fn poke(&mut self, addr: usize, value: u8) {
         if addr > usize::from(self.avr().ramend) {
@@ -309,7 +310,7 @@ impl Chip {
 
     /// CPU cycles since power-up, counting on over resets (simavr restarts its own count).
     pub fn cycle(&self) -> u64 {
-        self.link.now()
+        self.link.base + self.avr().cycle
     }
 
     /// CPU cycles since the last reset (simavr's own counter).
@@ -320,42 +321,6 @@ impl Chip {
     /// Simulated seconds since power-up.
     pub fn seconds(&self) -> f64 {
         self.cycle() as f64 / F_CPU as f64
-    }
-
-    /// Runs the CPU until `cycles` more cycles have passed (or it stops), feeding queued
-    /// UART input on the way.
-    pub fn run_for(&mut self, cycles: u64) -> CpuState {
-        let end = self.cycle().saturating_add(cycles);
-        while self.cycle() < end {
-            let state = self.step();
-            if state != CpuState::Running {
-                return state;
-            }
-        }
-        CpuState::Running
-    }
-
-    /// Executes one instruction (plus any interrupt entry simavr does after it, or one
-    /// sleeping stretch), feeding queued UART input on the way. A reset simavr does by
-    /// itself (the watchdog) keeps the cycle count going and re-arms the watchdog.
-    #[inline]
-    pub fn step(&mut self) -> CpuState {
-        self.feed_uart();
-        let before = self.avr().cycle;
-        let wdr = self.wd_pending.is_some() && self.flash_word(self.pc()) == WDR;
-        // SAFETY: `avr` is valid; callbacks it fires only touch our boxed `Link`.
-        let state = unsafe { ffi::avr_run(self.avr.as_ptr()) } as u32;
-        if self.avr().cycle < before {
-            // simavr reset the chip (and its counter) during this step.
-            self.link.base += before;
-            self.after_reset();
-        }
-        self.watchdog_rule(wdr);
-        match state {
-            ffi::cpu_Crashed => CpuState::Crashed,
-            ffi::cpu_Done | ffi::cpu_Stopped => CpuState::Done,
-            _ => CpuState::Running,
-        }
     }
 
     /// The CPU sleeps (the `sleep` instruction, until an interrupt).
@@ -403,64 +368,6 @@ impl Chip {
     /// MCUSR, the reset flags as the firmware reads them.
     pub fn mcusr(&self) -> u8 {
         self.peek(MCUSR)
-    }
-
-    /// Resets the chip as a real one would: registers cleared, SRAM and EEPROM kept, MCUSR
-    /// with the flag of `kind` (see [`Reset`]), execution from the reset vector (the boot
-    /// section after [`Chip::load_boot`]). The cycle count goes on; driven pins stay.
-    pub fn reset(&mut self, kind: Reset) {
-        let flags = match kind {
-            Reset::PowerOn => kind.flag(),
-            _ => self.mcusr() | kind.flag(),
-        };
-        self.poke(MCUSR, flags);
-        self.link.base += self.avr().cycle;
-        // SAFETY: `avr` is valid and not running.
-        unsafe { ffi::avr_reset(self.avr.as_ptr()) };
-        self.after_reset();
-    }
-
-    /// The rule of the watchdog's interrupt-and-system-reset mode that simavr leaves out:
-    /// "if the interrupt is not executed before the next time-out, a System Reset will be
-    /// applied" (ATmega328P datasheet, WDTCSR). simavr raises the interrupt again at every
-    /// time-out instead, so a chip with interrupts off for good would never reset. Here the
-    /// reset comes one watchdog period after the interrupt became pending without running,
-    /// or after the last `wdr` (`wdr_now`) since then, which restarts the period.
-    fn watchdog_rule(&mut self, wdr_now: bool) {
-        let wdtcsr = self.peek(WDTCSR);
-        if wdtcsr & WD_PENDING_IN_RESET_MODE != WD_PENDING_IN_RESET_MODE {
-            self.wd_pending = None;
-            return;
-        }
-        let now = self.cycle();
-        if wdr_now {
-            self.wd_pending = Some(now);
-        }
-        let since = *self.wd_pending.get_or_insert(now);
-        // WDP3 is bit 5, WDP2..0 bits 2..0; 2048 << WDP cycles of the 128 kHz oscillator.
-        let wdp = (wdtcsr & 0x07) | ((wdtcsr & 0x20) >> 2);
-        let period = (2048u64 << wdp) * F_CPU / 128_000;
-        if now - since >= period {
-            self.wd_pending = None;
-            self.reset(Reset::Watchdog);
-        }
-    }
-
-    /// What follows every reset: the watchdog re-armed from the new cycle 0 (simavr arms it
-    /// against the cycle count of before the reset, so it would fire late), the UART's
-    /// receive side restarted, the driven pins driven again.
-    fn after_reset(&mut self) {
-        self.resets += 1;
-        // SAFETY: the watchdog ioctl takes no parameter; simavr is not running.
-        unsafe {
-            ffi::avr_ioctl(
-                self.avr.as_ptr(),
-                IOCTL_WATCHDOG_RESET,
-                std::ptr::null_mut(),
-            );
-        }
-        self.rx_after_reset();
-        self.pins_after_reset();
     }
 }
 

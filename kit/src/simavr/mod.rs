@@ -7,7 +7,8 @@
 //! boot section, EEPROM access and write time, the ADC in millivolts, a UART fed and timed
 //! at any baud, single instructions with the PC after each.
 //!
-//! One file per job: [`chip`] (load, step, cycles, reset, memory), [`flash`] (Intel HEX
+//! One file per job: [`chip`] (load, cycles, memory), [`run`] (the run loop, resets, the
+//! watchdog), [`flash`] (Intel HEX
 //! images, the Arduino boot loaders), [`uart`] (the serial
 //! port), [`pins`] (driven inputs, output levels), [`adc`], [`eeprom`], [`bus`].
 //!
@@ -38,6 +39,7 @@ pub mod chip;
 pub mod eeprom;
 pub mod flash;
 pub mod pins;
+pub mod run;
 pub mod uart;
 
 pub use bus::{Bus, BusByte, Collision};

@@ -89,6 +89,10 @@ pub(crate) struct Rx {
     /// Cycle at which the last byte went into the UART.
     last: u64,
     pacing: RxPacing,
+    /// UBRR0L, UBRR0H and U2X0 when the frame time was last set, and the frame time set
+    /// ([`RxPacing::Line`]).
+    frame_regs: [u8; 3],
+    frame_set: u64,
 }
 
 impl Rx {
@@ -102,6 +106,8 @@ impl Rx {
             next: 0,
             last: 0,
             pacing: RxPacing::AfterRead,
+            frame_regs: [0; 3],
+            frame_set: 0,
         }
     }
 }
@@ -189,19 +195,41 @@ impl Chip {
     }
 
     /// Puts the next input byte on the line when its turn has come (see [`RxPacing`]).
-    #[inline]
+    /// On every instruction: a flag and a compare unless a byte is due.
+    #[inline(always)]
     pub(crate) fn feed_uart(&mut self) {
         match self.rx.pacing {
             RxPacing::Line { .. } => {
-                self.line_frame_time();
-                return self.feed_line();
+                if self.frame_time_stale() {
+                    self.line_frame_time();
+                }
+                if self
+                    .rx
+                    .timed
+                    .front()
+                    .is_some_and(|&(at, _)| self.cycle() >= at)
+                {
+                    self.feed_line();
+                }
+                return;
             }
-            RxPacing::AfterRead => self.line_frame_time(),
+            RxPacing::AfterRead => {
+                if self.frame_time_stale() {
+                    self.line_frame_time();
+                }
+            }
             RxPacing::Fixed | RxPacing::Fifo => {}
         }
-        if self.rx.queue.is_empty() {
-            return;
+        // (`Fifo` waits while simavr's FIFO is full: most of a long input's time.)
+        if !self.rx.queue.is_empty()
+            && !(self.link.uart.rx_full && self.rx.pacing == RxPacing::Fifo)
+        {
+            self.feed_paced();
         }
+    }
+
+    /// The paced modes' turn: a byte into simavr's FIFO when its time (or room) has come.
+    fn feed_paced(&mut self) {
         if self.rx.pacing == RxPacing::Fifo {
             while !self.link.uart.rx_full {
                 let Some(byte) = self.rx.queue.pop_front() else {
@@ -230,15 +258,36 @@ impl Chip {
         }
     }
 
+    /// UBRR0L, UBRR0H and U2X0 now.
+    #[inline(always)]
+    fn frame_regs(&self) -> [u8; 3] {
+        [self.io(UBRR0L), self.io(UBRR0H), self.io(UCSR0A) & U2X0]
+    }
+
+    /// The frame time must be set again: the baud registers changed, or simavr set its own
+    /// figure (it does on every UBRR0L write and reset).
+    #[inline(always)]
+    fn frame_time_stale(&self) -> bool {
+        if self.rx.uart.is_null() {
+            return false;
+        }
+        // SAFETY: the UART module belongs to this AVR, which is not running now.
+        let set = unsafe { (*self.rx.uart).cycles_per_byte };
+        set != self.rx.frame_set || self.frame_regs() != self.rx.frame_regs
+    }
+
     /// [`RxPacing::Line`] and [`RxPacing::AfterRead`]: simavr's UART counts 11 bits per 8N1
     /// frame (it always counts a parity bit), so bytes came one per 11 bit times both ways;
-    /// on the real line a frame is 10 bits. Kept right after every change of the baud rate.
+    /// on the real line a frame is 10 bits. Set again whenever UBRR0 or U2X0 changed or
+    /// simavr set its own figure.
     fn line_frame_time(&mut self) {
         if self.rx.uart.is_null() {
             return;
         }
         let ubrr = u64::from(self.peek(UBRR0L)) | u64::from(self.peek(UBRR0H) & 0x0F) << 8;
         let bit = (ubrr + 1) * if self.peek(UCSR0A) & U2X0 != 0 { 8 } else { 16 };
+        self.rx.frame_regs = self.frame_regs();
+        self.rx.frame_set = 10 * bit;
         // SAFETY: the UART module belongs to this AVR, which is not running now.
         unsafe { (*self.rx.uart).cycles_per_byte = 10 * bit };
     }
