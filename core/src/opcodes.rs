@@ -433,25 +433,46 @@ pub fn family_of(op: u8) -> Option<(&'static Family, u8)> {
 
 /// The command name of an opcode, or `None` for a blank or unassigned byte (shown `.....`).
 pub fn name(op: u8) -> Option<Name> {
-    let i = usize::from(op);
-    // The spelling as five bytes whose NULs are left out: a single's padded slot, or a
-    // family's padded prefix, the digit and the suffix (NUL when there is none).
-    let spelled: [u8; MAX_NAME] = if i < SINGLE_NAMES.len() {
-        SINGLE_NAMES.at(i).load()
-    } else {
-        let (f, num) = find_family(op)?;
-        [f.0[2], f.0[3], f.0[4], hex::digit(num), f.0[5]]
-    };
     let mut n = Name {
         buf: [0; MAX_NAME],
         len: 0,
     };
-    for c in spelled {
+    for k in 0..MAX_NAME as u8 {
+        let c = name_byte(op, k);
         if c != 0 {
             n.push(c);
         }
     }
-    Some(n)
+    (n.len > 0).then_some(n)
+}
+
+/// Byte `k` (0..[`MAX_NAME`]) of `op`'s spelling, whose NULs (0) are left out of its name:
+/// a single's padded slot, or a family's padded prefix, the digit and the suffix (NUL when
+/// there is none). All five are 0 for a blank or unassigned byte. A byte at a time in a
+/// register, so the editor sends a name with no buffer (and no stack frame) for it.
+pub fn name_byte(op: u8, k: u8) -> u8 {
+    let (i, k) = (usize::from(op), usize::from(k));
+    if k >= MAX_NAME {
+        return 0;
+    }
+    if i < SINGLE_NAMES.len() {
+        return SINGLE_NAMES.at(i).load_at(k);
+    }
+    for f in 0..FAMILIES.len() {
+        let rec = FAMILY_RECORDS.at(f);
+        let [base, count]: [u8; 2] = rec.load_sub_array(0);
+        if op >= base && op - base < count {
+            // The prefix (record bytes 2..5), the digit (its first number in byte 6), the
+            // suffix (byte 5): one read, at an index below 7.
+            let c = rec.load_at(match k {
+                3 => 6,
+                4 => 5,
+                _ => 2 + (k & 3),
+            });
+            return if k == 3 { hex::digit(op - base + c) } else { c };
+        }
+    }
+    0
 }
 
 /// True if the byte is an assigned opcode (not blank, not reserved).

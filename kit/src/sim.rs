@@ -273,8 +273,8 @@ impl Board for SimBoard {
     fn analog_bits(&mut self) -> u8 {
         self.analog.bits()
     }
-    fn analog_readings(&mut self) -> [u16; CHANNELS] {
-        self.analog.readings()
+    fn analog_reading(&mut self, channel: u8) -> u16 {
+        self.analog.reading(channel)
     }
     fn set_points(&mut self, sp: [u16; CHANNELS]) {
         self.analog.set_points(sp);
