@@ -53,6 +53,7 @@ impl Board {
     /// Load the firmware, set the rig up before the first instruction, and return without
     /// running anything yet.
     pub fn load(rig: Rig) -> Self {
+        setup::yield_to_wall_clock_tests();
         let elf = setup::firmware_elf();
         let mut chip = Chip::load(&elf).unwrap_or_else(|e| panic!("{e}"));
         // Typed bytes go into simavr's FIFO while it has room; it paces them at the baud.
