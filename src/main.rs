@@ -21,8 +21,6 @@ use panic_halt as _;
 
 #[cfg(target_arch = "avr")]
 mod firmware {
-    use core::mem::MaybeUninit;
-
     use crate::hal;
     use crate::hal::scan::{self, Exit, RunState};
     use crate::modbus;
@@ -33,10 +31,11 @@ mod firmware {
     use utile_core::stats::ScanStats;
 
     /// The editor lives in static RAM, so the linker counts it against the RAM budget
-    /// (memory.x) instead of it hiding in `main`'s stack frame.
-    /// Uninitialised (`.bss`) and written at boot: a `const` initial value would put the
-    /// whole editor, READ's staging buffer included, in `.data`, whose image takes flash.
-    static mut EDITOR: MaybeUninit<Editor> = MaybeUninit::uninit();
+    /// (memory.x) instead of it hiding in `main`'s stack frame. An editor at rest is all
+    /// zeros, so this is `.bss`, cleared by the start-up code: nothing is written at boot
+    /// (writing `Editor::new()` field by field took 142 B of flash), and nothing takes flash
+    /// as `.data` would (it would if `Editor::new()` had a byte other than 0).
+    static mut EDITOR: Editor = Editor::new();
 
     /// Autostart: D8 grounded and a valid stored image → load it and run at once (drawing
     /// comes later).
@@ -61,7 +60,7 @@ mod firmware {
         #[cfg(feature = "scan-check")]
         hal::scan_check::run(eng, &mut board);
         // SAFETY: the only reference to EDITOR, taken once; no interrupt handler uses it.
-        let editor = unsafe { (*core::ptr::addr_of_mut!(EDITOR)).write(Editor::new()) };
+        let editor = unsafe { &mut *core::ptr::addr_of_mut!(EDITOR) };
 
         let mut mode = autostart(eng, editor, &mut board);
         if mode == Mode::Edit {

@@ -73,7 +73,7 @@ fn render() -> String {
     let mut s = String::new();
     s.push_str(
         "# uTile opcode table\n\n\
-         Generated from `core/src/opcodes.rs` by `tests/engine_opcodes_doc.rs` \
+         Generated from `core/src/opcodes/mod.rs` by `tests/engine_opcodes_doc.rs` \
          (`UTILE_BLESS=1 cargo test --test engine_opcodes_doc`); do not edit by hand.\n\n\
          Each User File line holds one byte. These numbers are part of the stored-image format \
          (EEPROM, WRITE/READ files, listings): an existing opcode is never renumbered; a new \

@@ -23,7 +23,6 @@ use utile_core::modbus::plc::STATUS_WATCHDOG;
 use utile_core::opcodes::{lookup, END};
 use utile_kit::modbus;
 use utile_kit::setup;
-use utile_kit::sim::SimBoard;
 use utile_kit::simavr::{frame_cycles, ArduinoBoot, RxPacing};
 
 /// How the `hang-test` image hangs (src/hal/hang_test.rs).
@@ -77,9 +76,7 @@ fn eeprom_with_program() -> &'static [u8] {
         *line = lookup(w.as_bytes()).expect("a command");
     }
     assert_eq!(prog.uf[5], END);
-    let mut board = SimBoard::new();
-    utile_core::store::store(&prog, &mut board).expect("STORE");
-    Box::leak(board.eeprom.clone().into_boxed_slice())
+    support::chip::stored(&prog)
 }
 
 /// The hang-test image behind `boot` (if any), powered up with the rig.

@@ -6,15 +6,12 @@ mod support;
 use support::chip::{Board, Rig, CYCLES_PER_MS, RAMSTART, STACK_PAINT};
 use utile_core::engine::Program;
 use utile_core::opcodes::{END, LOAD_PA, NOT_ALL, STORE_PY};
-use utile_kit::sim::SimBoard;
 
 /// An EEPROM holding `uf` (from line 0) as written by STORE.
 fn eeprom_with(uf: &[u8]) -> &'static [u8] {
     let mut prog = Program::blank();
     prog.uf[..uf.len()].copy_from_slice(uf);
-    let mut board = SimBoard::new();
-    utile_core::store::store(&prog, &mut board).expect("STORE into a blank EEPROM");
-    Box::leak(board.eeprom.clone().into_boxed_slice())
+    support::chip::stored(&prog)
 }
 
 /// Step until the pins become outputs and return (PORTD, PORTB) at that instant.

@@ -20,6 +20,7 @@ fn chip(address: u8) -> Chip {
     let mut b = SimBoard::new();
     store::store(&listing::commands(&["U0.", ".Y0", "KEY", "END"]), &mut b).expect("STORE");
     assert!(store::set_slave_address(&mut b, address));
+    utile_kit::setup::yield_to_wall_clock_tests();
     let mut c = Chip::load(&firmware_elf()).unwrap_or_else(|e| panic!("{e}"));
     c.set_eeprom(0, &b.eeprom);
     c.hold_low(RigPin::D8, true);

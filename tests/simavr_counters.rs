@@ -7,12 +7,11 @@
 
 mod support;
 
-use support::chip::{Board, Rig, CYCLES_PER_MS};
+use support::chip::{stored, Board, Rig, CYCLES_PER_MS};
 use utile_core::engine::Program;
 use utile_core::ihex::{self, HexEvent, HexReader};
-use utile_core::{image, store};
+use utile_core::image;
 use utile_kit::listing;
-use utile_kit::sim::SimBoard;
 
 /// Y0 and Y1 in the output image.
 const Y0: u8 = 0x01;
@@ -25,19 +24,12 @@ fn example(stem: &str) -> Program {
     listing::parse(stem, &text).unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// An EEPROM holding `prog` as STORE leaves it.
-fn eeprom_with(prog: &Program) -> &'static [u8] {
-    let mut b = SimBoard::new();
-    store::store(prog, &mut b).expect("STORE into a blank EEPROM");
-    Box::leak(b.eeprom.into_boxed_slice())
-}
-
 /// The chip with `prog` stored and the D8 jumper fitted: it autostarts.
 fn autostarted(prog: &Program) -> Board {
     let mut nano = Board::boot_with(Rig {
         d8: true,
         d9: false,
-        eeprom: Some(eeprom_with(prog)),
+        eeprom: Some(stored(prog)),
     });
     nano.run_ms(50);
     nano
@@ -235,7 +227,7 @@ fn the_tank_pump_stays_off_from_power_up_when_the_level_is_between_its_marks() {
     let mut nano = Board::load(Rig {
         d8: true,
         d9: false,
-        eeprom: Some(eeprom_with(&prog)),
+        eeprom: Some(stored(&prog)),
     });
     nano.chip.set_analog_mv(6, mv(512));
     nano.chip.set_analog_mv(7, mv(512));
@@ -391,7 +383,7 @@ fn ldc_by_keys_sets_a_preset_that_the_running_program_uses_and_store_keeps_it() 
     let mut nano = Board::boot_with(Rig {
         d8: false,
         d9: false,
-        eeprom: Some(eeprom_with(&prog)),
+        eeprom: Some(stored(&prog)),
     });
     assert!(nano.wait_for("*** User File 0 ***", 2_000));
     nano.enter("load", 300);

@@ -9,11 +9,9 @@
 mod support;
 
 use support::chip::{Board, Rig, CYCLES_PER_MS};
-use utile_core::store;
 use utile_kit::listing;
 use utile_kit::modbus;
 use utile_kit::rng::Rng;
-use utile_kit::sim::SimBoard;
 use utile_kit::simavr::{frame_cycles, RxPacing};
 
 const ADDRESS: u8 = 1;
@@ -91,9 +89,7 @@ fn ten_minutes_of_polling_with_noise_keep_the_program_and_the_slave_right() {
     let prog = listing::commands(&[
         "CLKA.", ".Y0", "A0.", "!", ".Y1", "U0.", ".Y2", "KEY", "END",
     ]);
-    let mut b = SimBoard::new();
-    store::store(&prog, &mut b).expect("STORE");
-    let eeprom: &'static [u8] = Box::leak(b.eeprom.into_boxed_slice());
+    let eeprom = support::chip::stored(&prog);
     let mut nano = Board::boot_with(Rig {
         d8: true,
         d9: false,

@@ -3,7 +3,7 @@
 //! noise. Needs `out/m328-nano-utile.elf` (`cargo fw`).
 
 mod support;
-use support::chip::{contains, Board, Rig, RAMSTART, STACK_PAINT};
+use support::chip::{contains, stored, Board, Rig, RAMSTART, STACK_PAINT};
 use utile_core::engine::Program;
 use utile_core::opcodes::{self, NOP};
 use utile_core::{ihex, image, store};
@@ -26,13 +26,6 @@ fn filled(from: &Program) -> Program {
         uf: [NOP; 256],
         ..from.clone()
     }
-}
-
-/// An EEPROM holding `prog` as STORE leaves it.
-fn eeprom_with(prog: &Program) -> &'static [u8] {
-    let mut board = SimBoard::new();
-    store::store(prog, &mut board).expect("STORE into a blank EEPROM");
-    Box::leak(board.eeprom.clone().into_boxed_slice())
 }
 
 /// What LOAD would find in an EEPROM dump (the core's LOAD over the chip's bytes).
@@ -95,7 +88,7 @@ fn hex_of(prog: &Program) -> Vec<u8> {
 fn a_reset_in_the_middle_of_store_never_loses_the_stored_program() {
     let old = old_program();
     let new = filled(&old);
-    let eeprom = eeprom_with(&old);
+    let eeprom = stored(&old);
 
     // How long STORE takes on this image, from the CR to its message.
     let mut nano = start_store(eeprom);
@@ -132,7 +125,7 @@ fn a_reset_in_the_middle_of_store_never_loses_the_stored_program() {
 fn flipped_bytes_in_the_newest_slot_fall_back_to_the_other() {
     let old = old_program();
     let new = filled(&old);
-    let mut nano = start_store(eeprom_with(&old));
+    let mut nano = start_store(stored(&old));
     assert!(nano.wait_for("stored in EEPROM", 5000));
     let mut bytes = nano.eeprom();
     // The newest slot is the one holding `new`: damage one of its UF bytes.

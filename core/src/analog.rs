@@ -133,6 +133,11 @@ impl Analog {
         self.readings
     }
 
+    /// The last reading of A6 (`channel` 0) or A7 (1).
+    pub fn reading(&self, channel: u8) -> u16 {
+        self.readings[usize::from(channel & 1)]
+    }
+
     /// New set-points S6, S7 (0 disables a threshold; values above 1023 act as 1023). The
     /// bits follow at once, so a program starting now sees its own set-points' bits in its
     /// first scan.

@@ -50,8 +50,10 @@ pub trait Board {
     fn feed_watchdog(&mut self) {}
     /// Analog threshold bits: H6 in bit 6, H7 in bit 7, every other bit 0 (SPEC §15).
     fn analog_bits(&mut self) -> u8;
-    /// The last readings of A6 and A7, 0..1023 (the LDC screen, Modbus).
-    fn analog_readings(&mut self) -> [u16; crate::analog::CHANNELS];
+    /// The last reading of A6 (`channel` 0) or A7 (1), 0..1023 (the LDC screen, Modbus).
+    /// One channel a call: a `u16` comes back in registers, where the pair came back through
+    /// a stack frame of the caller's.
+    fn analog_reading(&mut self, channel: u8) -> u16;
     /// The set-points S6, S7 the thresholds compare with (the program's, given at RUN, EX0
     /// and whenever they change).
     fn set_points(&mut self, sp: [u16; crate::analog::CHANNELS]);

@@ -146,7 +146,8 @@ pub struct Ticker {
     /// The input pre-processor.
     pub inputs: Debouncer,
     clocks: u8,
-    /// Milliseconds left in the present 200 ms step of the clocks.
+    /// Milliseconds into the present 200 ms step of the clocks (counted up, so that a
+    /// ticker of settled low inputs at time 0 is all zeros: the firmware's is `.bss`).
     clock_ms: u8,
     /// 200 ms steps since CLKC last changed (0..=8): CLKB changes every 3rd, CLKC every 9th.
     clock_step: u8,
@@ -165,7 +166,7 @@ impl Ticker {
             ms,
             inputs: Debouncer::new(raw),
             clocks: 0,
-            clock_ms: CLOCK_STEP_MS,
+            clock_ms: 0,
             clock_step: 0,
         }
     }
@@ -174,11 +175,11 @@ impl Ticker {
     pub fn tick(&mut self, raw: u8) {
         self.ms = self.ms.wrapping_add(1);
         self.inputs.sample(raw);
-        // One 8-bit countdown for all three clocks (their half-periods are 1, 3 and 9 steps
-        // of 200 ms): the 1 ms interrupt pays a decrement and a test most of the time.
-        self.clock_ms = self.clock_ms.wrapping_sub(1);
-        if self.clock_ms == 0 {
-            self.clock_ms = CLOCK_STEP_MS;
+        // One 8-bit count for all three clocks (their half-periods are 1, 3 and 9 steps of
+        // 200 ms): the 1 ms interrupt pays an increment and a test most of the time.
+        self.clock_ms = self.clock_ms.wrapping_add(1);
+        if self.clock_ms == CLOCK_STEP_MS {
+            self.clock_ms = 0;
             self.clock_step = self.clock_step.wrapping_add(1);
             let mut flip = 0x01;
             if matches!(self.clock_step, 3 | 6 | 9) {

@@ -108,3 +108,17 @@ pub fn avr_gcc(src: &Path, elf: &Path, flags: &[&str]) {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// Lowers this process's CPU priority (nice +10), once: for a test that counts simulated
+/// cycles and never waits on the wall clock, so the tests beside it that do (the virtual Nano
+/// on a pty, terminals, avrdude, the browser) get the cores first when the machine is full.
+/// Its own results do not change: simulated time does not depend on the CPU it gets.
+/// `./x test` runs each test in a process of its own, so only that test is lowered.
+pub fn yield_to_wall_clock_tests() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        // SAFETY: nice(2) changes only this process's scheduling priority; its result (the
+        // new priority, or -1 when not allowed) changes nothing here.
+        unsafe { libc::nice(10) };
+    });
+}

@@ -9,7 +9,8 @@ use std::vec::Vec;
 
 use utile_core::analog::{Analog, CHANNELS};
 use utile_core::board::Board;
-use utile_core::engine::{Engine, Flow};
+use utile_core::engine::{Engine, Flow, Program};
+use utile_core::store::{self, StoreError};
 use utile_core::ticker::Ticker;
 
 /// Size of the simulated EEPROM.
@@ -81,6 +82,17 @@ pub struct SimBoard {
     pub analog_levels: [u16; CHANNELS],
     /// The analog sampler, fed one conversion per ms as the chip's ADC interrupt does.
     pub analog: Analog,
+}
+
+/// The EEPROM of a Nano that ran STORE of `prog` `times` times from an erased EEPROM (the
+/// core's own STORE, so the slots, CRC and sequence numbers are the firmware's): what tests,
+/// the bench and the virtual Nano start a chip with.
+pub fn stored_eeprom(prog: &Program, times: usize) -> Result<Vec<u8>, StoreError> {
+    let mut board = SimBoard::new();
+    for _ in 0..times {
+        store::store(prog, &mut board)?;
+    }
+    Ok(board.eeprom)
 }
 
 impl Default for SimBoard {
@@ -261,8 +273,8 @@ impl Board for SimBoard {
     fn analog_bits(&mut self) -> u8 {
         self.analog.bits()
     }
-    fn analog_readings(&mut self) -> [u16; CHANNELS] {
-        self.analog.readings()
+    fn analog_reading(&mut self, channel: u8) -> u16 {
+        self.analog.reading(channel)
     }
     fn set_points(&mut self, sp: [u16; CHANNELS]) {
         self.analog.set_points(sp);

@@ -84,10 +84,10 @@ pub fn wait_ready() {
     }
 }
 
-/// The last readings of A6 and A7.
-pub(super) fn readings() -> [u16; CHANNELS] {
+/// The last reading of A6 (`channel` 0) or A7 (1).
+pub(super) fn reading(channel: u8) -> u16 {
     // SAFETY: the closure does not re-enter ANALOG.
-    interrupt::free(|cs| unsafe { ANALOG.with(cs, |a| a.readings()) })
+    interrupt::free(|cs| unsafe { ANALOG.with(cs, |a| a.reading(channel)) })
 }
 
 /// New set-points for the thresholds; the bits follow at once for a channel with a reading.

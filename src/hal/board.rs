@@ -143,8 +143,8 @@ impl Board for Nano {
     }
 
     #[inline(never)]
-    fn analog_readings(&mut self) -> [u16; utile_core::analog::CHANNELS] {
-        adc::readings()
+    fn analog_reading(&mut self, channel: u8) -> u16 {
+        adc::reading(channel)
     }
 
     fn set_points(&mut self, sp: [u16; utile_core::analog::CHANNELS]) {

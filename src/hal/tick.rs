@@ -4,19 +4,20 @@
 use core::sync::atomic::{AtomicU8, Ordering};
 
 use avr_device::interrupt::{self, CriticalSection};
-use utile_core::ticker::{Ticker, INPUT_MASK};
+use utile_core::ticker::Ticker;
 
 use super::isr_cell::IsrCell;
 use super::regs::{bit, regs, wr};
 use super::{adc, pins};
 
-/// The core's ticker, advanced by the tick interrupt.
-pub(crate) static TICKER: IsrCell<Ticker> = IsrCell::new(Ticker::new(INPUT_MASK));
+/// The core's ticker, advanced by the tick interrupt. All zeros (`.bss`, no flash): `init`
+/// takes the pins' levels before the first tick.
+pub(crate) static TICKER: IsrCell<Ticker> = IsrCell::new(Ticker::new(0));
 
 /// Copies of the ticker's one-byte outputs (debounced levels, toggles, clocks), published
 /// by the tick. A one-byte load is atomic on the AVR, so the scan reads them without a
 /// critical section: each `An.` saves the SREG save, `cli` and restore.
-pub(crate) static LEVEL: AtomicU8 = AtomicU8::new(INPUT_MASK);
+pub(crate) static LEVEL: AtomicU8 = AtomicU8::new(0);
 /// Toggle bits (see [`LEVEL`]).
 pub(crate) static TOGGLES: AtomicU8 = AtomicU8::new(0);
 /// Clock bits (see [`LEVEL`]).

@@ -17,6 +17,12 @@ pub const RAMSTART: u16 = 0x0100;
 /// Byte the firmware paints over free RAM at boot (`utile::hal::STACK_PAINT`).
 pub const STACK_PAINT: u8 = 0xC5;
 
+/// An EEPROM holding `prog` as STORE leaves it, for [`Rig::eeprom`].
+pub fn stored(prog: &utile_core::engine::Program) -> &'static [u8] {
+    let eeprom = utile_kit::sim::stored_eeprom(prog, 1).expect("STORE into an erased EEPROM");
+    Box::leak(eeprom.into_boxed_slice())
+}
+
 /// Jumpers and switches at reset.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Rig {
@@ -47,6 +53,7 @@ impl Board {
     /// Load the firmware, set the rig up before the first instruction, and return without
     /// running anything yet.
     pub fn load(rig: Rig) -> Self {
+        setup::yield_to_wall_clock_tests();
         let elf = setup::firmware_elf();
         let mut chip = Chip::load(&elf).unwrap_or_else(|e| panic!("{e}"));
         // Typed bytes go into simavr's FIFO while it has room; it paces them at the baud.

@@ -76,6 +76,7 @@ struct Chip {
 impl Chip {
     /// Power up, find tick 0, wait for the editor's page.
     fn boot() -> Chip {
+        utile_kit::setup::yield_to_wall_clock_tests();
         let mut nano =
             simavr::Chip::load(&support::vnano::firmware_elf()).expect("load the firmware");
         while nano.peek(TCCR0B) == 0 {

@@ -17,6 +17,7 @@ const MS: u64 = 16_000;
 
 /// Power up and wait for the main screen.
 fn boot() -> Chip {
+    utile_kit::setup::yield_to_wall_clock_tests();
     let mut nano = Chip::load(&support::vnano::firmware_elf()).expect("load the firmware");
     let mut seen = Vec::new();
     for _ in 0..2000 {

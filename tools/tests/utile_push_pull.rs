@@ -163,7 +163,7 @@ fn a_running_program_is_refused_and_keeps_running_unless_stop_is_asked() {
     // Stored and autostarted: Y1 follows A0, Y0 on; KEY lets `/` stop it.
     let running = listing::commands(&["KEY", "A0.", ".Y1", "SET", ".Y0", "END"]);
     let ee = dir.join("ee.bin");
-    std::fs::write(&ee, utile_tools::bench::eeprom_with(&running, 1)).unwrap();
+    std::fs::write(&ee, utile_kit::sim::stored_eeprom(&running, 1).unwrap()).unwrap();
     let mut nano = PtyNano::start(&[
         "--elf",
         firmware_elf().to_str().unwrap(),

@@ -42,7 +42,7 @@ fn flash_and_boot(boot: ArduinoBoot, old: Option<&Path>) {
     );
     let dir = scratch(&format!("avrdude-{tag}"));
     let prog = utile_kit::listing::commands(&["A3.", "!", ".Y5", "END"]);
-    let eeprom = utile_tools::bench::eeprom_with(&prog, 1);
+    let eeprom = utile_kit::sim::stored_eeprom(&prog, 1).unwrap();
     let (ee_in, ee_out) = (dir.join("in.eeprom"), dir.join("out.eeprom"));
     std::fs::write(&ee_in, &eeprom).unwrap();
     let mut args = vec![

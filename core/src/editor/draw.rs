@@ -29,7 +29,7 @@ pub(super) const S_STATUS_A: u8 = 49;
 /// The screen's own overlay (help text, LDT, LIST / WRITE / READ prompts, `Strike any key`).
 pub(super) const S_SCREEN: u8 = 50;
 pub(super) const S_STATUS_B: u8 = 51;
-/// Number of steps; a `render` value of this means the screen is complete.
+/// Number of steps.
 pub(super) const STEPS: u8 = 52;
 
 impl Editor {
@@ -48,7 +48,7 @@ impl Editor {
     /// inlined copies cost 52 B more.
     #[inline(never)]
     pub(super) fn full_redraw(&mut self) {
-        self.render = 0;
+        self.left = STEPS;
         self.msg = None;
         self.info = INFO_NONE;
         self.len = 0;
@@ -206,19 +206,13 @@ impl Editor {
         }
         num_width(b, u32::from(line), 3);
         b.tx(b' ');
-        let op = eng.prog.uf[usize::from(line)];
-        let width = match opcodes::name(op) {
-            Some(n) => {
-                raw(b, n.as_bytes());
-                n.as_bytes().len()
-            }
-            None => {
-                text::DOTS.send(b);
-                5
-            }
-        };
+        let mut width = term::name(b, eng.prog.uf[usize::from(line)]);
+        if width == 0 {
+            text::DOTS.send(b);
+            width = opcodes::MAX_NAME as u8;
+        }
         if pad || rev {
-            for _ in width..opcodes::MAX_NAME {
+            for _ in width..opcodes::MAX_NAME as u8 {
                 b.tx(b' ');
             }
         }
@@ -300,7 +294,7 @@ impl Editor {
             self.msg = None;
         }
         // Lost input stays reported until a line is entered on an up-to-date screen.
-        if self.render >= STEPS {
+        if self.left == 0 {
             self.lost = false;
         }
         if self.info != INFO_NONE {

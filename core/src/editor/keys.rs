@@ -41,7 +41,9 @@ pub enum Event {
     Char(u8),
 }
 
+// `repr(u8)`: `Ground` is a 0 tag, not a niche value, so an editor at rest is all zeros.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u8)]
 enum State {
     Ground,
     /// After ESC.

@@ -119,13 +119,12 @@ impl Editor {
             return false;
         };
         let mut drawn = false;
-        let readings = b.analog_readings();
         // u8 cells: the indices are in range by construction (masks, not checks).
         for i in 0..CELLS {
             let v = if i < COUNTERS as u8 {
                 eng.count[usize::from(i & 7)]
             } else {
-                readings[usize::from(i & 1)]
+                b.analog_reading(i & 1)
             };
             let seen = &mut shown[usize::from(i)];
             if all || v != *seen {

@@ -87,8 +87,10 @@ pub(super) const INFO_ADDRESS: u8 = 2;
 
 /// Which screen the editor shows.
 // No heap to box READ's staging buffer into: the variants share its space instead.
+// `repr(u8)`: `Page` is a 0 tag, not a niche value, so an editor at rest is all zeros.
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug)]
+#[repr(u8)]
 enum Screen {
     /// The main screen.
     Page,
@@ -156,8 +158,10 @@ pub struct Editor {
     blank: bool,
     /// What row 19 shows (`INFO_*`).
     info: u8,
-    /// Next step of a deferred full redraw ([`STEPS`] = done).
-    render: u8,
+    /// Steps of a deferred full redraw still to draw (0: done); the next is step
+    /// `STEPS - left`. Counted down, so that an editor at rest is all zeros and the
+    /// firmware's lives in `.bss`, written by nothing at boot.
+    left: u8,
     /// When the bit-stack and port displays were last updated in RUN mode.
     bs_ms: u32,
     port_ms: u32,
@@ -175,7 +179,13 @@ impl Editor {
     /// An editor at line 0, page 0.
     pub const fn new() -> Self {
         Self {
-            stats: ScanStats::new(),
+            // No run yet: STAT shows zeros whatever `min` is (all zeros, see `left`).
+            stats: ScanStats {
+                min: 0,
+                max: 0,
+                count: 0,
+                run_ms: 0,
+            },
             stored: false,
             screen: Screen::Page,
             keys: KeyDecoder::new(),
@@ -195,7 +205,7 @@ impl Editor {
             seen_lost: 0,
             blank: false,
             info: INFO_NONE,
-            render: STEPS,
+            left: 0,
             bs_ms: 0,
             port_ms: 0,
             run_start_ms: 0,
@@ -220,7 +230,7 @@ impl Editor {
     /// True while the screen is being drawn piece by piece (RUN mode, or catching up after
     /// type-ahead in EDIT mode).
     pub fn drawing(&self) -> bool {
-        self.render < STEPS
+        self.left != 0
     }
 
     /// Power-up in EDIT mode: draw the whole main screen.
@@ -246,7 +256,7 @@ impl Editor {
         self.stored = true;
         eng.clear_runtime_keeping_counts(b);
         self.begin_run(b);
-        self.render = 0;
+        self.left = STEPS;
         Mode::Run
     }
 
@@ -256,7 +266,7 @@ impl Editor {
         let b = &mut Tracked::new(b, false);
         let _ = eng;
         self.begin_run(b);
-        self.render = 0;
+        self.left = STEPS;
     }
 
     /// One received byte in EDIT mode. Returns [`Mode::Run`] when RUN or EX0 start the program.
@@ -282,10 +292,10 @@ impl Editor {
             } else {
                 S_BS
             };
-            self.render = self.render.min(from);
+            self.left = self.left.max(STEPS - from);
         }
         if mode == Mode::Edit {
-            if self.render < STEPS {
+            if self.left != 0 {
                 self.catch_up(eng, &mut t);
             } else if t.sent() && !self.echo_only {
                 self.park(&mut t);
@@ -314,7 +324,7 @@ impl Editor {
         }
         if event == Event::Char(0x0C) {
             // Ctrl-L: the whole screen again, as it stands (a terminal that connected late).
-            self.render = 0;
+            self.left = STEPS;
             return Mode::Edit;
         }
         // One line per screen: each screen's keys live in its own room.
@@ -344,10 +354,10 @@ impl Editor {
             // Bytes were lost all the same: never silently (the status line says so).
             self.seen_lost = lost;
             self.lost = true;
-            self.render = self.render.min(S_STATUS_B);
+            self.left = self.left.max(STEPS - S_STATUS_B);
         }
         self.catch_up(eng, b);
-        if self.render >= STEPS {
+        if self.left == 0 {
             let now = b.now_ms();
             self.read_idle(now, b);
             self.ldc_idle(eng, now, b);
@@ -357,17 +367,17 @@ impl Editor {
     /// Draw the steps of a redraw still under way, until done or until input is waiting
     /// (then the step is drawn again next time); done, the cursor goes back to the prompt.
     fn catch_up<B: Board>(&mut self, eng: &Engine, t: &mut Tracked<'_, B>) {
-        if self.render >= STEPS || t.mute() {
+        if self.left == 0 || t.mute() {
             return;
         }
         // Output cut short may have left reverse video on.
         normal(t);
-        while self.render < STEPS {
-            self.step(self.render, eng, t);
+        while self.left != 0 {
+            self.step(STEPS - self.left, eng, t);
             if t.mute() {
                 return;
             }
-            self.render += 1;
+            self.left -= 1;
         }
         self.blank = false;
         self.park(t);

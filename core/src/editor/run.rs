@@ -7,7 +7,7 @@ impl Editor {
     /// Any key after `Strike any key -->` returns to the editor.
     pub(super) fn break_event<B: Board>(&mut self, eng: &mut Engine, b: &mut B) -> Mode {
         self.screen = Screen::Page;
-        if self.render < STEPS {
+        if self.left != 0 {
             self.full_redraw();
         } else {
             erase_at(b, ROW_STATUS, COL_STATUS_B);
@@ -38,7 +38,7 @@ impl Editor {
     /// request. The main loop asks first, so an idle scan pays only these tests.
     #[inline(always)]
     pub fn has_output(&self, eng: &Engine) -> bool {
-        self.render < STEPS || eng.port_view().is_some() || eng.bs_view().is_some()
+        self.left != 0 || eng.port_view().is_some() || eng.bs_view().is_some()
     }
 
     /// After every scan in RUN mode: pending PPx/PBS displays (at most one per 100 ms each)
@@ -46,11 +46,11 @@ impl Editor {
     pub fn after_scan<B: Board>(&mut self, eng: &mut Engine, b: &mut B) {
         // One instance of the drawing code: every entry point goes through `Tracked`.
         let b = &mut Tracked::new(b, false);
-        if self.render < STEPS {
+        if self.left != 0 {
             // One step per visit: the scan waits for at most one step's work.
             if b.tx_room() >= STEP_MAX {
-                self.step(self.render, eng, b);
-                self.render += 1;
+                self.step(STEPS - self.left, eng, b);
+                self.left -= 1;
             }
             return;
         }
@@ -83,7 +83,7 @@ impl Editor {
         let now = b.now_ms();
         self.stats.run_ms = now.wrapping_sub(self.run_start_ms);
         self.screen = Screen::Break;
-        if self.render >= STEPS {
+        if self.left == 0 {
             text::STRIKE.send_at(b, ROW_STATUS, COL_STRIKE);
         } else {
             // The screen is redrawn whole at the next key.

@@ -16,6 +16,19 @@ pub fn raw<B: Board>(b: &mut B, bytes: &[u8]) {
     }
 }
 
+/// The command name of `op` (nothing for a blank or unassigned byte); returns its width.
+pub fn name<B: Board>(b: &mut B, op: u8) -> u8 {
+    let mut width = 0;
+    for k in 0..crate::opcodes::MAX_NAME as u8 {
+        let c = crate::opcodes::name_byte(op, k);
+        if c != 0 {
+            b.tx(c);
+            width += 1;
+        }
+    }
+    width
+}
+
 /// Cursor to `row`, `col` (1-based), in the shortest form (`ESC[rH` for column 1).
 pub fn goto<B: Board>(b: &mut B, row: u8, col: u8) {
     if b.tx_dropped() {

@@ -132,8 +132,8 @@ impl<B: Board> Board for Tracked<'_, B> {
     fn analog_bits(&mut self) -> u8 {
         self.b.analog_bits()
     }
-    fn analog_readings(&mut self) -> [u16; crate::analog::CHANNELS] {
-        self.b.analog_readings()
+    fn analog_reading(&mut self, channel: u8) -> u16 {
+        self.b.analog_reading(channel)
     }
     fn set_points(&mut self, sp: [u16; crate::analog::CHANNELS]) {
         self.b.set_points(sp)

@@ -51,10 +51,11 @@ impl Editor {
         text::LIST_HEAD.send(b);
         crlf(b);
         for (line, &op) in eng.prog.uf.iter().enumerate() {
-            if let Some(n) = opcodes::name(op) {
+            // A named command starts with a letter or a dot, never a NUL.
+            if opcodes::name_byte(op, 0) != 0 {
                 num_width(b, line as u32, 3);
                 b.tx(b' ');
-                raw(b, n.as_bytes());
+                term::name(b, op);
                 crlf(b);
             }
         }

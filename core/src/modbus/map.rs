@@ -34,10 +34,13 @@ pub trait Map {
     /// Byte `i` of that text.
     fn id_byte(&self, i: u8) -> u8;
 
-    /// Whether every address of `start .. start + qty` exists in `table` (`qty` ≥ 1, the
-    /// range inside the 16-bit address space). Address by address, unless the map knows
-    /// a shorter way.
+    /// Whether every address of `start .. start + qty` exists in `table` (`qty` ≥ 1); a
+    /// range past address 65535 never does. Address by address, unless the map knows a
+    /// shorter way.
     fn covers(&self, table: Table, start: u16, qty: u16) -> bool {
+        if u32::from(start) + u32::from(qty) > 0x1_0000 {
+            return false;
+        }
         let mut addr = start;
         for _ in 0..qty {
             if !self.contains(table, addr) {

@@ -219,7 +219,7 @@ impl<B: Board> PlcMap<'_, B> {
         } else if addr < IR_READINGS {
             self.eng.count[a & 7]
         } else if addr < IR_TIME_LEFT {
-            self.b.analog_readings()[a & 1]
+            self.b.analog_reading(addr as u8 & 1)
         } else {
             let now = self.b.now_ms();
             let left = self.eng.time_left_ms((addr - IR_TIME_LEFT) as u8, now);
@@ -236,6 +236,8 @@ impl<B: Board> Map for PlcMap<'_, B> {
 
     fn covers(&self, table: Table, start: u16, qty: u16) -> bool {
         // One check for any length: a read of 125 registers is judged between two scans.
+        // A range past address 65535 (at most 2,000 addresses long) starts above 63,535,
+        // where no window lies.
         let first = window(table, start);
         first.is_some() && first == window(table, start.wrapping_add(qty - 1))
     }

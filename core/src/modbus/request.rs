@@ -52,9 +52,20 @@ fn word(pdu: &[u8], at: usize) -> u16 {
     u16::from_be_bytes([hi, lo])
 }
 
-/// `start .. start + qty` stays inside the 16-bit address space.
-fn fits(start: u16, qty: u16) -> bool {
-    u32::from(start) + u32::from(qty) <= 0x1_0000
+/// Value `i` of a write's values: a bit of the packed coils (the first in bit 0), or a
+/// register. A plain function (no closure over the request): its arguments stay in
+/// registers, where a closure's environment took a stack frame in `check`.
+fn value(values: &[u8], coils: bool, i: u16) -> u16 {
+    let i = usize::from(i);
+    if coils {
+        let byte = values.get(i >> 3).copied().unwrap_or(0);
+        u16::from((byte >> (i & 7)) & 1)
+    } else {
+        match values.get(2 * i..2 * i + 2) {
+            Some(&[hi, lo]) => u16::from_be_bytes([hi, lo]),
+            _ => 0,
+        }
+    }
 }
 
 /// Check the PDU (function code first, no address, no CRC) against `map`, do its writes if it
@@ -87,7 +98,7 @@ fn check<M: Map + ?Sized>(function: u8, pdu: &[u8], map: &mut M) -> Result<Answe
             if len != 5 || b == 0 || b > max {
                 return Err(Exception::IllegalDataValue);
             }
-            if !fits(a, b) || !map.covers(table, a, b) {
+            if !map.covers(table, a, b) {
                 return Err(Exception::IllegalDataAddress);
             }
             Ok(Answer::Read {
@@ -127,30 +138,17 @@ fn check<M: Map + ?Sized>(function: u8, pdu: &[u8], map: &mut M) -> Result<Answe
             if b == 0 || b > max || u16::from(count) != bytes || len != 6 + usize::from(count) {
                 return Err(Exception::IllegalDataValue);
             }
-            if !fits(a, b) || !map.covers(table, a, b) {
+            if !map.covers(table, a, b) {
                 return Err(Exception::IllegalDataAddress);
             }
-            // Value i: a bit of the packed coils (first in bit 0), or a register. The length
-            // was checked above: the values are all there.
+            // The length was checked above: the values are all there.
             let values = pdu.get(6..).unwrap_or(&[]);
-            let value = |i: u16| {
-                let i = usize::from(i);
-                if coils {
-                    let byte = values.get(i >> 3).copied().unwrap_or(0);
-                    u16::from((byte >> (i & 7)) & 1)
-                } else {
-                    match values.get(2 * i..2 * i + 2) {
-                        Some(&[hi, lo]) => u16::from_be_bytes([hi, lo]),
-                        _ => 0,
-                    }
-                }
-            };
             // Every value is checked before the first write: an exception changes nothing.
-            if !coils && (0..b).any(|i| !map.accepts(a.wrapping_add(i), value(i))) {
+            if !coils && (0..b).any(|i| !map.accepts(a.wrapping_add(i), value(values, false, i))) {
                 return Err(Exception::IllegalDataValue);
             }
             for i in 0..b {
-                map.write(table, a.wrapping_add(i), value(i));
+                map.write(table, a.wrapping_add(i), value(values, coils, i));
             }
             Ok(Answer::Echo { len: 5 })
         }

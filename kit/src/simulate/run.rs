@@ -93,8 +93,8 @@ impl Board for Clock {
     fn analog_bits(&mut self) -> u8 {
         0
     }
-    fn analog_readings(&mut self) -> [u16; utile_core::analog::CHANNELS] {
-        [0; utile_core::analog::CHANNELS]
+    fn analog_reading(&mut self, _: u8) -> u16 {
+        0
     }
     fn set_points(&mut self, _: [u16; utile_core::analog::CHANNELS]) {}
 }

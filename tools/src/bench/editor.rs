@@ -165,7 +165,7 @@ fn timed_store(chip: &mut Chip) -> StoreTiming {
 pub fn measure_store(elf: &Path) -> Result<(StoreTiming, StoreTiming), String> {
     let prog = example("11.2b-intrusion-alarm.utl")?;
     let mut chip = chip::load(elf)?;
-    chip.set_eeprom(0, &eeprom_with(&prog, 2));
+    chip.set_eeprom(0, &eeprom_with(&prog, 2)?);
     chip.run_until_quiet(40, 5000);
     exchange(&mut chip, b"LOAD\r");
     exchange(&mut chip, b"A1.\r");

@@ -14,9 +14,8 @@ use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-use utile_core::store;
 use utile_kit::listing;
-use utile_kit::sim::SimBoard;
+use utile_kit::sim::stored_eeprom;
 
 use crate::live::{self, args, queue::Job, queue::Origin, state::Input, Running};
 
@@ -60,10 +59,9 @@ fn start_nano(dir: &Path, link: &Path, units: usize) -> Result<Child, String> {
             vnano.display()
         ));
     }
-    let mut b = SimBoard::new();
-    store::store(&program(), &mut b).map_err(|e| format!("{e:?}"))?;
+    let eeprom = stored_eeprom(&program(), 1).map_err(|e| format!("STORE: {e:?}"))?;
     let ee = dir.join("live-bench.eeprom");
-    std::fs::write(&ee, &b.eeprom).map_err(|e| e.to_string())?;
+    std::fs::write(&ee, eeprom).map_err(|e| e.to_string())?;
     let elf = utile_kit::setup::firmware_elf();
     let mut cmd = Command::new(vnano);
     cmd.arg("--elf").arg(&elf).arg("--eeprom").arg(&ee);

@@ -7,7 +7,6 @@ use utile_core::engine::{Program, LINES};
 use utile_core::opcodes::{self, END, NOP};
 use utile_kit::listing;
 use utile_kit::setup;
-use utile_kit::sim::SimBoard;
 use utile_kit::simavr::{Chip, RigPin};
 
 use super::chip;
@@ -82,19 +81,15 @@ pub fn example(name: &str) -> Result<Program, String> {
     listing::parse(name, &text).map_err(|e| e.to_string())
 }
 
-/// The EEPROM contents after STORE of `prog` into an erased EEPROM (by the core itself).
-pub fn eeprom_with(prog: &Program, stores: usize) -> Vec<u8> {
-    let mut board = SimBoard::new();
-    for _ in 0..stores {
-        let _ = utile_core::store::store(prog, &mut board);
-    }
-    board.eeprom.clone()
+/// [`utile_kit::sim::stored_eeprom`] with the bench's error text.
+pub fn eeprom_with(prog: &Program, stores: usize) -> Result<Vec<u8>, String> {
+    utile_kit::sim::stored_eeprom(prog, stores).map_err(|e| format!("STORE: {e:?}"))
 }
 
 /// A chip with `prog` stored in EEPROM and D8 grounded: it autostarts at power-up.
 pub fn autostarting(elf: &Path, prog: &Program) -> Result<Chip, String> {
     let mut chip = chip::load(elf)?;
-    chip.set_eeprom(0, &eeprom_with(prog, 1));
+    chip.set_eeprom(0, &eeprom_with(prog, 1)?);
     chip.hold_low(RigPin::D8, true);
     Ok(chip)
 }

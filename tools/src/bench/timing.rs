@@ -174,7 +174,7 @@ pub fn measure_autostart_boot(
     port_open: bool,
 ) -> Result<BootStart, String> {
     let mut chip = chip::load(elf)?;
-    chip.set_eeprom(0, &eeprom_with(&program(&["SET", ".Y0", "END"]), 1));
+    chip.set_eeprom(0, &eeprom_with(&program(&["SET", ".Y0", "END"]), 1)?);
     boot.load_into(&mut chip).map_err(|e| e.to_string())?;
     chip.hold_low(RigPin::D8, true);
     let start = boot.section().start();

@@ -96,8 +96,8 @@ impl Board for SnapshotBoard<'_> {
     fn analog_bits(&mut self) -> u8 {
         self.snap.thresholds << 6
     }
-    fn analog_readings(&mut self) -> [u16; 2] {
-        self.snap.readings
+    fn analog_reading(&mut self, channel: u8) -> u16 {
+        self.snap.readings[usize::from(channel & 1)]
     }
     fn set_points(&mut self, _sp: [u16; 2]) {}
 }

@@ -9,9 +9,9 @@ use std::io::Write;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use utile_core::store::{self, ADDR_CELL};
+use utile_core::store::ADDR_CELL;
 use utile_kit::listing;
-use utile_kit::sim::SimBoard;
+use utile_kit::sim::stored_eeprom;
 use utile_kit::simavr::{Bus, Chip, RigPin, F_CPU};
 
 use super::args::Options;
@@ -29,10 +29,8 @@ fn eeprom(o: &Options, i: usize) -> Result<Vec<u8>, String> {
     let mut ee = match &o.eeprom {
         Some(f) => std::fs::read(f).map_err(|e| format!("--eeprom {}: {e}", f.display()))?,
         None => {
-            let mut b = SimBoard::new();
             let prog = listing::commands(&["PU.", ".PY", "KEY", "END"]);
-            store::store(&prog, &mut b).map_err(|e| format!("default program: {e:?}"))?;
-            b.eeprom
+            stored_eeprom(&prog, 1).map_err(|e| format!("default program: {e:?}"))?
         }
     };
     ee.resize(1024, 0xFF);

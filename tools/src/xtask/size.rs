@@ -144,7 +144,7 @@ fn file_room(file: &str, root: &str) -> Option<String> {
             _ if r.starts_with("engine/commands") => "engine::commands".into(),
             _ if r.starts_with("engine/") => "engine".into(),
             "editor/mod.rs" => "editor".into(),
-            "opcodes.rs" => "opcodes (names, lookup)".into(),
+            _ if r.starts_with("opcodes/") => "opcodes (names, lookup)".into(),
             "image.rs" | "ihex.rs" | "store.rs" => format!("storage::{}", stem(r)),
             _ => stem(r),
         }

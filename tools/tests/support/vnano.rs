@@ -18,10 +18,9 @@ pub use utile_kit::setup::built_firmware_elf as firmware_elf;
 
 /// An EEPROM file holding `prog` as STORE leaves it, in the scratch directory `name`.
 pub fn eeprom_file(name: &str, prog: &utile_core::engine::Program) -> PathBuf {
-    let mut b = utile_kit::sim::SimBoard::new();
-    utile_core::store::store(prog, &mut b).expect("STORE");
+    let eeprom = utile_kit::sim::stored_eeprom(prog, 1).expect("STORE");
     let path = scratch(name).join("eeprom.bin");
-    std::fs::write(&path, &b.eeprom).expect("write EEPROM file");
+    std::fs::write(&path, eeprom).expect("write EEPROM file");
     path
 }
 

@@ -17,9 +17,8 @@
 //! Every other byte is unassigned: it is shown as `.....` and runs as NOP.
 //!
 //! The opcode numbers are the stored-image format and the names are the manual's words;
-//! numbering, spelling and lookup stay together so that a new command is added in one place.
-
-use crate::hex;
+//! numbering, spelling and lookup stay together in this module (the spelling in flash and
+//! the lookup in `spell.rs`) so that a new command is added in one place.
 
 /// No operation.
 pub const NOP: u8 = 0x00;
@@ -300,129 +299,6 @@ pub const FAMILIES: [Family; 20] = [
 /// Longest command name (`CLKA.`, `.TK0`): 5 characters.
 pub const MAX_NAME: usize = 5;
 
-/// Bytes of one family record in flash: base, count, prefix (3, NUL-padded), suffix (or NUL),
-/// first number.
-const FAM_REC: usize = 7;
-
-/// The single names as NUL-padded 5-byte slots, built at compile time.
-const fn single_slots() -> [[u8; MAX_NAME]; SINGLES.len()] {
-    let mut out = [[0u8; MAX_NAME]; SINGLES.len()];
-    let mut i = 0;
-    while i < SINGLES.len() {
-        let name = SINGLES[i].as_bytes();
-        let mut j = 0;
-        while j < name.len() {
-            out[i][j] = name[j];
-            j += 1;
-        }
-        i += 1;
-    }
-    out
-}
-
-/// The family table as records, built at compile time.
-const fn family_records() -> [[u8; FAM_REC]; FAMILIES.len()] {
-    let mut out = [[0u8; FAM_REC]; FAMILIES.len()];
-    let mut i = 0;
-    while i < FAMILIES.len() {
-        let f = &FAMILIES[i];
-        out[i][0] = f.base;
-        out[i][1] = f.count;
-        let p = f.prefix.as_bytes();
-        let mut j = 0;
-        while j < p.len() {
-            out[i][2 + j] = p[j];
-            j += 1;
-        }
-        let s = f.suffix.as_bytes();
-        if !s.is_empty() {
-            out[i][5] = s[0];
-        }
-        out[i][6] = f.first;
-        i += 1;
-    }
-    out
-}
-
-// The name tables are read a record at a time from flash: as RAM statics they would cost
-// about 400 of the chip's 2048 bytes. Records (not flat bytes) so that every read is one
-// bounds check the compiler can prove (no panic path in the image).
-avr_progmem::progmem! {
-    static progmem SINGLE_NAMES: [[u8; MAX_NAME]; SINGLES.len()] = single_slots();
-    static progmem FAMILY_RECORDS: [[u8; FAM_REC]; FAMILIES.len()] = family_records();
-}
-
-/// A NUL-padded name slot without its padding.
-fn unpad(slot: &[u8]) -> &[u8] {
-    let len = slot.iter().position(|&c| c == 0).unwrap_or(slot.len());
-    slot.get(..len).unwrap_or(&[])
-}
-
-/// One family as read from flash.
-#[derive(Clone, Copy)]
-struct FamRec([u8; FAM_REC]);
-
-impl FamRec {
-    /// Every family record, read from flash one at a time.
-    fn all() -> impl Iterator<Item = Self> {
-        FAMILY_RECORDS.wrapper_iter().map(|w| Self(w.load()))
-    }
-    fn base(&self) -> u8 {
-        self.0[0]
-    }
-    fn count(&self) -> u8 {
-        self.0[1]
-    }
-    fn prefix(&self) -> &[u8] {
-        unpad(&self.0[2..5])
-    }
-    fn suffix(&self) -> &[u8] {
-        let s = &self.0[5..6];
-        if s.first() == Some(&0) {
-            &[]
-        } else {
-            s
-        }
-    }
-    fn first(&self) -> u8 {
-        self.0[6]
-    }
-    fn holds(&self, op: u8) -> bool {
-        op >= self.base() && op - self.base() < self.count()
-    }
-}
-
-/// The family holding `op`, with the command's number.
-fn find_family(op: u8) -> Option<(FamRec, u8)> {
-    FamRec::all().find_map(|f| f.holds(op).then(|| (f, op - f.base() + f.first())))
-}
-
-/// A command name, spelled into a small fixed buffer (no heap, no RAM tables).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Name {
-    buf: [u8; MAX_NAME],
-    len: u8,
-}
-
-impl Name {
-    fn push(&mut self, b: u8) {
-        if let Some(slot) = self.buf.get_mut(usize::from(self.len)) {
-            *slot = b;
-            self.len += 1;
-        }
-    }
-
-    /// The name's bytes (upper-case ASCII).
-    pub fn as_bytes(&self) -> &[u8] {
-        self.buf.get(..usize::from(self.len)).unwrap_or(&[])
-    }
-
-    /// The name as text.
-    pub fn as_str(&self) -> &str {
-        core::str::from_utf8(self.as_bytes()).unwrap_or("")
-    }
-}
-
 /// The family an opcode belongs to, with its number (documentation and tools).
 pub fn family_of(op: u8) -> Option<(&'static Family, u8)> {
     FAMILIES
@@ -431,69 +307,8 @@ pub fn family_of(op: u8) -> Option<(&'static Family, u8)> {
         .map(|f| (f, op - f.base + f.first))
 }
 
-/// The command name of an opcode, or `None` for a blank or unassigned byte (shown `.....`).
-pub fn name(op: u8) -> Option<Name> {
-    let i = usize::from(op);
-    // The spelling as five bytes whose NULs are left out: a single's padded slot, or a
-    // family's padded prefix, the digit and the suffix (NUL when there is none).
-    let spelled: [u8; MAX_NAME] = if i < SINGLE_NAMES.len() {
-        SINGLE_NAMES.at(i).load()
-    } else {
-        let (f, num) = find_family(op)?;
-        [f.0[2], f.0[3], f.0[4], hex::digit(num), f.0[5]]
-    };
-    let mut n = Name {
-        buf: [0; MAX_NAME],
-        len: 0,
-    };
-    for c in spelled {
-        if c != 0 {
-            n.push(c);
-        }
-    }
-    Some(n)
-}
-
-/// True if the byte is an assigned opcode (not blank, not reserved).
-pub fn is_valid(op: u8) -> bool {
-    usize::from(op) < SINGLES.len() || find_family(op).is_some()
-}
-
-/// Case-insensitive equality of a typed word and a name spelled in upper case (the names'
-/// digits and dots have no case, so upper-casing the word alone is enough).
-fn eq_fold(word: &[u8], name: &[u8]) -> bool {
-    word.len() == name.len()
-        && word
-            .iter()
-            .zip(name)
-            .all(|(w, n)| w.to_ascii_uppercase() == *n)
-}
-
-/// The opcode of an executable command name (any case), or `None`.
-pub fn lookup(word: &[u8]) -> Option<u8> {
-    if word.len() > MAX_NAME {
-        return None;
-    }
-    if let Some(op) = SINGLE_NAMES
-        .wrapper_iter()
-        .position(|w| eq_fold(word, unpad(&w.load())))
-    {
-        return Some(op as u8);
-    }
-    FamRec::all().find_map(|f| {
-        let (p, s) = (f.prefix(), f.suffix());
-        if word.len() != p.len() + 1 + s.len() {
-            return None;
-        }
-        let (head, rest) = word.split_at(p.len());
-        let (digit, tail) = rest.split_at(1);
-        if !eq_fold(head, p) || !eq_fold(tail, s) {
-            return None;
-        }
-        let n = hex::value(*digit.first()?)?.checked_sub(f.first())?;
-        (n < f.count()).then_some(f.base() + n)
-    })
-}
+mod spell;
+pub use spell::{is_valid, lookup, name, name_byte, Name};
 
 #[cfg(test)]
 mod tests {
