@@ -94,14 +94,19 @@ class Page:
         moves with every one), so what it shows was read after this call."""
         for _ in range(pictures):
             before = self.value(unit, "scans")
-            try:
-                self.page.wait_for_function(
-                    "([s, b]) => { const e = document.querySelector(s); return e && e.dataset.value !== b; }",
-                    arg=[self.sel(unit, "scans"), before],
-                    timeout=timeout,
-                )
-            except Exception:
-                fail(f"uTile {unit}: no new picture after {timeout} ms (scans {before!r})")
+            self.newer_than(unit, before, timeout, f"no new picture after {timeout} ms")
+
+    def newer_than(self, unit, scans, timeout, why):
+        """Waits until the card of `unit` shows a scan count other than `scans` (a newer
+        picture); fails with `why` otherwise."""
+        try:
+            self.page.wait_for_function(
+                "([s, b]) => { const e = document.querySelector(s); return e && e.dataset.value !== String(b); }",
+                arg=[self.sel(unit, "scans"), scans],
+                timeout=timeout,
+            )
+        except Exception:
+            fail(f"uTile {unit}: {why} (scans {scans!r})")
 
     def wait_text(self, selector, text, timeout=T):
         try:
@@ -186,14 +191,7 @@ def gateway(p, tcp, unit):
     c.close()
     # The page kept refreshing all along: a picture newer than the one before the gateway's
     # requests (waited for, not slept on).
-    try:
-        p.page.wait_for_function(
-            "([s, b]) => { const e = document.querySelector(s); return e && Number(e.dataset.value) !== b; }",
-            arg=[p.sel(unit, "scans"), scans],
-            timeout=T,
-        )
-    except Exception:
-        fail("the page stopped refreshing while the gateway was used")
+    p.newer_than(unit, scans, T, "the page stopped refreshing while the gateway was used")
 
 
 def single(p, a):

@@ -5,20 +5,10 @@
 // a trend. Every value carries data-unit, data-signal (the listing's name) and data-value
 // (the number it shows, 0/1 for bits); what a user must do is said in words.
 
+import { el } from "/dom.js";
 import { Trend } from "/trend.js";
 
 const HEX = "0123456789ABCDEF";
-
-function el(tag, attrs = {}, ...children) {
-  const e = document.createElement(tag);
-  for (const [k, v] of Object.entries(attrs)) {
-    if (k === "class") e.className = v;
-    else if (k === "text") e.textContent = v;
-    else e.setAttribute(k, v);
-  }
-  e.append(...children);
-  return e;
-}
 
 const range = (n, f) => Array.from({ length: n }, (_, i) => f(i));
 

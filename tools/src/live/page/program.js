@@ -3,16 +3,7 @@
 // that pops (`.Y0` …) the bit it took (shown with an arrow); `?` where the picture cannot
 // tell (edges, toggles, clocks). With --program FILE, whether that listing is the one that runs.
 
-function el(tag, attrs = {}, ...children) {
-  const e = document.createElement(tag);
-  for (const [k, v] of Object.entries(attrs)) {
-    if (k === "class") e.className = v;
-    else if (k === "text") e.textContent = v;
-    else e.setAttribute(k, v);
-  }
-  e.append(...children);
-  return e;
-}
+import { el } from "/dom.js";
 
 export class ProgramView {
   constructor(addr) {
