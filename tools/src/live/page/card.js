@@ -215,7 +215,11 @@ export class Card {
     this.reqEl = add("requests", "requests sent to this uTile");
     this.toEl = add("time-outs", "requests with no whole reply in time");
     this.crcEl = add("CRC errors", "replies with a wrong CRC");
-    add("frames the uTile dropped", "Modbus frames the uTile dropped (CRC, length, gap)", "dropped");
+    // On a bus every uTile also sets aside the frames for the others and their replies
+    // (SPEC §13's count), so the figure grows with the others' traffic: the label says so.
+    add("frames set aside (damaged or for another uTile)",
+      "Modbus frames the uTile dropped: a wrong CRC, length or gap, or another address; on a bus it grows with the other uTiles' traffic",
+      "dropped");
     return box;
   }
 
