@@ -6,7 +6,8 @@
 //! |---|---|
 //! | `args.rs` | the command line |
 //! | `port.rs` | opening the port, an adapter's latency timer |
-//! | `line.rs` | the line's owner: open/reopen, the boot wait, EDIT or RUN, one transaction at a time |
+//! | `line/` | the line's owner: open/reopen, the boot wait, EDIT or RUN, one transaction at a time |
+//! | `line_use.rs` | line time over a sliding window (the line's busy figure, a uTile's share) |
 //! | `rtu.rs` | the RTU master's side of a transaction: reply lengths, finding a reply, timing |
 //! | `queue.rs` | the queue in front of the line: writes first, reads and polls in turn |
 //! | `screen.rs` | EDIT or RUN, told from the terminal's output |
@@ -24,6 +25,7 @@ pub mod assets;
 pub mod gateway;
 pub mod http;
 pub mod line;
+pub mod line_use;
 pub mod port;
 pub mod queue;
 pub mod rtu;

@@ -9,6 +9,7 @@ use utile_core::engine::LINES;
 use utile_core::modbus::snapshot::{self, Snapshot, PROGRAM, PROGRAM_LEN, SNAPSHOT, SNAPSHOT_LEN};
 use utile_kit::modbus::registers;
 
+use super::line_use::LineUse;
 use super::signals::{Holdings, HOLDINGS};
 
 /// Misses in a row after which a uTile is shown offline.
@@ -106,7 +107,7 @@ pub struct Unit {
     /// When snapshots came (for refreshes per second).
     refreshes: VecDeque<Instant>,
     /// Line time used, by when.
-    line_use: VecDeque<(Instant, Duration)>,
+    line_use: LineUse,
     /// Scans per second, from two snapshots.
     pub scans_per_s: f64,
     /// Trend points (time, A6, A7, C0..C7).
@@ -135,7 +136,7 @@ impl Unit {
             legacy_regs: [0; SNAPSHOT_LEN as usize],
             link: Link::default(),
             refreshes: VecDeque::new(),
-            line_use: VecDeque::new(),
+            line_use: LineUse::new(WINDOW),
             scans_per_s: 0.0,
             trend: VecDeque::new(),
             reason: None,
@@ -183,16 +184,7 @@ impl Unit {
 
     /// Counts a transaction's line time.
     pub fn used_line(&mut self, now: Instant, time: Duration) {
-        self.line_use.push_back((now, time));
-        while self
-            .line_use
-            .front()
-            .is_some_and(|(t, _)| now.duration_since(*t) > WINDOW)
-        {
-            self.line_use.pop_front();
-        }
-        let used: Duration = self.line_use.iter().map(|(_, d)| *d).sum();
-        self.link.share = used.as_secs_f64() / WINDOW.as_secs_f64();
+        self.link.share = self.line_use.add(now, time);
     }
 
     /// Refreshes per second over the last two seconds.

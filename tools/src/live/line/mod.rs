@@ -13,7 +13,6 @@ mod serve;
 mod wire;
 
 use std::collections::HashMap;
-use std::collections::VecDeque;
 use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
@@ -21,6 +20,7 @@ use std::time::{Duration, Instant};
 use serialport::TTYPort;
 use tokio::sync::mpsc;
 
+use super::line_use::LineUse;
 use super::queue::{Failure, Next, Queue};
 use super::rtu;
 use super::screen::{Mode, Screen};
@@ -92,7 +92,7 @@ struct Line {
     /// Addresses that missed lately (gateway requests to them answered at once).
     dead: HashMap<u8, Instant>,
     /// Line time used, by when.
-    busy: VecDeque<(Instant, Duration)>,
+    busy: LineUse,
     /// How late a reply may be (beyond its time on the line) before it is missing: learnt
     /// from the replies (a USB adapter's latency, a simulated Nano slower than the clock).
     slack: Duration,
@@ -129,7 +129,7 @@ pub fn spawn(
                 screen: Screen::new(),
                 quiet: now,
                 dead: HashMap::new(),
-                busy: VecDeque::new(),
+                busy: LineUse::new(BUSY_WINDOW),
                 slack: rtu::ANSWER_SLACK,
                 late: Duration::ZERO,
                 answered: None,

@@ -36,7 +36,7 @@ impl Line {
         let result = self.transact(addr, &pdu, self.slack);
         let now = Instant::now();
         let mut live = self.shared.lock();
-        let busy = self.busy.back().map(|(_, d)| *d).unwrap_or_default();
+        let busy = self.busy.last();
         if let Some(u) = live.unit_mut(addr) {
             u.used_line(now, busy);
             match result {

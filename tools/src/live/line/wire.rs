@@ -8,7 +8,7 @@ use serialport::SerialPort;
 use utile_kit::modbus;
 
 use super::super::rtu::{self, Scan};
-use super::{Line, Miss, BUSY_WINDOW, INTER_BYTE, SLACK_MAX};
+use super::{Line, Miss, INTER_BYTE, SLACK_MAX};
 
 impl Line {
     /// Reads whatever comes within `wait`: the editor's screen.
@@ -74,19 +74,10 @@ impl Line {
 
     /// Counts line time for the busy figure.
     pub(super) fn used(&mut self, bytes: usize) -> Duration {
-        let now = Instant::now();
         let t = rtu::line_time(bytes);
-        self.busy.push_back((now, t));
-        while self
-            .busy
-            .front()
-            .is_some_and(|(at, _)| now.duration_since(*at) > BUSY_WINDOW)
-        {
-            self.busy.pop_front();
-        }
-        let sum: Duration = self.busy.iter().map(|(_, d)| *d).sum();
+        let busy = self.busy.add(Instant::now(), t);
         let mut live = self.shared.lock();
-        live.busy = (sum.as_secs_f64() / BUSY_WINDOW.as_secs_f64()).min(1.0);
+        live.busy = busy;
         live.line_bytes += bytes as u64;
         t
     }
