@@ -44,7 +44,7 @@ pub mod uart;
 
 pub use bus::{Bus, BusByte, Collision};
 pub use chip::{BootSection, Chip, CpuState, Reset};
-pub use flash::{ArduinoBoot, FlashImage};
+pub use flash::{ArduinoBoot, FlashImage, HexLineError};
 pub use pins::RigPin;
 pub use uart::RxPacing;
 

@@ -1,19 +1,57 @@
-//! The command line of `utile live`.
+//! The command line of `utile live` (clap): [`LiveArgs`] as typed, then [`Options`], what
+//! the rest of `live` consumes.
 
 use std::net::SocketAddr;
 use std::time::Duration;
 
-/// The usage text.
-pub const USAGE: &str = "\
-  utile live --port PATH [--units 1,2,3 | --scan] [--http ADDR:PORT] [--tcp ADDR:PORT]
-             [--no-tcp] [--read-only] [--program PROG.utl] [--wait SECS]
-                                       every uTile on the line live in the browser, the
-                                       terminal beside it, a Modbus TCP gateway
-    --units  the slave addresses on the line (default 1); --scan looks for them
-    --http   where the page is served (default 127.0.0.1:8080)
-    --tcp    the Modbus TCP gateway (default 127.0.0.1:1502; unit id = slave address)
-    --read-only  refuse every write (page, terminal keys and TCP)
-    --program    check that the listing is the program that runs (its fingerprint)";
+use clap::Parser;
+
+use crate::cli::{socket_address, BootWait};
+
+/// The examples under `utile live --help`.
+const EXAMPLES: &str = "\
+Examples:
+  utile live --port /dev/ttyUSB0                   uTile 1 on the page at http://127.0.0.1:8080/
+  utile live --port /dev/ttyUSB0 --units 1,2,3     three uTiles on one RS-485 line
+  utile live --port /dev/ttyUSB0 --scan            look for every uTile on the line
+  utile live --port /tmp/utile-tty --http 8081 --program examples/tank-fill.utl
+  utile live --port /dev/ttyUSB0 --http 0.0.0.0:8080 --read-only --no-tcp";
+
+/// `utile live`: every uTile on the line live in the browser, the terminal beside it, a
+/// Modbus TCP gateway.
+#[derive(clap::Args, Clone, Debug, PartialEq)]
+#[command(after_help = EXAMPLES)]
+pub struct LiveArgs {
+    /// The serial port (e.g. /dev/ttyUSB0)
+    #[arg(long, value_name = "PATH")]
+    pub port: String,
+    /// The slave addresses on the line, 1..247 (default 1)
+    #[arg(long, value_name = "1,2,3", value_delimiter = ',', num_args = 1,
+          value_parser = clap::value_parser!(u8).range(1..=247), conflicts_with = "scan")]
+    pub units: Vec<u8>,
+    /// Look for the uTiles on the line
+    #[arg(long)]
+    pub scan: bool,
+    /// Where the page is served: ADDR:PORT, or a port on 127.0.0.1
+    #[arg(long, value_name = "ADDR:PORT", default_value = "127.0.0.1:8080", value_parser = socket_address)]
+    pub http: SocketAddr,
+    /// The Modbus TCP gateway (unit id = slave address): ADDR:PORT, or a port on 127.0.0.1
+    #[arg(long, value_name = "ADDR:PORT", default_value = "127.0.0.1:1502",
+          value_parser = socket_address, conflicts_with = "no_tcp")]
+    pub tcp: SocketAddr,
+    /// No Modbus TCP gateway
+    #[arg(long)]
+    pub no_tcp: bool,
+    /// Refuse every write (page, terminal keys and TCP)
+    #[arg(long)]
+    pub read_only: bool,
+    /// Check that this listing is the program that runs (its fingerprint)
+    #[arg(long, value_name = "PROG.utl")]
+    pub program: Option<String>,
+    /// `--wait SECS`.
+    #[command(flatten)]
+    pub wait: BootWait,
+}
 
 /// Options of one run.
 #[derive(Clone, Debug, PartialEq)]
@@ -36,83 +74,43 @@ pub struct Options {
     pub boot_wait: Duration,
 }
 
-/// `ADDR:PORT`, or a bare port on 127.0.0.1.
-fn address(flag: &str, v: &str) -> Result<SocketAddr, String> {
-    if let Ok(port) = v.parse::<u16>() {
-        return Ok(SocketAddr::from(([127, 0, 0, 1], port)));
+impl From<LiveArgs> for Options {
+    fn from(a: LiveArgs) -> Options {
+        let mut units = Vec::new();
+        for u in a.units {
+            if !units.contains(&u) {
+                units.push(u);
+            }
+        }
+        if !a.scan && units.is_empty() {
+            units.push(1);
+        }
+        Options {
+            port: a.port,
+            units,
+            scan: a.scan,
+            http: a.http,
+            tcp: (!a.no_tcp).then_some(a.tcp),
+            read_only: a.read_only,
+            program: a.program,
+            boot_wait: a.wait.boot_wait,
+        }
     }
-    v.parse()
-        .map_err(|_| format!("{flag} takes ADDR:PORT (e.g. 127.0.0.1:8080), not '{v}'"))
+}
+
+/// `utile live`'s words alone, as a command of their own (the benchmarks start `live` so).
+#[derive(Parser)]
+#[command(name = "utile live")]
+struct Alone {
+    #[command(flatten)]
+    args: LiveArgs,
 }
 
 /// Parses the words after `live`.
-pub fn parse(words: &[String]) -> Result<Options, String> {
-    let mut o = Options {
-        port: String::new(),
-        units: Vec::new(),
-        scan: false,
-        http: SocketAddr::from(([127, 0, 0, 1], 8080)),
-        tcp: Some(SocketAddr::from(([127, 0, 0, 1], 1502))),
-        read_only: false,
-        program: None,
-        boot_wait: Duration::from_millis(2500),
-    };
-    let mut it = words.iter();
-    while let Some(w) = it.next() {
-        let mut value = || {
-            it.next()
-                .cloned()
-                .ok_or_else(|| format!("option '{w}' needs a value"))
-        };
-        match w.as_str() {
-            "--port" => o.port = value()?,
-            "--units" => {
-                let list = value()?;
-                for a in list.split(',') {
-                    let n: u8 = a
-                        .trim()
-                        .parse()
-                        .ok()
-                        .filter(|n| (1..=247).contains(n))
-                        .ok_or_else(|| {
-                            format!("--units takes slave addresses 1..247, not '{a}'")
-                        })?;
-                    if !o.units.contains(&n) {
-                        o.units.push(n);
-                    }
-                }
-            }
-            "--scan" => o.scan = true,
-            "--http" => o.http = address(w, &value()?)?,
-            "--tcp" => o.tcp = Some(address(w, &value()?)?),
-            "--no-tcp" => o.tcp = None,
-            "--read-only" => o.read_only = true,
-            "--program" => o.program = Some(value()?),
-            "--wait" => {
-                let v = value()?;
-                let secs: f64 = v
-                    .trim_end_matches('s')
-                    .parse()
-                    .ok()
-                    .filter(|s: &f64| (0.0..=60.0).contains(s))
-                    .ok_or_else(|| format!("--wait takes seconds (0..60), not '{v}'"))?;
-                o.boot_wait = Duration::from_secs_f64(secs);
-            }
-            other => return Err(format!("unknown option '{other}'\nusage:\n{USAGE}")),
-        }
-    }
-    if o.port.is_empty() {
-        return Err(format!(
-            "--port PATH is needed (e.g. /dev/ttyUSB0)\nusage:\n{USAGE}"
-        ));
-    }
-    if o.scan && !o.units.is_empty() {
-        return Err("--units and --scan exclude each other".into());
-    }
-    if !o.scan && o.units.is_empty() {
-        o.units.push(1);
-    }
-    Ok(o)
+pub fn parse(words: &[String]) -> Result<Options, clap::Error> {
+    let alone =
+        Alone::try_parse_from(std::iter::once("live").chain(words.iter().map(String::as_str)))?;
+    Ok(alone.args.into())
 }
 
 /// The warning for an address other than loopback, or `None`.
@@ -150,11 +148,33 @@ mod tests {
 
     #[test]
     fn mistakes_are_refused() {
-        assert!(parse(&words("--units 1")).unwrap_err().contains("--port"));
+        let e = parse(&words("--units 1")).unwrap_err();
+        assert_eq!(e.kind(), clap::error::ErrorKind::MissingRequiredArgument);
+        assert!(e.to_string().contains("--port"), "{e}");
         assert!(parse(&words("--port p --units 0")).is_err());
         assert!(parse(&words("--port p --units 248")).is_err());
         assert!(parse(&words("--port p --scan --units 2")).is_err());
         assert!(parse(&words("--port p --http nowhere")).is_err());
         assert!(parse(&words("--port p --bogus")).is_err());
+        let e = parse(&words("--port p --port q")).unwrap_err();
+        assert_eq!(e.kind(), clap::error::ErrorKind::ArgumentConflict, "{e}");
+        let e = parse(&words("--port p --scan --scan")).unwrap_err();
+        assert_eq!(e.kind(), clap::error::ErrorKind::ArgumentConflict, "{e}");
+        assert!(parse(&words("--port p --tcp 1 --no-tcp")).is_err());
+    }
+
+    #[test]
+    fn units_and_wait() {
+        let o = parse(&words(
+            "--port p --units 3,1,3 --wait 1s --no-tcp --read-only",
+        ))
+        .unwrap();
+        assert_eq!(o.units, [3, 1]);
+        assert_eq!(o.boot_wait, Duration::from_secs(1));
+        assert_eq!(o.tcp, None);
+        assert!(o.read_only);
+        let o = parse(&words("--port p --scan")).unwrap();
+        assert!(o.scan && o.units.is_empty());
+        assert!(parse(&words("--port p --wait 61")).is_err());
     }
 }

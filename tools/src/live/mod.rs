@@ -164,8 +164,7 @@ pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Ru
 }
 
 /// `utile live ...`: runs until Ctrl-C or SIGTERM.
-pub fn main(words: &[String]) -> Result<(), String> {
-    let opts = args::parse(words)?;
+pub fn main(opts: &args::Options) -> Result<(), String> {
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
@@ -173,7 +172,7 @@ pub fn main(words: &[String]) -> Result<(), String> {
         .map_err(|e| format!("cannot start the runtime: {e}"))?;
     rt.block_on(async {
         let mut say = |line: &str| eprintln!("utile live: {line}");
-        let mut running = start(&opts, &mut say).await?;
+        let mut running = start(opts, &mut say).await?;
         let mut term = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate())
             .map_err(|e| e.to_string())?;
         tokio::select! {
