@@ -69,11 +69,8 @@ fn every_help_exits_0_with_usage_and_examples() {
             );
             assert!(help.contains("Usage: "), "{bin} {args:?}: {help}");
             assert!(help.contains(own), "{bin} {args:?} lacks {own}: {help}");
-            // Every leaf command shows examples (the long help; -h keeps them too).
-            let leaf = !(bin == XTASK && words.is_empty());
-            if leaf {
-                assert!(help.contains("Example"), "{bin} {args:?}: {help}");
-            }
+            // Examples too (after_help: -h shows them as --help does).
+            assert!(help.contains("Example"), "{bin} {args:?}: {help}");
         }
     }
     // `utile help live` is `utile live --help`.

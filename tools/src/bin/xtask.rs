@@ -29,7 +29,11 @@ use utile_tools::{cli, elf};
 
 /// Build tasks (`cargo fw` runs `xtask fw`).
 #[derive(Parser)]
-#[command(name = "xtask", bin_name = "cargo")]
+#[command(
+    name = "xtask",
+    bin_name = "cargo",
+    after_help = "Examples:\n  cargo fw                   the firmware in out/, its size\n  cargo fw --help            every option of fw"
+)]
 struct Xtask {
     #[command(subcommand)]
     task: Task,
