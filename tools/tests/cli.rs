@@ -259,3 +259,23 @@ fn a_failure_that_is_no_usage_error_exits_1_naming_the_file() {
         "{err}"
     );
 }
+
+#[test]
+fn a_failure_keeps_its_causes_in_the_message() {
+    // The kit's typed error and its source, printed as one chain by vnano's main.
+    let bad = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli-bad-image.hex");
+    std::fs::write(&bad, ":0100000055AA\nnot a record\n:00000001FF\n").unwrap();
+    let out = run(
+        VNANO,
+        &["--fast", "--for", "0.1", "--elf", bad.to_str().unwrap()],
+    );
+    assert_eq!(out.status.code(), Some(1));
+    let err = text(&out.stderr);
+    assert!(
+        err.contains(&format!(
+            "vnano: flash image {}: line 2: no ':'",
+            bad.display()
+        )),
+        "{err}"
+    );
+}

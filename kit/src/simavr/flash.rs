@@ -28,7 +28,7 @@ impl FlashImage {
     pub fn read_hex(path: &Path) -> Result<FlashImage, LoadError> {
         let shown = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|_| LoadError::Missing(shown.clone()))?;
-        FlashImage::parse_hex(&text).map_err(|why| LoadError::BadHex(format!("{shown}: {why}")))
+        FlashImage::parse_hex(&text).map_err(|error| LoadError::HexFile { file: shown, error })
     }
 
     /// Parses Intel HEX text; the error names the bad line.
