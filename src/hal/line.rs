@@ -1,6 +1,9 @@
 //! The serial line as a Modbus RTU slave's in RUN mode (SPEC §13): its timing and the driver
-//! enable. Received bytes go to the core's [`Slave`], stamped with Timer1 to find gaps inside
-//! a frame; Timer1's compare B marks the 3.5-character silence that ends a frame and wants
+//! enable. Received bytes go to the core's [`Slave`], stamped with Timer1 at their
+//! receive-complete interrupt to find gaps inside a frame: a silence of more than 1.5
+//! characters from one stop bit to the next start bit (t1.5), that is more than the later
+//! character and t1.5 between two stamps ([`PAUSE_TICKS`], from the core's rule in
+//! `modbus/frame.rs`); Timer1's compare B marks the 3.5-character silence that ends a frame and wants
 //! the main loop at the next END (`want.rs`); a reply raises the driver enable D10, wants the
 //! main loop again after each byte while it is being made, and the transmit-complete
 //! interrupt lowers D10 after the last stop bit. The main loop (`src/modbus.rs`) reaches the
@@ -13,13 +16,9 @@ use utile_core::modbus::plc::PlcMap;
 use utile_core::modbus::slave::{Event, Slave};
 
 use super::regs::{bit, regs, wr};
+use super::clock::{PAUSE_TICKS, SILENCE_TICKS};
 use super::{pins, serial, want, IsrCell, Nano};
 
-/// Timer1 counts (0.5 µs) of more than 1.5 characters at 19200 8N1 (a character is 10 bits,
-/// 520.8 µs): a silence this long inside a frame breaks it.
-const GAP_TICKS: u16 = 1563;
-/// Timer1 counts of 3.5 characters (1.823 ms): the silence that ends a frame.
-const SILENCE_TICKS: u16 = 3646;
 
 /// The Modbus side of the line.
 struct Line {
@@ -59,7 +58,7 @@ pub(crate) fn on_byte(cs: CriticalSection, byte: u8) -> bool {
     // SAFETY: the closure does not re-enter LINE.
     unsafe {
         LINE.with(cs, |l| {
-            l.slave.push(byte, now.wrapping_sub(l.last) > GAP_TICKS);
+            l.slave.push(byte, now.wrapping_sub(l.last) > PAUSE_TICKS);
             l.last = now;
         })
     };
@@ -131,6 +130,8 @@ pub(crate) fn serve(on: bool) {
 
 /// The main loop is back between two scans: whether a frame's closing silence has passed
 /// (reported once). A wish of the line from now on wants the main loop at the next END.
+/// A silence timed while a reply is being made closes no frame (the slave ignored the bytes
+/// before it): the reply's snapshot and the request it echoes stay as they are.
 pub(crate) fn take_frame_end() -> bool {
     interrupt::free(|cs| {
         want::taken(cs);

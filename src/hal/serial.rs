@@ -11,7 +11,7 @@ use avr_device::interrupt::{self, CriticalSection};
 
 use super::regs::{bit, regs, wr};
 use super::ring::Ring;
-use super::{line, IsrCell};
+use super::{clock, line, IsrCell};
 
 /// Receive ring size.
 pub const RX_SIZE: usize = 64;
@@ -47,13 +47,13 @@ static TXCIE: IsrCell<u8> = IsrCell::new(0);
 /// the last reply's transmit-complete interrupt (which clears TXC0) was the last event.
 static TX_IDLE: AtomicU8 = AtomicU8::new(1);
 
-/// Set up USART0: 19200 baud (UBRR0 = 51 at 16 MHz: 19231 baud, +0.2 %), 8N1.
+/// Set up USART0: 19200 baud ([`clock::UBRR`]: 51 at 16 MHz, 19231 baud, +0.2 %), 8N1.
 pub(crate) fn init() {
     let dp = regs();
     // UCSR0A: normal speed (U2X0 off).
     wr!(dp.USART0.ucsr0a(), 0);
-    // UBRR0: 16 MHz / (16 × 19200) − 1 ≈ 51.
-    wr!(dp.USART0.ubrr0(), 51);
+    // UBRR0: F_CPU / (16 × BAUD) − 1.
+    wr!(dp.USART0.ubrr0(), clock::UBRR);
     // UCSR0C: asynchronous, no parity, 1 stop bit, 8 data bits.
     wr!(dp.USART0.ucsr0c(), bit::UCSZ01 | bit::UCSZ00);
     // UCSR0B: receiver, its interrupt, transmitter.
