@@ -25,7 +25,10 @@ pub(crate) const T0_PRESCALE: u32 = 64;
 /// Timer0's compare value in CTC mode for a 1 ms period: OCR0A + 1 counts of F_CPU / 64.
 pub(crate) const OCR0A: u8 = (F_CPU / T0_PRESCALE / 1000 - 1) as u8;
 const _: () = {
-    assert!(F_CPU % (T0_PRESCALE * 1000) == 0, "the tick would not be exactly 1 ms");
+    assert!(
+        F_CPU.is_multiple_of(T0_PRESCALE * 1000),
+        "the tick would not be exactly 1 ms"
+    );
     assert!(F_CPU / T0_PRESCALE / 1000 <= 256, "OCR0A has 8 bits");
 };
 
@@ -33,7 +36,7 @@ const _: () = {
 pub(crate) const T1_PRESCALE: u32 = 8;
 /// Timer1's counts per second (2 MHz: 0.5 µs a count).
 pub(crate) const T1_HZ: u32 = F_CPU / T1_PRESCALE;
-const _: () = assert!(F_CPU % T1_PRESCALE == 0);
+const _: () = assert!(F_CPU.is_multiple_of(T1_PRESCALE));
 
 /// Timer1 counts `us` microseconds make.
 pub(crate) const fn t1_us(us: u32) -> u16 {
@@ -44,7 +47,7 @@ pub(crate) const fn t1_us(us: u32) -> u16 {
 
 /// The most Timer1 counts between two received bytes of one frame: the later byte itself
 /// and 1.5 characters of silence (t1.5) after the earlier one's stop bit.
-pub(crate) const PAUSE_TICKS: u16 = t1_counts(frame::char_counts(T1_HZ, BAUD, frame::PAUSE_TENTHS));
+pub(crate) const PAUSE_TICKS: u16 = t1_counts(frame::pause_limit(T1_HZ, BAUD));
 /// Timer1 counts of 3.5 characters (t3.5) after the last byte: the silence that ends a frame.
 pub(crate) const SILENCE_TICKS: u16 = t1_counts(frame::end_silence(T1_HZ, BAUD));
 

@@ -19,7 +19,12 @@ impl<const N: usize> Ring<N> {
         // The limits the indexing relies on, checked at compile time for each `N` made: a
         // power of two (the mask), at most 128 (`room` and the lengths fit a `u8`, and the
         // indices, wrapping at 256, stay a whole number of turns apart).
-        const { assert!(N.is_power_of_two() && N <= 128, "Ring<N>: N a power of two <= 128") };
+        const {
+            assert!(
+                N.is_power_of_two() && N <= 128,
+                "Ring<N>: N a power of two <= 128"
+            )
+        };
         Self {
             buf: [0; N],
             head: 0,
