@@ -16,12 +16,12 @@ use utile_core::stats::ScanStats;
 use utile_core::store;
 
 use crate::hal::scan::RunState;
-use crate::hal::{line, serial, Nano};
+use crate::hal::{clock, line, serial, Nano};
 
 /// Timer1 counts (0.5 µs) a visit may go on making reply bytes (0.2 ms): a byte costs a map
 /// read and the CRC, a timer's time left or the mean scan time a division (0.13 ms). With
 /// the judging before them, no visit holds the scan up 0.45 ms.
-const VISIT_TICKS: u16 = 400;
+const VISIT_TICKS: u16 = clock::t1_us(200);
 /// Reply bytes a visit makes whatever it costs: a reply's first three (address, function,
 /// byte count or echo) read nothing from the map, and three bytes keep the line busy
 /// 1.5 ms, longer than the slowest scan before the next visit.

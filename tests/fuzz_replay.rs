@@ -10,7 +10,8 @@ use std::path::{Path, PathBuf};
 
 use utile_core::engine::Program;
 use utile_core::ihex::write_hex;
-use utile_core::image::{encode, IMAGE_LEN};
+use utile_core::image::{crc16_ccitt, encode, IMAGE_LEN, IMAGE_LEN_V1, VERSION_OFFSET};
+use utile_core::store::{SLOT_ADDR, SLOT_LEN};
 use utile_kit::fuzzing::{self, sample_program, TARGETS};
 use utile_kit::listing;
 use utile_kit::rng::Rng;
@@ -107,6 +108,99 @@ fn the_checks_can_fail() {
     assert!(fuzzing::ihex(b":00000001FF").is_ok());
 }
 
+/// Issue 32: each repaired oracle, handed a planted fault, says so (and passes the truth).
+#[test]
+fn the_repaired_oracles_see_planted_faults() {
+    use utile_core::engine::Engine;
+    use utile_kit::modbus::map::TestMap;
+
+    // Images: the reserved byte is ignored, any other byte is not.
+    let img = encode(&sample_program());
+    let with_crc = |mut v: Vec<u8>| {
+        let crc = crc16_ccitt(&v[..IMAGE_LEN - 2]);
+        v[IMAGE_LEN - 2..].copy_from_slice(&crc.to_be_bytes());
+        v
+    };
+    let mut reserved = img.to_vec();
+    reserved[3] = 0xC8;
+    let reserved = with_crc(reserved);
+    assert!(
+        fuzzing::same_image(&img, &reserved),
+        "the reserved byte is ignored"
+    );
+    assert!(fuzzing::image_decode(&reserved).is_ok());
+    let mut other = img.to_vec();
+    other[10] ^= 1;
+    let other = with_crc(other);
+    assert!(!fuzzing::same_image(&img, &other), "a UF byte is not");
+    let mut bad_reserved = img;
+    bad_reserved[3] = 1;
+    assert!(
+        !fuzzing::same_image(&bad_reserved, &reserved),
+        "the encoder writes 0 there"
+    );
+
+    // Modbus on the test map: a wrong value read, a write beyond what it names.
+    let map = TestMap::new();
+    let read = [0x04, 0, 1, 0, 1];
+    assert!(fuzzing::check_effect(&read, &[0x04, 2, 0x10, 0x01], &map, &map).is_ok());
+    assert!(fuzzing::check_effect(&read, &[0x04, 2, 0x10, 0x02], &map, &map).is_err());
+    let write = [0x06, 0, 3, 0, 9];
+    let mut after = map.clone();
+    after.holding[3] = 9;
+    assert!(fuzzing::check_effect(&write, &write, &map, &after).is_ok());
+    after.holding[4] = 1;
+    assert!(fuzzing::check_effect(&write, &write, &map, &after).is_err());
+    assert!(
+        fuzzing::check_effect(&write, &write, &map, &map).is_err(),
+        "a write lost"
+    );
+
+    // Modbus on the engine: PY bit 3 named, PY bit 4 not; a counter preset and its output.
+    let before = Engine::new(sample_program());
+    let coil = [1, 0x05, 0, 3, 0xFF, 0];
+    let mut after = before.clone();
+    after.py |= 1 << 3;
+    assert!(fuzzing::named_writes(&coil, &before, &after).is_ok());
+    after.py |= 1 << 4;
+    assert!(fuzzing::named_writes(&coil, &before, &after).is_err());
+    let preset = [1, 0x06, 0, 17, 0, 0];
+    let mut after = before.clone();
+    after.prog.counter_presets[1] = 0;
+    after.cq ^= 1 << 1;
+    assert!(fuzzing::named_writes(&preset, &before, &after).is_ok());
+    after.cq ^= 1 << 2;
+    assert!(fuzzing::named_writes(&preset, &before, &after).is_err());
+    after.cq ^= 1 << 2;
+    after.pu ^= 1;
+    assert!(fuzzing::named_writes(&preset, &before, &after).is_err());
+
+    // EEPROM: the newest valid slot by its own rules (serial numbers wrap).
+    let slot = usize::from(SLOT_LEN);
+    let mut ee = vec![0xFFu8; 1024];
+    let at1 = usize::from(SLOT_ADDR[1]);
+    for (at, seq) in [(0, 0xFFFFu16), (at1, 0)] {
+        ee[at..at + 2].copy_from_slice(&seq.to_le_bytes());
+        ee[at + 2..at + slot].copy_from_slice(&encode(&sample_program()));
+    }
+    assert_eq!(
+        fuzzing::reference_newest(&ee),
+        Some(1),
+        "0 is newer than 0xFFFF"
+    );
+    ee[at1 + 40] ^= 1;
+    assert_eq!(
+        fuzzing::reference_newest(&ee),
+        Some(0),
+        "a damaged slot is not valid"
+    );
+    ee[40] ^= 1;
+    assert_eq!(fuzzing::reference_newest(&ee), None);
+
+    // The escape decoder is fed 0xFF itself (0xFF 0x00), not only pauses.
+    assert!(fuzzing::keys(&[0x1B, b'[', 0xFF, 0, b'A']).is_ok());
+}
+
 // ---------------------------------------------------------------------------------------
 // The seed corpus.
 // ---------------------------------------------------------------------------------------
@@ -115,15 +209,64 @@ fn cat(parts: &[&[u8]]) -> Vec<u8> {
     parts.concat()
 }
 
-fn write(target: &str, name: &str, data: &[u8]) {
-    let dir = corpus_dir(target);
-    std::fs::create_dir_all(&dir).expect("create corpus dir");
-    std::fs::write(dir.join(name), data).expect("write seed");
-}
+/// One seed: target, file name, bytes.
+type Seed = (&'static str, String, Vec<u8>);
+
+/// Inputs kept in the corpus that the generator does not make: found by fuzzing (each
+/// one a fault once, of the code or of a harness), kept so the replay keeps checking them.
+const FOUND: &[(&str, &str)] = &[
+    ("lines", "read_resets_cursor"),
+    // ../shared/fuzz/image-reserved-byte.bin: a valid image whose reserved byte is 0xC8.
+    ("image", "reserved_byte"),
+];
 
 #[test]
 #[ignore = "regenerates the committed seed corpus"]
 fn write_seed_corpus() {
+    for (target, name, data) in seeds() {
+        let dir = corpus_dir(target);
+        std::fs::create_dir_all(&dir).expect("create corpus dir");
+        std::fs::write(dir.join(name), data).expect("write seed");
+    }
+}
+
+/// The committed corpus is the generator's: every seed it makes is there with the same
+/// bytes, and every other file is a found input ([`FOUND`]).
+#[test]
+fn the_committed_corpus_is_the_generators() {
+    let seeds = seeds();
+    let mut wrong = Vec::new();
+    for (target, name, data) in &seeds {
+        let path = corpus_dir(target).join(name);
+        if std::fs::read(&path).ok().as_ref() != Some(data) {
+            wrong.push(format!("{} differs from the generator's", path.display()));
+        }
+    }
+    for (target, _) in TARGETS {
+        for f in files(target) {
+            let name = f.file_name().unwrap().to_string_lossy().into_owned();
+            let generated = seeds.iter().any(|(t, n, _)| *t == target && *n == name);
+            if !generated && !FOUND.contains(&(target, name.as_str())) {
+                wrong.push(format!(
+                    "{} is neither generated nor a found input",
+                    f.display()
+                ));
+            }
+        }
+    }
+    assert!(
+        wrong.is_empty(),
+        "{}\n(regenerate: cargo test --test fuzz_replay -- --ignored write_seed_corpus)",
+        wrong.join("\n")
+    );
+}
+
+/// Every seed of the corpus, made from the code's own encoders.
+fn seeds() -> Vec<Seed> {
+    let mut out: Vec<Seed> = Vec::new();
+    let mut write = |target: &'static str, name: &str, data: &[u8]| {
+        out.push((target, name.to_string(), data.to_vec()));
+    };
     let prog = sample_program();
     let hex = listing::to_hex(&prog);
     let lower = hex.to_ascii_lowercase();
@@ -135,6 +278,13 @@ fn write_seed_corpus() {
     other_version[2] = 2;
     let mut v2_text = Vec::new();
     write_hex(&other_version, &mut |c| v2_text.push(c));
+    // A valid image whose reserved byte is not 0 (readers ignore it, docs/FORMAT.md).
+    let mut reserved = encode(&prog);
+    reserved[3] = 0xC8;
+    let crc = crc16_ccitt(&reserved[..IMAGE_LEN - 2]);
+    reserved[IMAGE_LEN - 2..].copy_from_slice(&crc.to_be_bytes());
+    let mut reserved_text = Vec::new();
+    write_hex(&reserved, &mut |c| reserved_text.push(c));
 
     // editor: first byte = flags (0x80 autostart, 0x40 sample program, 0x20 busy
     // transmitter, 0x10 READ time-outs).
@@ -246,6 +396,7 @@ fn write_seed_corpus() {
         ("overlong_record", b":0100000000FF00\r\n".to_vec()),
         ("bad_char", b":01000000GG\r\n".to_vec()),
         ("version2", v2_text.clone()),
+        ("reserved_byte", reserved_text),
     ];
     for (name, data) in ihex_seeds {
         write("ihex", name, data);
@@ -269,18 +420,179 @@ fn write_seed_corpus() {
     write("image", "version2", &other_version);
     write("image", "short", &img[..IMAGE_LEN - 1]);
 
+    let mut v1 = img[..IMAGE_LEN_V1 - 2].to_vec();
+    v1[VERSION_OFFSET] = 1;
+    let crc = crc16_ccitt(&v1);
+    v1.extend(crc.to_be_bytes());
+    write("image", "version1", &v1);
+
+    // eeprom: input bytes 0..300 are slot 0, 300..600 slot 1 (`SLOT_LEN`).
+    let slot = usize::from(SLOT_LEN);
     let mut board = SimBoard::new();
     utile_core::store::store(&prog, &mut board).unwrap();
-    let one_slot: Vec<u8> = board.eeprom[..560].to_vec();
+    let one_slot: Vec<u8> = board.eeprom[..slot].to_vec();
     let mut p2 = prog.clone();
     p2.presets[3] = 9;
+    p2.counter_presets[2] = 500;
+    p2.set_points = [100, 1023];
     utile_core::store::store(&p2, &mut board).unwrap();
-    let two_slots = cat(&[&board.eeprom[..280], &board.eeprom[0x200..0x200 + 280]]);
+    let at1 = usize::from(SLOT_ADDR[1]);
+    let two_slots = cat(&[&board.eeprom[..slot], &board.eeprom[at1..at1 + slot]]);
+    // The newest slot (slot 1, written second) damaged: LOAD falls back to slot 0.
     let mut damaged = two_slots.clone();
-    damaged[300] ^= 0x40;
-    write("eeprom", "erased", &[0xFF; 560]);
+    damaged[slot + 40] ^= 0x40;
+    // A version-1 image in slot 0.
+    let v1_slot = cat(&[&[1, 0], &v1]);
+    // The first byte cuts the STORE after 3 × it writes, the second tears the last write.
+    let mut torn = two_slots.clone();
+    torn[..2].copy_from_slice(&[40, 1]);
+    let mut half = two_slots.clone();
+    half[..2].copy_from_slice(&[90, 2]);
+    write("eeprom", "erased", &[0xFF; 600]);
     write("eeprom", "one_slot", &one_slot);
     write("eeprom", "two_slots", &two_slots);
     write("eeprom", "newest_damaged", &damaged);
+    write("eeprom", "version1_slot", &v1_slot);
+    write("eeprom", "cut_erased", &torn);
+    write("eeprom", "cut_partial", &half);
     write("eeprom", "zeros", &[0u8; 600]);
+
+    for (name, data) in modbus_seeds() {
+        write("modbus", name, &data);
+        write("modbus_plc", name, &data);
+    }
+    out
+}
+
+/// A frame the Modbus harnesses build (`utile_kit::fuzzing::modbus`'s line events): control
+/// `to << 6 | 3` (0 broadcast, 1 another slave, 3 this one), its length, then its bytes as
+/// (0, byte) pairs; the harness appends the CRC and the closing silence.
+fn built(to: u8, body: &[u8]) -> Vec<u8> {
+    assert!(body.len() < usize::from(fuzzing::BUILT_MAX));
+    let mut v = vec![to << 6 | 3, body.len() as u8];
+    for &b in body {
+        v.extend([0, b]);
+    }
+    v
+}
+
+/// The Modbus seeds: every function, reads of both §17 windows, writes up to a 61-byte
+/// FC16, exceptions, broken frames, and stray bytes and silences while a reply goes out.
+fn modbus_seeds() -> Vec<(&'static str, Vec<u8>)> {
+    let me = 3;
+    let mut fc16 = vec![0x10, 0, 0, 0, 26, 52];
+    for i in 0..26u8 {
+        fc16.extend([0, i * 9]);
+    }
+    let mut coils = vec![0x0F, 0, 0, 0, 24, 3];
+    coils.extend([0xA5, 0x5A, 0xFF]);
+    let mut diag = vec![0x08, 0, 0];
+    diag.extend(1..=40u8);
+    vec![
+        (
+            "reads",
+            cat(&[
+                &built(me, &[0x01, 0, 0, 0, 24]),
+                &built(me, &[0x02, 0, 0, 0, 6]),
+                &built(me, &[0x03, 0, 0, 0, 26]),
+                &built(me, &[0x04, 0, 0, 0, 18]),
+                &built(me, &[0x11]),
+            ]),
+        ),
+        (
+            "writes",
+            cat(&[
+                &built(me, &[0x05, 0, 3, 0xFF, 0]),
+                &built(me, &[0x06, 0, 17, 0x12, 0x34]),
+                &built(me, &[0x06, 0, 24, 0x03, 0xFF]),
+                &built(me, &coils),
+                &built(me, &fc16),
+                &built(me, &[0x03, 0, 0, 0, 26]),
+            ]),
+        ),
+        (
+            "snapshot_program",
+            cat(&[
+                &built(me, &[0x04, 0, 64, 0, 40]),
+                &built(me, &[0x04, 1, 0, 0, 125]),
+                &built(me, &[0x04, 1, 125, 0, 3]),
+            ]),
+        ),
+        (
+            "exceptions",
+            cat(&[
+                &built(me, &[0x07]),
+                &built(me, &[0x03, 0, 26, 0, 1]),
+                &built(me, &[0x03, 0, 0, 0, 0]),
+                &built(me, &[0x06, 0, 0, 1, 0]),
+                &built(me, &[0x06, 0, 24, 4, 0]),
+                &built(me, &[0x05, 0, 0, 0x12, 0x34]),
+                &built(me, &[0x08, 0, 1, 0, 0]),
+            ]),
+        ),
+        (
+            "broken",
+            cat(&[
+                // Bytes with a gap inside, a frame for another slave, a broadcast write.
+                &[0, 1, 0, 3, 1, 0, 0, 0, 2, 0],
+                &built(1, &[0x03, 0, 0, 0, 1]),
+                &built(0, &[0x06, 0, 0, 0, 5]),
+                &built(me, &[0x03, 0, 0]),
+                // A lone `/`.
+                &[0, b'/', 2, 0],
+            ]),
+        ),
+        (
+            "broadcast",
+            cat(&[
+                &built(0, &[0x06, 0, 2, 0, 9]),
+                &built(0, &[0x05, 0, 8, 0xFF, 0]),
+                &built(0, &[0x03, 0, 0, 0, 1]),
+                &built(me, &[0x03, 0, 0, 0, 3]),
+            ]),
+        ),
+        (
+            "inputs",
+            cat(&[
+                &built(me, &[0x02, 0, 8, 0, 42]),
+                &built(me, &[0x04, 0, 8, 0, 10]),
+                &built(me, &[0x04, 0, 32, 0, 16]),
+            ]),
+        ),
+        (
+            "presets",
+            cat(&[
+                &built(
+                    me,
+                    &[
+                        0x10, 0, 16, 0, 10, 20, 0, 1, 0, 2, 0, 3, 0, 4, 0, 5, 0, 6, 0, 7, 0xFF,
+                        0xFF, 0, 100, 3, 0xFF,
+                    ],
+                ),
+                &built(me, &[0x04, 0, 8, 0, 8]),
+                &built(me, &[0x02, 0, 40, 0, 8]),
+            ]),
+        ),
+        (
+            "remote_start",
+            cat(&[
+                // U0 (coil 8) on, a scan, U0 off.
+                &built(me, &[0x05, 0, 8, 0xFF, 0]),
+                &built(me, &[0x01, 0, 0, 0, 8]),
+                &built(me, &[0x05, 0, 8, 0, 0]),
+            ]),
+        ),
+        (
+            "mid_reply",
+            cat(&[
+                // An echo and a snapshot read, each with stray bytes and a silence while
+                // the reply goes out.
+                &built(me, &diag),
+                &[0, 0x55, 0, 0x55, 2, 0, 0, 1, 2, 0],
+                &built(me, &[0x04, 0, 64, 0, 40]),
+                &[0, 0xAA, 2, 0, 0, 0x10, 2, 0],
+                &built(me, &[0x03, 0, 0, 0, 26]),
+            ]),
+        ),
+    ]
 }

@@ -3,7 +3,7 @@
 //! produced byte by byte.
 
 use utile_core::modbus::crc::{crc16_modbus, Crc16};
-use utile_core::modbus::frame::{Drop, Receiver, Verdict, FRAME_MAX};
+use utile_core::modbus::frame::{self, Drop, Receiver, Verdict, FRAME_MAX};
 use utile_core::modbus::map::{Map, Table};
 use utile_core::modbus::reply::Reply;
 use utile_core::modbus::request::{handle, Answer};
@@ -113,6 +113,24 @@ fn frames_are_taken_or_dropped_as_the_spec_says() {
         rx.push(b, false);
     }
     assert_eq!(rx.end(), Verdict::Frame { len: 8 });
+}
+
+/// The line's silences in a board's clock (issue 32): t1.5 is measured from one stop bit to
+/// the next start bit, so between two receive stamps (the same point of each character) the
+/// limit is the later character plus t1.5; t3.5 runs from the last stamp.
+#[test]
+fn the_silences_in_clock_counts_hold_the_character_itself() {
+    // Timer1 at 2 MHz, 19200 baud: a character is 1,041.7 counts.
+    assert_eq!(frame::char_counts(2_000_000, 19_200, 10), 1042);
+    assert_eq!(frame::pause_limit(2_000_000, 19_200), 2605);
+    assert_eq!(frame::end_silence(2_000_000, 19_200), 3646);
+    // In microseconds at 9600 baud: 1,041.7 µs a character.
+    assert_eq!(frame::pause_limit(1_000_000, 9600), 2605);
+    // A stamp 1.4 characters of silence after the last character's is inside the frame,
+    // 1.6 characters after it is not.
+    let c = 2_000_000.0 / 1920.0;
+    let limit = f64::from(frame::pause_limit(2_000_000, 19_200));
+    assert!(2.4 * c < limit && 2.6 * c > limit);
 }
 
 #[test]

@@ -16,7 +16,7 @@ use utile_kit::listing;
 use utile_kit::modbus;
 use utile_kit::rng::Rng;
 use utile_kit::sim::SimBoard;
-use utile_kit::simavr::{frame_cycles, RxPacing};
+use utile_kit::simavr::{frame_cycles, CpuState, RxPacing};
 
 /// One character at 19200 8N1, in CPU cycles.
 fn char_cycles() -> u64 {
@@ -82,6 +82,20 @@ impl Line {
         self.nano.chip.send_after(idle, frame);
         let now = self.nano.chip.cycle();
         now + idle + frame.len() as u64 * char_cycles()
+    }
+
+    /// Send `frame` after a silence of 4 characters, with `pause` cycles of silence between
+    /// each character's stop bit and the next one's start bit (a master behind a USB adapter).
+    /// Runs the chip until the request has gone down the line.
+    fn send_paused(&mut self, pause: u64, frame: &[u8]) {
+        let c = char_cycles();
+        let end = self.nano.chip.cycle() + 4 * c + frame.len() as u64 * c;
+        self.nano.chip.send_after(4 * c, &frame[..1]);
+        for b in &frame[1..] {
+            self.nano.chip.send_after(pause, std::slice::from_ref(b));
+        }
+        let end = end + (frame.len() as u64 - 1) * pause;
+        self.run(end.saturating_sub(self.nano.chip.cycle()));
     }
 
     /// A request (CRC appended) and the reply, with the cycle of each reply byte's stop bit.
@@ -224,6 +238,59 @@ fn broken_frames_get_no_answer_and_are_counted() {
     assert!(line.collect().is_empty(), "no answer to a frame with a gap");
     let (_, reply) = line.transact(&[0x04, 0, 7, 0, 1]);
     assert_eq!(pdu(&reply), vec![0x04, 2, 0, 3], "three frames dropped");
+}
+
+/// Modbus RTU's t1.5 (issue 32): a silence of up to 1.5 characters between two characters of
+/// a frame, from one stop bit's end to the next start bit, leaves the frame whole; a longer
+/// one breaks it, and the broken frame is counted (input register 7). With 3 characters
+/// between bytes a slave that learns of a character only at its stop bit has timed t3.5 from
+/// the last one before the next shows: each byte is a frame of its own, each counted.
+#[test]
+fn pauses_up_to_one_and_a_half_characters_inside_a_frame_are_allowed() {
+    let mut line = Line::new(&remote_start());
+    let c = char_cycles();
+    // The request reads the drop count, so each answer also says how many were dropped.
+    let read = [0x04, 0, 7, 0, 1];
+    let request = modbus::frame(ADDRESS, &read);
+    let mut dropped = 0u16;
+    let mut seen = Vec::new();
+    let mut wrong = Vec::new();
+    // (pause in tenths of a character, answered, frames dropped at least and at most)
+    for (tenths, answered, least, most) in [
+        (5, true, 0, 0),
+        (10, true, 0, 0),
+        (14, true, 0, 0),
+        (20, false, 1, 1),
+        (30, false, 1, request.len() as u16),
+    ] {
+        line.nano.chip.take_output_timed();
+        line.send_paused(c * tenths / 10, &request);
+        let reply = bytes(&line.collect());
+        let pause = tenths as f64 / 10.0;
+        seen.push(format!(
+            "{pause}: {}",
+            if reply.is_empty() {
+                "dropped"
+            } else {
+                "answered"
+            }
+        ));
+        let (_, count) = line.transact(&read);
+        let now = modbus::registers(&pdu(&count))[0];
+        let more = now - dropped;
+        dropped = now;
+        if answered != !reply.is_empty() || !(least..=most).contains(&more) {
+            wrong.push(format!(
+                "pauses of {pause} characters: reply {reply:02X?}, {more} frames dropped"
+            ));
+        }
+    }
+    assert!(
+        wrong.is_empty(),
+        "{} ({})",
+        wrong.join("; "),
+        seen.join(", ")
+    );
 }
 
 #[test]
@@ -562,4 +629,181 @@ fn the_longest_programs_still_answer_within_the_spec_and_without_gaps() {
             }
         }
     }
+}
+
+/// `cli`: the first instruction of each critical section (`interrupt::free`).
+const CLI: u16 = 0x94F8;
+/// UCSR0A and UCSR0B's data-space addresses, and the bits the holds below look at.
+const UCSR0A: usize = 0xC0;
+const UCSR0B: usize = 0xC1;
+const TXC0: u8 = 1 << 6;
+const TXCIE0: u8 = 1 << 6;
+const UDRIE0: u8 = 1 << 5;
+
+impl Line {
+    /// The transmitter has nothing left: the last byte's stop bit has gone, the ring is
+    /// empty (data-register-empty off) and a transmit complete, if wanted, has been taken.
+    fn tx_drained(&self) -> bool {
+        let chip = &self.nano.chip;
+        let b = chip.peek(UCSR0B);
+        chip.cycle() >= chip.tx_free_at()
+            && b & UDRIE0 == 0
+            && !(b & TXCIE0 != 0 && chip.peek(UCSR0A) & TXC0 != 0)
+    }
+
+    /// Run `cycles` one instruction at a time. While D10 is up (a reply goes out), the main
+    /// program's critical sections are counted (a `cli` with interrupts on). At the `k`-th
+    /// it is held until the transmitter is on its last queued byte (the ring empty), as a
+    /// slow scan holds it; then, on the instruction before its next critical section, until
+    /// that byte has left: the line goes idle exactly there (the interleaving a slow visit
+    /// makes, with the transmit complete in the last gap before a critical section).
+    /// Returns how many critical sections there were.
+    fn run_held(&mut self, cycles: u64, k: u32) -> u32 {
+        let end = self.nano.chip.cycle() + cycles;
+        let mut seen = 0;
+        let mut armed = false;
+        while self.nano.chip.cycle() < end {
+            let chip = &self.nano.chip;
+            let main = self.de_level() && chip.interrupts_on();
+            if main && armed && chip.flash_word(chip.pc() + 2) == CLI {
+                armed = false;
+                self.hold_while(|l| !l.tx_drained());
+            }
+            let chip = &self.nano.chip;
+            if main && chip.flash_word(chip.pc()) == CLI {
+                seen += 1;
+                if seen == k + 1 {
+                    self.hold_while(|l| l.nano.chip.peek(UCSR0B) & UDRIE0 != 0);
+                    armed = true;
+                }
+            }
+            self.step_sampled();
+        }
+        seen
+    }
+
+    /// Hold the main program where it is while the interrupts run, as long as `wait` says.
+    fn hold_while(&mut self, wait: impl Fn(&Line) -> bool) {
+        let at = self.nano.chip.pc();
+        while wait(self) {
+            let chip = &mut self.nano.chip;
+            let held = chip.interrupts_on() && chip.pc() == at;
+            let state = if held { chip.step_held() } else { chip.step() };
+            assert_eq!(state, CpuState::Running, "the chip stopped");
+            self.sample_de();
+        }
+    }
+
+    /// One instruction, D10 sampled after it.
+    fn step_sampled(&mut self) {
+        let state = self.nano.chip.step();
+        assert_eq!(state, CpuState::Running, "the chip stopped");
+        self.sample_de();
+    }
+
+    /// D10 now, recorded if it changed.
+    fn sample_de(&mut self) {
+        let level = self.de_level();
+        if self.de.last().map(|&(_, l)| l) != Some(level) {
+            self.de.push((self.nano.chip.cycle(), level));
+        }
+    }
+}
+
+/// Issue 32: a transmit complete between the main program's "not idle" mark and its push
+/// of a reply byte made the line look idle with the byte still to go, and the reply's end
+/// then dropped D10 (and transmit complete) before that byte had left. With the line going
+/// idle in the last gap before each of its critical sections in turn (one per request,
+/// `Line::run_held`), the main program must still give every reply whole, with D10 up until
+/// its last stop bit.
+#[test]
+fn a_reply_keeps_d10_up_to_its_last_stop_bit_whatever_the_interleaving() {
+    let mut line = Line::new(&remote_start());
+    let c = char_cycles();
+    let mut k = 0;
+    loop {
+        let req = [0x05, 0, 3, if k % 2 == 0 { 0xFF } else { 0 }, 0];
+        line.nano.chip.take_output_timed();
+        line.de.clear();
+        line.de.push((line.nano.chip.cycle(), line.de_level()));
+        line.send(4 * c, &modbus::frame(ADDRESS, &req));
+        let seen = line.run_held(20 * CYCLES_PER_MS, k);
+        let reply = line.nano.chip.take_output_timed();
+        let got = bytes(&reply);
+        assert_eq!(
+            modbus::reply_pdu(ADDRESS, &got).ok(),
+            Some(&req[..]),
+            "held at critical section {k} of {seen}: the echo came as {got:02X?}"
+        );
+        let last_stop = reply.last().unwrap().1;
+        let first_start = reply[0].1 - c;
+        let rise = line.de.iter().find(|d| d.1).expect("D10 rose").0;
+        let fall = line
+            .de
+            .iter()
+            .find(|d| !d.1 && d.0 > rise)
+            .expect("D10 fell")
+            .0;
+        assert!(rise <= first_start, "D10 up before the first start bit");
+        // simavr's transmit complete and the harness's stop bits agree within a few
+        // cycles; half a bit is the margin.
+        assert!(
+            fall + c / 20 >= last_stop,
+            "held at critical section {k} of {seen}: D10 fell {} cycles before the last \
+             stop bit had left",
+            last_stop.saturating_sub(fall)
+        );
+        assert!(!line.de_level(), "D10 down after the reply");
+        k += 1;
+        if k >= seen {
+            break;
+        }
+    }
+    assert!(
+        k > 10,
+        "only {k} critical sections while the reply went out"
+    );
+}
+
+/// Issue 32: a byte on the line while a reply goes out (noise, a master that gave up) is
+/// ignored, and its silence must not end a frame: that took a new snapshot in the middle of
+/// the reply and emptied the request an echo reply is still built from.
+#[test]
+fn a_stray_byte_during_a_reply_changes_nothing_in_it() {
+    let mut line = Line::new(&data_listing("scan_counter.utl"));
+    let c = char_cycles();
+    // Diagnostics echoes its request: 52 bytes of PDU, over many visits.
+    let mut echo = vec![0x08, 0, 0];
+    echo.extend((0..49u8).map(|i| i.wrapping_mul(37) ^ 0x5A));
+    let snapshot_read = [0x04, 0, SNAPSHOT as u8, 0, SNAPSHOT_LEN as u8];
+    for (k, req) in [&echo[..], &snapshot_read, &echo, &snapshot_read]
+        .into_iter()
+        .enumerate()
+    {
+        line.nano.chip.take_output_timed();
+        let end = line.send(4 * c, &modbus::frame(ADDRESS, req));
+        // 10 characters after the request: the reply (about 50 characters) is under way,
+        // and the stray byte's 3.5-character silence ends in the middle of it.
+        line.send(10 * c, &[0x55]);
+        line.run(end.saturating_sub(line.nano.chip.cycle()));
+        let reply = line.collect();
+        let got = pdu(&reply);
+        if req[0] == 0x08 {
+            assert_eq!(got, req, "request {k}: the echo is the request");
+            continue;
+        }
+        let regs = modbus::registers(&got);
+        let scans = u32::from(regs[6]) << 16 | u32::from(regs[7]);
+        let y = (scans & 0xFF) as u16;
+        let all = if y & 1 == 1 { 0xFFFF } else { 0 };
+        assert_eq!(regs[1] >> 8, y, "request {k}: Y0..Y7 of scan {scans}");
+        assert_eq!(
+            regs[2..5],
+            [y << 8 | y, all, all],
+            "request {k}: U/V, Q and TQ of scan {scans}"
+        );
+    }
+    // The stray bytes were no frames: nothing dropped.
+    let (_, reply) = line.transact(&[0x04, 0, 7, 0, 1]);
+    assert_eq!(pdu(&reply), vec![0x04, 2, 0, 0], "no frame dropped");
 }

@@ -1,25 +1,21 @@
 //! The serial line as a Modbus RTU slave's in RUN mode (SPEC §13): its timing and the driver
-//! enable. Received bytes go to the core's [`Slave`], stamped with Timer1 to find gaps inside
-//! a frame; Timer1's compare B marks the 3.5-character silence that ends a frame and wants
+//! enable. Received bytes go to the core's [`Slave`], stamped with Timer1 at their
+//! receive-complete interrupt to find gaps inside a frame: a silence of more than 1.5
+//! characters from one stop bit to the next start bit (t1.5), that is more than the later
+//! character and t1.5 between two stamps ([`PAUSE_TICKS`], from the core's rule in
+//! `modbus/frame.rs`); Timer1's compare B marks the 3.5-character silence that ends a frame and wants
 //! the main loop at the next END (`want.rs`); a reply raises the driver enable D10, wants the
 //! main loop again after each byte while it is being made, and the transmit-complete
 //! interrupt lowers D10 after the last stop bit. The main loop (`src/modbus.rs`) reaches the
 //! slave only through the safe functions here.
 
-use core::sync::atomic::{AtomicU8, Ordering};
-
 use avr_device::interrupt::{self, CriticalSection};
 use utile_core::modbus::plc::PlcMap;
 use utile_core::modbus::slave::{Event, Slave};
 
+use super::clock::{PAUSE_TICKS, SILENCE_TICKS};
 use super::regs::{bit, regs, wr};
 use super::{pins, serial, want, IsrCell, Nano};
-
-/// Timer1 counts (0.5 µs) of more than 1.5 characters at 19200 8N1 (a character is 10 bits,
-/// 520.8 µs): a silence this long inside a frame breaks it.
-const GAP_TICKS: u16 = 1563;
-/// Timer1 counts of 3.5 characters (1.823 ms): the silence that ends a frame.
-const SILENCE_TICKS: u16 = 3646;
 
 /// The Modbus side of the line.
 struct Line {
@@ -29,6 +25,10 @@ struct Line {
     last: u16,
     /// The whole reply is in the transmit ring: transmit complete ends it.
     queued: bool,
+    /// The line serves Modbus (RUN mode); in EDIT mode bytes go to the ring.
+    serving: bool,
+    /// A frame's closing silence has passed and the main loop has not judged it.
+    frame_end: bool,
 }
 
 /// The slave and its timing, shared with the receive, timer and transmit interrupts.
@@ -36,17 +36,16 @@ static LINE: IsrCell<Line> = IsrCell::new(Line {
     slave: Slave::new(),
     last: 0,
     queued: false,
+    serving: false,
+    frame_end: false,
 });
-/// Nonzero while the line serves Modbus (RUN mode); in EDIT mode bytes go to the ring.
-static SERVING: AtomicU8 = AtomicU8::new(0);
-/// Nonzero when a frame's closing silence has passed and the main loop has not judged it.
-static FRAME_END: AtomicU8 = AtomicU8::new(0);
 
 /// From the receive interrupt: in RUN mode the byte goes to the slave and the silence after
 /// it is timed (returns true); in EDIT mode it is the terminal's (false).
 #[inline(always)]
 pub(crate) fn on_byte(cs: CriticalSection, byte: u8) -> bool {
-    if SERVING.load(Ordering::Relaxed) == 0 {
+    // SAFETY: the closure does not re-enter LINE.
+    if !unsafe { LINE.with(cs, |l| l.serving) } {
         return false;
     }
     let dp = regs();
@@ -59,7 +58,7 @@ pub(crate) fn on_byte(cs: CriticalSection, byte: u8) -> bool {
     // SAFETY: the closure does not re-enter LINE.
     unsafe {
         LINE.with(cs, |l| {
-            l.slave.push(byte, now.wrapping_sub(l.last) > GAP_TICKS);
+            l.slave.push(byte, now.wrapping_sub(l.last) > PAUSE_TICKS);
             l.last = now;
         })
     };
@@ -79,7 +78,8 @@ pub(crate) fn on_byte(cs: CriticalSection, byte: u8) -> bool {
 pub fn on_silence(cs: CriticalSection) {
     // TIMSK1: compare B off until the next byte.
     wr!(regs().TC1.timsk1(), 0);
-    FRAME_END.store(1, Ordering::Relaxed);
+    // SAFETY: the closure does not re-enter LINE.
+    unsafe { LINE.with(cs, |l| l.frame_end = true) };
     want::now(cs);
 }
 
@@ -101,7 +101,7 @@ pub fn on_tx_complete(cs: CriticalSection) {
     }
     // The line is idle: if the whole reply was queued, it is over; if its last byte is yet
     // to be reported queued (the main loop learns that a visit later), `reply_queued` ends it.
-    serial::went_idle();
+    serial::went_idle(cs);
     // SAFETY: the closure does not re-enter LINE.
     if unsafe { LINE.with(cs, |l| l.queued) } {
         reply_over(cs);
@@ -120,23 +120,32 @@ fn reply_over(cs: CriticalSection) {
 /// Either way the slave starts from a clean line.
 pub(crate) fn serve(on: bool) {
     interrupt::free(|cs| {
-        SERVING.store(u8::from(on), Ordering::Relaxed);
-        FRAME_END.store(0, Ordering::Relaxed);
         // TIMSK1: no pending silence.
         wr!(regs().TC1.timsk1(), 0);
         // SAFETY: the closure does not re-enter LINE.
-        unsafe { LINE.with(cs, |l| l.slave = Slave::new()) };
+        unsafe {
+            LINE.with(cs, |l| {
+                l.serving = on;
+                l.frame_end = false;
+                l.slave = Slave::new();
+            })
+        };
     });
 }
 
 /// The main loop is back between two scans: whether a frame's closing silence has passed
 /// (reported once). A wish of the line from now on wants the main loop at the next END.
+/// A silence timed while a reply is being made closes no frame (the slave ignored the bytes
+/// before it): the reply's snapshot and the request it echoes stay as they are.
 pub(crate) fn take_frame_end() -> bool {
     interrupt::free(|cs| {
         want::taken(cs);
-        let end = FRAME_END.load(Ordering::Relaxed) != 0;
-        FRAME_END.store(0, Ordering::Relaxed);
-        end
+        // SAFETY: the closure does not re-enter LINE.
+        unsafe {
+            LINE.with(cs, |l| {
+                core::mem::take(&mut l.frame_end) && !l.slave.replying()
+            })
+        }
     })
 }
 
@@ -194,7 +203,7 @@ pub(crate) fn reply_start() -> bool {
 /// now if the line has gone idle already.
 pub(crate) fn reply_queued() {
     interrupt::free(|cs| {
-        if serial::idle_since_queued() {
+        if serial::idle_since_queued(cs) {
             reply_over(cs);
             return;
         }

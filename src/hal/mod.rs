@@ -5,6 +5,7 @@
 //! |---|---|
 //! | `board.rs` | bring-up order (`init`) and `Board` for [`Nano`] |
 //! | `pins.rs` | Y0..Y7 with out_sense, A0..A5, the D8/D9 jumpers |
+//! | `clock.rs` | every number from F_CPU and the baud rate: UBRR0, OCR0A, the line's silences |
 //! | `tick.rs` | Timer0's 1 ms tick (the core's `Ticker`), Timer1 for STAT |
 //! | `adc.rs` | A6/A7 in the background (the core's `Analog`: H6, H7) |
 //! | `watchdog.rs` | the watchdog (software restart first) and the reset flags |
@@ -26,6 +27,7 @@
 
 pub mod adc;
 mod board;
+pub(crate) mod clock;
 mod eeprom;
 #[cfg(feature = "hang-test")]
 mod hang_test;

@@ -14,15 +14,15 @@ use super::isr_cell::IsrCell;
 use super::regs::{regs, wr};
 
 /// PORTB bits that are pull-ups, never outputs: D8 (PB0), D9 (PB1), unused D11 (PB3).
-const PORTB_PULLUPS: u8 = 0x0B;
+pub(crate) const PORTB_PULLUPS: u8 = 0x0B;
 /// PORTB bit of the driver enable D10 (PB2), kept as it is by every other PORTB write.
 pub(crate) const DE_BIT: u8 = 0x04;
 /// PORTD bit of RX (PD0): its pull-up holds the line idle with no cable.
 const PORTD_RX: u8 = 0x01;
 /// PORTB bits of Y6 (PB4) and Y7 (PB5).
-const PORTB_Y: u8 = 0x30;
+pub(crate) const PORTB_Y: u8 = 0x30;
 /// PORTD bits of Y0..Y5 (PD2..PD7).
-const PORTD_Y: u8 = 0xFC;
+pub(crate) const PORTD_Y: u8 = 0xFC;
 /// PINB bit of the autostart jumper D8.
 const D8_BIT: u8 = 0x01;
 /// PINB bit of the out_sense jumper D9.

@@ -56,6 +56,12 @@ pub(crate) fn regs() -> Regs {
 /// GPIOR0's I/O address (data address 0x3E): bit-addressable flags (`sbi`, `sbic`) for the
 /// watchdog's restart (`watchdog.rs`) and the scan's "main loop wanted now" (`want.rs`).
 pub(crate) const GPIOR0_IO: u8 = 0x1E;
+/// PORTB's I/O address (data address 0x25): the scan's `in`/`out` of the outputs Y6, Y7.
+pub(crate) const PORTB_IO: u8 = 0x05;
+/// PORTD's I/O address (data address 0x2B): the scan's `in`/`out` of the outputs Y0..Y5.
+pub(crate) const PORTD_IO: u8 = 0x0B;
+/// TCNT1's data address (low byte; the high byte follows): the scan's `lds` of Timer1.
+pub(crate) const TCNT1_MEM: u16 = 0x84;
 
 /// Register bits by the datasheet's names (ATmega328P, "Register Description" of each
 /// peripheral): the one place this layer spells a bit as a number.

@@ -1,4 +1,5 @@
-//! A byte ring of `N` entries (`N` a power of two dividing 256), indexed by wrapping `u8`s:
+//! A byte ring of `N` entries (`N` a power of two, at most 128: checked when a ring is made),
+//! indexed by wrapping `u8`s:
 //! the USART's receive and transmit queues between the main program and the interrupts.
 
 /// A byte ring; see the module.
@@ -15,6 +16,15 @@ impl<const N: usize> Ring<N> {
 
     /// An empty ring.
     pub(crate) const fn new() -> Self {
+        // The limits the indexing relies on, checked at compile time for each `N` made: a
+        // power of two (the mask), at most 128 (`room` and the lengths fit a `u8`, and the
+        // indices, wrapping at 256, stay a whole number of turns apart).
+        const {
+            assert!(
+                N.is_power_of_two() && N <= 128,
+                "Ring<N>: N a power of two <= 128"
+            )
+        };
         Self {
             buf: [0; N],
             head: 0,
@@ -31,7 +41,7 @@ impl<const N: usize> Ring<N> {
     /// Free slots.
     #[inline(always)]
     pub(crate) fn room(&self) -> u8 {
-        // N ≤ 128 for every ring here, so this fits a u8.
+        // N ≤ 128 (checked in `new`), so this fits a u8.
         (N as u8).wrapping_sub(self.len())
     }
 

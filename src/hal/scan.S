@@ -21,10 +21,9 @@
 ; Interrupts stay enabled; `cli`/`sei` only guard the read-modify-write of state that the
 ; 1 ms tick also writes (edge bits, ms clock, output pins).
 
-; I/O registers (ATmega328P datasheet, register summary).
-    .set PORTB_IO, 0x05
-    .set PORTD_IO, 0x0B
-    .set TCNT1_MEM, 0x84
+; I/O addresses (PORTB_IO, PORTD_IO, TCNT1_MEM: regs.rs), pin masks (PORTB_Y, PORTD_Y,
+; PORTB_PULLUPS, DE_BIT: pins.rs) and the timer units (UNIT_*: the core's TIMER_UNIT_MS) are
+; also `.set` by scan.rs, from the Rust that names them.
 
 .macro NEXT
     ld r30, X+
@@ -363,27 +362,27 @@ utile_scan_tr\n:
 
 ; .TK tails, by timer unit: 0.1 s, 1 s, 1 min.
 utile_scan_tk_100:
-    ldi r23, 100
+    ldi r23, UNIT_TENTH
     mul r22, r23
     clr r23
     ADD_NOW_16
 utile_scan_tk_1000:
-    TK_TAIL_24 0xE8, 0x03
+    TK_TAIL_24 lo8(UNIT_SECOND), hi8(UNIT_SECOND)
 utile_scan_tk_60000:
-    TK_TAIL_24 0x60, 0xEA
+    TK_TAIL_24 lo8(UNIT_MINUTE), hi8(UNIT_MINUTE)
 
 ; .TKF (400 s = 0x061A80 ms): the product needs 32 bits; Z stays the table page.
 utile_scan_tk_400000:
-    ldi r23, 0x80
+    ldi r23, lo8(UNIT_400S)
     mul r22, r23
     movw r24, r0
-    ldi r23, 0x1A
+    ldi r23, hi8(UNIT_400S)
     mul r22, r23
     add r25, r0
     clr r23
     adc r1, r23
     mov r30, r1
-    ldi r23, 0x06
+    ldi r23, hh8(UNIT_400S)
     mul r22, r23
     add r30, r0
     clr r23
@@ -391,16 +390,16 @@ utile_scan_tk_400000:
     cli
     lds r22, U_MS
     add r22, r24
-    sts U_DEADLINE + 60, r22
+    sts U_DEADLINE + 4 * 15, r22
     lds r22, U_MS + 1
     adc r22, r25
-    sts U_DEADLINE + 61, r22
+    sts U_DEADLINE + 4 * 15 + 1, r22
     lds r22, U_MS + 2
     adc r22, r30
-    sts U_DEADLINE + 62, r22
+    sts U_DEADLINE + 4 * 15 + 2, r22
     lds r22, U_MS + 3
     adc r22, r1
-    sts U_DEADLINE + 63, r22
+    sts U_DEADLINE + 4 * 15 + 3, r22
     sei
     NEXT
 
@@ -742,7 +741,7 @@ utile_scan_outputs:
     eor r22, r19
     ; Y0..Y5 on PD2..PD7; PD0/PD1 (USART) keep their bits.
     in r23, PORTD_IO
-    andi r23, 0x03
+    andi r23, lo8(~PORTD_Y)
     mov r24, r22
     lsl r24
     lsl r24
@@ -754,11 +753,11 @@ utile_scan_outputs:
     mov r24, r22
     lsr r24
     lsr r24
-    andi r24, 0x30
-    ori r24, 0x0B
+    andi r24, PORTB_Y
+    ori r24, PORTB_PULLUPS
     in r23, PORTB_IO
     mov r25, r23
-    andi r25, 0x04
+    andi r25, DE_BIT
     or r24, r25
     cp r23, r24
     breq 1f

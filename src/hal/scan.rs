@@ -8,8 +8,8 @@
 //! stays in assembly too. BENCHMARKS.md has the figures; `--features scan-check` builds a
 //! firmware that compares it with the core on random programs (tests/simavr_scan_check.rs).
 
-use super::{kept, regs, serial, want};
-use utile_core::engine::{offsets as eng, Engine, VIEW_BS, VIEW_PORT};
+use super::{kept, pins, regs, serial, want};
+use utile_core::engine::{offsets as eng, Engine, TIMER_UNIT_MS, UNITS, VIEW_BS, VIEW_PORT};
 use utile_core::ticker::offsets as tick;
 
 /// Why [`run`] returned.
@@ -83,6 +83,25 @@ const ENGINE: usize = kept::ENGINE_AT;
 const CP_OFF: usize = eng::COUNTER_PRESETS - eng::COUNT;
 const _: () = assert!(CP_OFF < 63);
 
+/// `scan.S`'s .TK tails take timers 0..3 in one 8-bit unit (tenths), 4..11 and 12..14 in one
+/// 16-bit unit each (seconds, minutes) and 15 in a 24-bit one (400 s): the core's units must
+/// fall into those groups.
+const _: () = {
+    let u = TIMER_UNIT_MS;
+    let mut m = 0;
+    while m < UNITS {
+        let tail = match m {
+            0..=3 => u[0],
+            4..=11 => u[4],
+            12..=14 => u[12],
+            _ => u[15],
+        };
+        assert!(u[m] == tail, "a timer's unit differs from its .TK tail's");
+        m += 1;
+    }
+    assert!(UNITS == 16 && u[0] < 1 << 8 && u[4] < 1 << 16 && u[12] < 1 << 16 && u[15] < 1 << 24);
+};
+
 /// Call `utile_run` (scan.S): runs the engine from `st.next` until an exit; returns
 /// `EXIT_*`. The assembly is emitted here, inside this function's inline `asm!`, because
 /// LLVM assembles a library's `global_asm!` without the CPU's instruction set
@@ -147,6 +166,17 @@ fn enter(eng: *mut Engine, st: *mut RunState) -> u8 {
         ".set EXIT_WRAP, {exit_wrap}",
         ".set VIEW_PORT, {view_port}",
         ".set VIEW_BS, {view_bs}",
+        ".set PORTB_IO, {portb_io}",
+        ".set PORTD_IO, {portd_io}",
+        ".set TCNT1_MEM, {tcnt1}",
+        ".set PORTB_Y, {portb_y}",
+        ".set PORTD_Y, {portd_y}",
+        ".set PORTB_PULLUPS, {portb_pullups}",
+        ".set DE_BIT, {de_bit}",
+        ".set UNIT_TENTH, {unit_tenth}",
+        ".set UNIT_SECOND, {unit_second}",
+        ".set UNIT_MINUTE, {unit_minute}",
+        ".set UNIT_400S, {unit_400s}",
         include_str!("scan.S"),
         "call utile_run",
         inout("r24") eng_lo => why,
@@ -211,6 +241,17 @@ fn enter(eng: *mut Engine, st: *mut RunState) -> u8 {
         exit_wrap = const EXIT_WRAP,
         view_port = const VIEW_PORT,
         view_bs = const VIEW_BS,
+        portb_io = const regs::PORTB_IO,
+        portd_io = const regs::PORTD_IO,
+        tcnt1 = const regs::TCNT1_MEM,
+        portb_y = const pins::PORTB_Y,
+        portd_y = const pins::PORTD_Y,
+        portb_pullups = const pins::PORTB_PULLUPS,
+        de_bit = const pins::DE_BIT,
+        unit_tenth = const TIMER_UNIT_MS[0],
+        unit_second = const TIMER_UNIT_MS[4],
+        unit_minute = const TIMER_UNIT_MS[12],
+        unit_400s = const TIMER_UNIT_MS[15],
             );
     }
     why

@@ -5,13 +5,11 @@
 //! In RUN mode received bytes go to the Modbus slave instead of the ring (`line.rs`, which
 //! also owns the driver enable and the transmit-complete interrupt of a reply).
 
-use core::sync::atomic::{AtomicU8, Ordering};
-
 use avr_device::interrupt::{self, CriticalSection};
 
 use super::regs::{bit, regs, wr};
 use super::ring::Ring;
-use super::{line, IsrCell};
+use super::{clock, line, IsrCell};
 
 /// Receive ring size.
 pub const RX_SIZE: usize = 64;
@@ -45,15 +43,16 @@ const UCSR0B_ON: u8 = bit::RXCIE0 | bit::RXEN0 | bit::TXEN0;
 static TXCIE: IsrCell<u8> = IsrCell::new(0);
 /// Nonzero while the transmitter is known idle without TXC0: nothing sent since reset, or
 /// the last reply's transmit-complete interrupt (which clears TXC0) was the last event.
-static TX_IDLE: AtomicU8 = AtomicU8::new(1);
+/// Read and written only with interrupts off (a cell, not an atomic: no `cli` of its own).
+static TX_IDLE: IsrCell<u8> = IsrCell::new(1);
 
-/// Set up USART0: 19200 baud (UBRR0 = 51 at 16 MHz: 19231 baud, +0.2 %), 8N1.
+/// Set up USART0: 19200 baud ([`clock::UBRR`]: 51 at 16 MHz, 19231 baud, +0.2 %), 8N1.
 pub(crate) fn init() {
     let dp = regs();
     // UCSR0A: normal speed (U2X0 off).
     wr!(dp.USART0.ucsr0a(), 0);
-    // UBRR0: 16 MHz / (16 × 19200) − 1 ≈ 51.
-    wr!(dp.USART0.ubrr0(), 51);
+    // UBRR0: F_CPU / (16 × BAUD) − 1.
+    wr!(dp.USART0.ubrr0(), clock::UBRR);
     // UCSR0C: asynchronous, no parity, 1 stop bit, 8 data bits.
     wr!(dp.USART0.ucsr0c(), bit::UCSZ01 | bit::UCSZ00);
     // UCSR0B: receiver, its interrupt, transmitter.
@@ -118,14 +117,16 @@ pub(crate) fn all_sent(cs: CriticalSection) -> bool {
 
 /// Transmit complete found the line idle.
 #[inline(always)]
-pub(crate) fn went_idle() {
-    TX_IDLE.store(1, Ordering::Relaxed);
+pub(crate) fn went_idle(cs: CriticalSection) {
+    // SAFETY: the closure does not re-enter TX_IDLE.
+    unsafe { TX_IDLE.with(cs, |i| *i = 1) };
 }
 
 /// Whether the line has gone idle since the last byte was queued.
 #[inline(always)]
-pub(crate) fn idle_since_queued() -> bool {
-    TX_IDLE.load(Ordering::Relaxed) != 0
+pub(crate) fn idle_since_queued(cs: CriticalSection) -> bool {
+    // SAFETY: the closure does not re-enter TX_IDLE.
+    unsafe { TX_IDLE.with(cs, |i| *i != 0) }
 }
 
 /// If nothing waits to be sent and the transmitter is idle, make transmit complete report
@@ -136,7 +137,7 @@ pub(crate) fn claim_idle(cs: CriticalSection) -> bool {
     let empty = unsafe { TX.with(cs, |tx| tx.len() == 0) };
     // UCSR0A: TXC0 says UDR0 and the shift register are both empty.
     let done = dp.USART0.ucsr0a().read().bits() & bit::TXC0 != 0;
-    let idle = empty && (done || idle_since_queued());
+    let idle = empty && (done || idle_since_queued(cs));
     if idle {
         // UCSR0A: TXC0 cleared (a one clears it), normal speed.
         wr!(dp.USART0.ucsr0a(), bit::TXC0);
@@ -189,12 +190,16 @@ pub(crate) fn overruns() -> u16 {
 
 /// Queue `byte` for sending, waiting (and feeding the watchdog) while the ring is full.
 pub(crate) fn tx(byte: u8) {
-    TX_IDLE.store(0, Ordering::Relaxed);
     loop {
         let queued = interrupt::free(|cs| {
             // SAFETY: the closure does not re-enter TX.
             let queued = unsafe { TX.with(cs, |tx| tx.push(byte)) };
             if queued {
+                // Not idle since this byte, in the same critical section as the push: a
+                // transmit complete before it would otherwise mark the line idle with the
+                // byte still to go, and a reply queued after it would end early.
+                // SAFETY: the closure does not re-enter TX_IDLE.
+                unsafe { TX_IDLE.with(cs, |i| *i = 0) };
                 // UCSR0B with UDRIE0: the interrupt drains the ring (TXCIE0 kept).
                 wr!(regs().USART0.ucsr0b(), UCSR0B_ON | bit::UDRIE0 | txcie(cs));
             }

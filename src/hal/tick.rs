@@ -8,7 +8,7 @@ use utile_core::ticker::Ticker;
 
 use super::isr_cell::IsrCell;
 use super::regs::{bit, regs, wr};
-use super::{adc, pins};
+use super::{adc, clock, pins};
 
 /// The core's ticker, advanced by the tick interrupt. All zeros (`.bss`, no flash): `init`
 /// takes the pins' levels before the first tick.
@@ -35,11 +35,11 @@ pub(crate) fn publish(t: &Ticker) {
 #[inline(always)]
 pub(super) fn init() {
     let dp = regs();
-    // Timer0: CTC, clk/64, OCR0A = 249 → exactly 1 kHz at 16 MHz.
+    // Timer0: CTC, clk/64, OCR0A = 249 → exactly 1 kHz at 16 MHz (`clock.rs`).
     // TCCR0A: WGM01 (CTC).
     wr!(dp.TC0.tccr0a(), bit::WGM01);
     // OCR0A: 250 counts per period.
-    wr!(dp.TC0.ocr0a(), 249);
+    wr!(dp.TC0.ocr0a(), clock::OCR0A);
     // TCCR0B: CS01|CS00 = clk/64.
     wr!(dp.TC0.tccr0b(), bit::CS01 | bit::CS00);
     // TIMSK0: OCIE0A.

@@ -1,16 +1,49 @@
 //! Collecting one request frame. The firmware reports the silences it measures: before each
-//! byte whether more than 1.5 character times passed since the previous one, and the end of
-//! the frame after 3.5 character times of silence. The CRC runs as bytes arrive.
+//! byte whether the line was silent for more than 1.5 character times (t1.5) since the previous
+//! one's stop bit, and the end of the frame after 3.5 character times of silence (t3.5). The
+//! CRC runs as bytes arrive.
+//!
+//! The silences are the Modbus RTU specification's, from the end of one character's stop bit
+//! to the next start bit. A board stamps each character at the same point of it (its
+//! receive-complete interrupt), so the time between two stamps holds the later character
+//! itself besides the silence: [`pause_limit`] and [`end_silence`] give the limits in the
+//! board's own clock counts, worked out from its clock and the baud rate.
 
 use super::crc::Crc16;
 
 /// The largest frame this slave takes: a write of all 26 holding registers is 61 bytes.
 pub const FRAME_MAX: usize = 64;
 
+/// The longest silence inside a frame, in tenths of a character (t1.5).
+pub const PAUSE_TENTHS: u32 = 15;
+/// The silence that ends a frame, in tenths of a character (t3.5).
+pub const END_TENTHS: u32 = 35;
+/// Bits in one character at 8N1: start, 8 data, stop.
+pub const CHAR_BITS: u32 = 10;
+
+/// `tenths` tenths of a character at `baud` 8N1, in counts of a clock at `hz`, rounded up.
+pub const fn char_counts(hz: u32, baud: u32, tenths: u32) -> u32 {
+    let counts = hz as u64 * tenths as u64 * CHAR_BITS as u64 / 10;
+    let baud = if baud == 0 { 1 } else { baud as u64 };
+    counts.div_ceil(baud) as u32
+}
+
+/// The most counts of a clock at `hz` between the stamps of two characters of one frame at
+/// `baud`: the later character itself and t1.5 of silence. A longer time breaks the frame.
+pub const fn pause_limit(hz: u32, baud: u32) -> u32 {
+    char_counts(hz, baud, 10 + PAUSE_TENTHS)
+}
+
+/// Counts of a clock at `hz` after the stamp of a frame's last character (its stop bit's
+/// end or later) that end the frame: t3.5 at `baud`.
+pub const fn end_silence(hz: u32, baud: u32) -> u32 {
+    char_counts(hz, baud, END_TENTHS)
+}
+
 /// Why a frame was thrown away (no answer, nothing changed).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Drop {
-    /// More than 1.5 character times of silence inside the frame.
+    /// More than 1.5 character times of silence inside the frame (t1.5).
     Gap,
     /// Longer than [`FRAME_MAX`].
     TooLong,
@@ -60,7 +93,8 @@ impl Receiver {
         }
     }
 
-    /// A received byte; `after_gap`: more than 1.5 character times of silence came first.
+    /// A received byte; `after_gap`: the line was silent for more than 1.5 character times
+    /// between the previous byte's stop bit and this byte's start bit ([`pause_limit`]).
     pub fn push(&mut self, byte: u8, after_gap: bool) {
         self.kept = 0;
         if self.len > 0 && after_gap {

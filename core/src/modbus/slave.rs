@@ -3,7 +3,8 @@
 //! terminal stays quiet while one is).
 //!
 //! The board reports the line's silences ([`Slave::push`] with `after_gap`, [`Slave::end`]
-//! after 3.5 character times); the slave never waits and never holds a reply buffer.
+//! after 3.5 character times, both measured as [`super::frame`] says); the slave never waits
+//! and never holds a reply buffer.
 
 use super::frame::{Receiver, Verdict};
 use super::map::Map;
@@ -64,7 +65,8 @@ impl Slave {
         }
     }
 
-    /// A received byte; `after_gap`: more than 1.5 character times of silence came first.
+    /// A received byte; `after_gap`: the line was silent for more than 1.5 character times
+    /// since the previous byte's stop bit (see [`super::frame::pause_limit`]).
     /// While a reply goes out the line is ours (RS-485 is half duplex): bytes are ignored.
     pub fn push(&mut self, byte: u8, after_gap: bool) {
         if !self.replying {
@@ -79,7 +81,13 @@ impl Slave {
 
     /// 3.5 character times of silence: judge the frame, and for a valid request to
     /// `address` (1..247) or a broadcast, carry it out on `map`.
+    ///
+    /// While a reply is being made nothing ends: the bytes were ignored, and the request the
+    /// reply is built from stays.
     pub fn end<M: Map + ?Sized>(&mut self, address: u8, map: &mut M, now_ms: u32) -> Event {
+        if self.replying {
+            return Event::None;
+        }
         let len = match self.rx.end() {
             Verdict::Empty => return Event::None,
             Verdict::Slash => return Event::Slash,

@@ -64,14 +64,17 @@ pub fn editor_loop(data: &[u8]) -> Result<MainLoop, String> {
 }
 
 /// The line parser: the input is split at `\n` into lines of printable characters, each
-/// typed and ended with CR. A model of the main screen and of LDT predicts the UF, the
-/// presets, the cursor line and the Data display after every line; they must match exactly.
+/// typed and ended with CR. A model of the main screen, of LDT and of LDC predicts the whole
+/// program (UF, presets, counter presets, set-points), the cursor line and the Data display
+/// after every line; they must match exactly.
 pub fn lines(data: &[u8]) -> Verdict {
     let mut main_loop = MainLoop::boot(sample_program());
     let mut model = main_loop.eng.prog.clone();
     let mut cursor: u8 = 0;
     let mut data_shown: u16 = 0;
     let mut ldt: Option<u8> = None;
+    // LDC's selected cell: counters 0..7, set-points 8 and 9.
+    let mut ldc: Option<u8> = None;
     for raw in data.split(|&c| c == b'\n').take(64) {
         let typed: Vec<u8> = raw
             .iter()
@@ -109,6 +112,27 @@ pub fn lines(data: &[u8]) -> Verdict {
                 (None, b"Z") => model.presets = [0; UNITS],
                 _ => {}
             }
+        } else if let Some(sel) = ldc {
+            match (number, word.as_slice()) {
+                (_, []) => ldc = None,
+                (Some(v), _) => {
+                    let i = usize::from(sel);
+                    let max = if i < 8 { 0xFFFF } else { 1023 };
+                    if v <= max {
+                        if i < 8 {
+                            model.counter_presets[i] = v as u16;
+                        } else {
+                            model.set_points[i - 8] = v as u16;
+                        }
+                        ldc = Some(if sel == 9 { 0 } else { sel + 1 });
+                    }
+                }
+                (None, b"Z") => {
+                    model.counter_presets = [0; 8];
+                    model.set_points = [0; 2];
+                }
+                _ => {}
+            }
         } else if let Some(v) = number {
             if v <= 0xFFFF {
                 data_shown = v as u16;
@@ -130,6 +154,7 @@ pub fn lines(data: &[u8]) -> Verdict {
                     cursor = 0;
                 }
                 b"LDT" => ldt = Some(0),
+                b"LDC" => ldc = Some(0),
                 b"LIST" | b"WRITE" => after_cr = b"/",
                 b"READ" => after_cr = b"/",
                 b"STORE" => {
@@ -200,7 +225,8 @@ pub fn lines(data: &[u8]) -> Verdict {
 }
 
 /// The escape-sequence decoder (SPEC §8, version-2 rules). The input is bytes received; a
-/// byte 0xFF followed by `n` stands for a pause of `n` ms, which must change nothing (ESC
+/// byte 0xFF followed by `n` stands for a pause of `n` ms (`n` > 0), which must change
+/// nothing, and for the byte 0xFF itself when `n` is 0 (ESC
 /// always starts a sequence, however late the next byte comes). Invariants: a byte outside
 /// a sequence, and a control character, DEL or high byte anywhere, is handed on unchanged
 /// (ESC excepted); a printable byte inside a sequence never is; keys come only on a final
@@ -212,11 +238,15 @@ pub fn keys(data: &[u8]) -> Verdict {
     let mut since_esc: u32 = 0;
     let mut it = data.iter().copied();
     while let Some(b) = it.next() {
-        if b == 0xFF {
-            // A pause: the decoder has no clock, nothing may happen.
-            let _ = it.next();
-            continue;
-        }
+        // 0xFF 0x00 is the byte 0xFF itself (a high byte like any other).
+        let b = match b {
+            0xFF => match it.next() {
+                Some(0) => 0xFF,
+                // A pause: the decoder has no clock, nothing may happen.
+                _ => continue,
+            },
+            b => b,
+        };
         let was_pending = d.pending();
         let ev = d.feed(b);
         let printable = (0x20..0x7F).contains(&b);

@@ -190,7 +190,11 @@ impl MainLoop {
                 Err(why())
             };
         }
-        let uf_only = after.presets == before.presets;
+        // Every field of the program is compared: counter presets and set-points change
+        // only through LDC (one cell, or all cleared by `Z`), or with the whole program.
+        let ldc_same = after.counter_presets == before.counter_presets
+            && after.set_points == before.set_points;
+        let uf_only = after.presets == before.presets && ldc_same;
         let ins_del = uf_only
             && (after.uf == inserted(&before.uf, cursor)
                 || after.uf == deleted(&before.uf, cursor));
@@ -208,7 +212,15 @@ impl MainLoop {
                 .enumerate()
                 .all(|(i, (a, b))| a == b || i == cursor);
         let fill = uf_only && after.uf == [NOP; LINES];
+        let changed = |a: &[u16], b: &[u16]| a.iter().zip(b).filter(|(x, y)| x != y).count();
+        let ldc_only = after.uf == before.uf
+            && after.presets == before.presets
+            && ((after.counter_presets == [0; 8] && after.set_points == [0; 2])
+                || changed(&after.counter_presets, &before.counter_presets)
+                    + changed(&after.set_points, &before.set_points)
+                    == 1);
         let presets_only = after.uf == before.uf
+            && ldc_same
             && (after.presets == [0; UNITS]
                 || after
                     .presets
@@ -217,7 +229,7 @@ impl MainLoop {
                     .filter(|(a, b)| a != b)
                     .count()
                     == 1);
-        if one_line || ins_del || fill || presets_only {
+        if one_line || ins_del || fill || presets_only || ldc_only {
             return Ok(());
         }
         // LOAD: the newest stored program.

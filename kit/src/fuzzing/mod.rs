@@ -11,7 +11,7 @@
 //! and calls `after_scan`, and KEY's `/` ends in `on_break`.
 //!
 //! Rooms: `term.rs` (the terminal model), `main_loop.rs`, and the harnesses by subject:
-//! `editor.rs`, `storage.rs`, `modbus.rs`.
+//! `editor.rs`, `storage.rs`, `modbus.rs` (with `modbus_oracle.rs`, what a request must do).
 
 use std::format;
 use std::string::{String, ToString};
@@ -40,13 +40,15 @@ pub const RX_RING: usize = 64;
 mod editor;
 mod main_loop;
 mod modbus;
+mod modbus_oracle;
 mod storage;
 mod term;
 
 pub use editor::{editor, editor_loop, keys, lines, sample_program};
 pub use main_loop::MainLoop;
-pub use modbus::{modbus, modbus_plc};
-pub use storage::{eeprom, hex_roundtrip, ihex, image_decode};
+pub use modbus::{modbus, modbus_plc, named_writes, BUILT_MAX};
+pub use modbus_oracle::check_effect;
+pub use storage::{eeprom, hex_roundtrip, ihex, image_decode, reference_newest, same_image};
 pub use term::Term;
 
 /// A fuzz harness: arbitrary bytes in, the broken invariant out.

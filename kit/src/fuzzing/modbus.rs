@@ -5,7 +5,9 @@
 //!
 //! Invariants: no panic; no read or write outside the map (the map records any); an
 //! exception or a dropped frame changes nothing; every reply is a valid frame (CRC,
-//! address, function or function | 0x80, a length that agrees with its byte count).
+//! address, function or function | 0x80, a length that agrees with its byte count); a
+//! read carries the map's values and a write changes exactly what it names
+//! (`modbus_oracle.rs`).
 
 use std::format;
 use std::vec::Vec;
@@ -14,6 +16,7 @@ use utile_core::modbus::frame::{Receiver, Verdict as FrameVerdict};
 use utile_core::modbus::reply::Reply;
 use utile_core::modbus::request::{handle, Answer};
 
+use super::modbus_oracle::check_effect;
 use super::Verdict;
 use crate::modbus::map::TestMap;
 use crate::modbus::{crc_ok, with_crc};
@@ -67,10 +70,14 @@ enum Line {
     End,
 }
 
+/// Body bytes a built frame takes at most: 63 after its address, so a write of all 26
+/// holding registers (61 bytes with its CRC) and frames too long for the slave are reached.
+pub const BUILT_MAX: u8 = 64;
+
 /// Pairs of bytes (control, value). Control `& 3`: 0 a byte, 1 a byte after a 1.5-character
-/// gap, 2 the silence that ends a frame, 3 a frame built from the next `value % 40` values
-/// with a correct CRC (so the handler is reached often), addressed by `control >> 6` (0 all,
-/// 1 another slave, else this one), and its end.
+/// gap, 2 the silence that ends a frame, 3 a frame built from the next `value % BUILT_MAX`
+/// values with a correct CRC (so the handler is reached often), addressed by `control >> 6`
+/// (0 all, 1 another slave, else this one), and its end.
 fn line_events(data: &[u8]) -> Vec<Line> {
     let mut events = Vec::new();
     let mut pairs = data.chunks_exact(2);
@@ -87,7 +94,12 @@ fn line_events(data: &[u8]) -> Vec<Line> {
                     _ => ADDRESS,
                 };
                 let mut body = std::vec![to];
-                body.extend(pairs.by_ref().take(usize::from(value % 40)).map(|p| p[1]));
+                body.extend(
+                    pairs
+                        .by_ref()
+                        .take(usize::from(value % BUILT_MAX))
+                        .map(|p| p[1]),
+                );
                 events.extend(with_crc(&body).into_iter().map(|b| Line::Byte(b, false)));
                 events.push(Line::End);
             }
@@ -125,6 +137,7 @@ pub fn modbus(data: &[u8]) -> Verdict {
                     return Err(format!("reply of {} bytes", bytes.len()));
                 }
                 check_reply(&bytes, pdu, answer)?;
+                check_effect(pdu, &bytes[1..bytes.len() - 2], &before, &map)?;
             }
             _ => {
                 if map != before {
@@ -141,13 +154,15 @@ pub fn modbus(data: &[u8]) -> Verdict {
 
 /// The harness of the slave on the real map (`plc`): the line events of [`line_events`]
 /// go through [`Slave`] to §13's map over an engine running a program, which scans between
-/// frames.
+/// frames. A reply is made one byte per line event after its frame, as the firmware makes
+/// it a few bytes per visit: scans run and stray bytes and silences arrive while it goes out.
 ///
-/// Invariants: no panic; a request changes only what the map names (PY, PU, PV, the
-/// presets and set-points, and the counter outputs a preset moves), an exception or a
-/// dropped frame nothing; set-points stay ≤ 1023; every reply is a valid frame; a read of
-/// §17's windows shows the engine as it was when the frame was judged, the program two
-/// lines per register and the program's fingerprint.
+/// Invariants: no panic; a request changes exactly what it names ([`named_writes`]: PY, PU,
+/// PV, the presets, the set-points, and the counter outputs of the counters whose preset it
+/// wrote), an exception, a dropped frame or a silence during a reply nothing; set-points stay
+/// ≤ 1023; every reply is a valid frame; a read of §17's windows shows the engine as it was
+/// when the frame was judged, the program two lines per register and the program's
+/// fingerprint.
 pub fn modbus_plc(data: &[u8]) -> Verdict {
     use utile_core::board::Board;
     use utile_core::engine::Engine;
@@ -160,12 +175,60 @@ pub fn modbus_plc(data: &[u8]) -> Verdict {
     let mut slave = Slave::new();
     let mut status = Status::new(STATUS_RUNNING, &utile_core::stats::ScanStats::new(), 0, 0);
     status.start(&eng.prog.uf);
-    // The bytes since the last frame end: the request, if it was one.
+    // The bytes the slave took since the last frame end: the request, if it was one.
     let mut frame = Vec::new();
-    for event in line_events(data) {
+    // The reply being made, with what its frame's judgement saw and did.
+    let mut going: Option<Going> = None;
+    let events = line_events(data);
+    // After the last event, the reply still being made is finished.
+    for event in events.into_iter().map(Some).chain(std::iter::once(None)) {
+        if let Some(g) = &mut going {
+            // A scan between two visits, then one byte of the reply (all of it at the end).
+            b.run_for(&mut eng, 1, 1);
+            let mut map = PlcMap {
+                eng: &mut eng,
+                b: &mut b,
+                status: &status,
+            };
+            let complete = loop {
+                match slave.next_byte(&mut map) {
+                    Some(x) => g.reply.push(x),
+                    None => break true,
+                }
+                if g.reply.len() > 256 {
+                    return Err("a reply of more than 256 bytes".into());
+                }
+                if event.is_some() {
+                    break false;
+                }
+            };
+            if complete {
+                g.check()?;
+                going = None;
+            }
+        }
+        let Some(event) = event else { break };
         if let Line::Byte(byte, gap) = event {
+            // While a reply is being made the slave ignores the line (half duplex).
+            if !slave.replying() {
+                frame.push(byte);
+            }
             slave.push(byte, gap);
-            frame.push(byte);
+            continue;
+        }
+        if slave.replying() {
+            // A silence during a reply (after a stray byte): nothing ends, nothing changes.
+            let before = eng.clone();
+            let now = b.ticker.now_ms();
+            let mut map = PlcMap {
+                eng: &mut eng,
+                b: &mut b,
+                status: &status,
+            };
+            let event = slave.end(ADDRESS, &mut map, now);
+            if event != Event::None || eng != before {
+                return Err(format!("a silence during a reply: {event:?}"));
+            }
             continue;
         }
         let request = std::mem::take(&mut frame);
@@ -180,58 +243,163 @@ pub fn modbus_plc(data: &[u8]) -> Verdict {
             status: &status,
         };
         let event = slave.end(ADDRESS, &mut map, now);
-        let mut reply = Vec::new();
-        while let Some(x) = slave.next_byte(&mut map) {
-            reply.push(x);
-            if reply.len() > 256 {
-                return Err("a reply of more than 256 bytes".into());
-            }
-        }
-        // What a request may change: outputs and virtual ports, presets, set-points, and
-        // the counter outputs that follow a counter preset.
-        let mut allowed = eng.clone();
-        allowed.py = before.py;
-        allowed.pu = before.pu;
-        allowed.pv = before.pv;
-        allowed.cq = before.cq;
-        allowed.prog.presets = before.prog.presets;
-        allowed.prog.counter_presets = before.prog.counter_presets;
-        allowed.prog.set_points = before.prog.set_points;
-        if allowed != before {
-            return Err(format!("a request changed more than the map: {event:?}"));
-        }
         if eng.prog.set_points.iter().any(|&s| s > 1023) {
             return Err(format!("a set-point above 1023: {:?}", eng.prog.set_points));
         }
         match event {
             Event::Reply => {
-                if reply.len() < 5 || !crc_ok(&reply) || reply[0] != ADDRESS {
-                    return Err(format!("reply {reply:02X?} is not a valid frame"));
-                }
-                if reply[1] & 0x80 != 0 && eng != before {
-                    return Err(format!("exception {reply:02X?} changed the engine"));
-                }
-                if reply[1] == 0x04 {
-                    let judged = Judged {
-                        eng: &before,
-                        inputs,
-                        thresholds,
-                        status: &status,
-                    };
-                    check_windows(&request, &reply, &judged)?;
-                }
+                going = Some(Going {
+                    named: named_writes(&request, &before, &eng),
+                    unchanged: eng == before,
+                    status,
+                    before,
+                    inputs,
+                    thresholds,
+                    request,
+                    reply: Vec::new(),
+                });
             }
             Event::Dropped | Event::Slash | Event::None => {
-                if !reply.is_empty() || eng != before {
+                if slave.replying() || eng != before {
                     return Err(format!("{event:?} answered or changed something"));
                 }
             }
             Event::Broadcast => {
-                if !reply.is_empty() {
+                if slave.replying() {
                     return Err("a broadcast was answered".into());
+                }
+                if named_writes(&request, &before, &eng).is_err() && eng != before {
+                    return Err("a broadcast changed more than it names".into());
                 }
             }
         }
+    }
+    Ok(())
+}
+
+/// A reply being made, with what its frame's judgement saw and did.
+struct Going {
+    /// The engine when the frame was judged, before the request was carried out.
+    before: utile_core::engine::Engine,
+    inputs: u8,
+    thresholds: u8,
+    status: utile_core::modbus::plc::Status,
+    /// The request's frame.
+    request: Vec<u8>,
+    /// Whether the request changed exactly what it names ([`named_writes`]).
+    named: Verdict,
+    /// Whether it changed nothing.
+    unchanged: bool,
+    /// The reply's bytes so far.
+    reply: Vec<u8>,
+}
+
+impl Going {
+    /// The whole reply against the request and the judgement.
+    fn check(&self) -> Verdict {
+        let reply = &self.reply;
+        if reply.len() < 5 || !crc_ok(reply) || reply[0] != ADDRESS {
+            return Err(format!("reply {reply:02X?} is not a valid frame"));
+        }
+        if reply[1] & 0x80 != 0 {
+            if !self.unchanged {
+                return Err(format!("exception {reply:02X?} changed the engine"));
+            }
+            return Ok(());
+        }
+        self.named.clone()?;
+        // Echoes: the whole request (single writes, diagnostics), its first five bytes
+        // (multiple writes).
+        let (pdu, answer) = (
+            self.request.get(1..self.request.len().saturating_sub(2)),
+            reply.get(1..reply.len() - 2),
+        );
+        let echoed = match reply[1] {
+            0x05 | 0x06 | 0x08 => pdu == answer,
+            0x0F | 0x10 => pdu.and_then(|p| p.get(..5)) == answer,
+            _ => true,
+        };
+        if !echoed {
+            return Err(format!(
+                "reply {reply:02X?} does not echo {:02X?}",
+                self.request
+            ));
+        }
+        if reply[1] == 0x04 {
+            let judged = Judged {
+                eng: &self.before,
+                inputs: self.inputs,
+                thresholds: self.thresholds,
+                status: &self.status,
+            };
+            check_windows(&self.request, reply, &judged)?;
+        }
+        Ok(())
+    }
+}
+
+/// Whether `after` is `before` with exactly the writes the request frame `request` names
+/// (worked out here from §13's map, not by the codec): coils 0..23 are PY, PU, PV bit by bit,
+/// holding registers 0..15 the timer presets, 16..23 the counter presets (their counters'
+/// outputs may follow), 24..25 the set-points. A request that writes nothing changes nothing.
+pub fn named_writes(
+    request: &[u8],
+    before: &utile_core::engine::Engine,
+    after: &utile_core::engine::Engine,
+) -> Verdict {
+    let word = |i: usize| match (request.get(i), request.get(i + 1)) {
+        (Some(&h), Some(&l)) => u16::from_be_bytes([h, l]),
+        _ => 0,
+    };
+    let (start, qty) = (word(2), word(4));
+    let mut want = before.clone();
+    let mut coil = |a: u16, on: bool| {
+        let port = match a >> 3 {
+            0 => &mut want.py,
+            1 => &mut want.pu,
+            _ => &mut want.pv,
+        };
+        let mask = 1u8 << (a & 7);
+        *port = if on { *port | mask } else { *port & !mask };
+    };
+    let mut registers = Vec::new();
+    match request.get(1).copied().unwrap_or(0) {
+        0x05 => coil(start, qty == 0xFF00),
+        0x0F => {
+            for i in 0..qty {
+                let byte = request.get(7 + usize::from(i / 8)).copied().unwrap_or(0);
+                coil(start.wrapping_add(i), byte >> (i % 8) & 1 != 0);
+            }
+        }
+        0x06 => registers.push((start, qty)),
+        0x10 => {
+            for i in 0..qty {
+                registers.push((start.wrapping_add(i), word(7 + 2 * usize::from(i))));
+            }
+        }
+        _ => {}
+    }
+    // Counter outputs may follow the presets written.
+    let mut cq_free = 0u8;
+    for (a, v) in registers {
+        let a = usize::from(a);
+        match a {
+            0..=15 => want.prog.presets[a] = v as u8,
+            16..=23 => {
+                want.prog.counter_presets[a - 16] = v;
+                cq_free |= 1 << (a - 16);
+            }
+            _ => want.prog.set_points[(a - 24) & 1] = v,
+        }
+    }
+    if (after.cq ^ before.cq) & !cq_free != 0 {
+        return Err(format!(
+            "{request:02X?} moved the outputs of counters whose preset it did not write"
+        ));
+    }
+    want.cq = after.cq;
+    if *after != want {
+        return Err(format!("{request:02X?} changed otherwise than it names"));
     }
     Ok(())
 }

@@ -328,6 +328,11 @@ impl Chip {
         self.avr().state == ffi::cpu_Sleeping as c_int
     }
 
+    /// Whether interrupts are enabled (SREG's I bit).
+    pub fn interrupts_on(&self) -> bool {
+        self.avr().sreg[7] != 0
+    }
+
     /// Program counter (byte address).
     pub fn pc(&self) -> u32 {
         self.avr().pc

@@ -5,6 +5,7 @@
 use super::chip::{Chip, CpuState, Reset, MCUSR};
 use super::{ioctl_def, F_CPU};
 use simavr_ffi as ffi;
+use std::ffi::c_int;
 
 /// Data-space address of WDTCSR (the watchdog's control register).
 const WDTCSR: usize = 0x60;
@@ -58,6 +59,27 @@ impl Chip {
     /// itself (the watchdog) keeps the cycle count going and re-arms the watchdog.
     pub fn step(&mut self) -> CpuState {
         self.step_inline()
+    }
+
+    /// One step with the program held at its next instruction, as if that instruction
+    /// took this long: time passes to the next event of the peripherals and timers, and an
+    /// interrupt that is due is taken (its handler then runs by [`Chip::step`]); no
+    /// instruction of the program runs, not even the one the chip runs after `reti` or `sei`
+    /// before the next interrupt. How a test stalls the main program at the instruction
+    /// that matters (an interleaving a slow main loop makes). With interrupts off it is
+    /// [`Chip::step`]: nothing could end the hold.
+    pub fn step_held(&mut self) -> CpuState {
+        if !self.interrupts_on() {
+            return self.step();
+        }
+        // SAFETY: `avr` is valid and not running; as sleeping, simavr runs no instruction.
+        unsafe { self.avr.as_mut().state = ffi::cpu_Sleeping as c_int };
+        let state = self.step_inline();
+        if self.sleeping() {
+            // SAFETY: as above; the hold ends with the step (inside a handler, too).
+            unsafe { self.avr.as_mut().state = ffi::cpu_Running as c_int };
+        }
+        state
     }
 
     /// [`Chip::step`], inlined into the run loop: the harness's per-instruction path, so

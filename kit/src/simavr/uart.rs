@@ -390,6 +390,12 @@ impl Chip {
         self.link.uart.out.drain(..).collect()
     }
 
+    /// The cycle at which the firmware's last byte has left the line (its stop bit ends);
+    /// the transmitter is idle from then on, unless it is given another.
+    pub fn tx_free_at(&self) -> u64 {
+        self.link.uart.tx_free
+    }
+
     /// Bytes sent by the firmware and not yet taken.
     pub fn output_len(&self) -> usize {
         self.link.uart.out.len()

@@ -1,0 +1,119 @@
+//! The `modbus` harness's oracle of what a request does, worked out from the request and the
+//! map alone (never from the codec): a read's reply carries the map's values as they were,
+//! a write changes exactly the coils or registers it names to the values it names, and
+//! anything else (diagnostics, report server ID, an exception) changes nothing.
+
+use std::format;
+use std::vec::Vec;
+
+use utile_core::modbus::map::{Map, Table};
+
+use super::Verdict;
+use crate::modbus::map::TestMap;
+
+/// Big-endian word at `i` of `b` (0 past the end).
+fn word(b: &[u8], i: usize) -> u16 {
+    match (b.get(i), b.get(i + 1)) {
+        (Some(&h), Some(&l)) => u16::from_be_bytes([h, l]),
+        _ => 0,
+    }
+}
+
+/// The map as `before` with every `(table, addr, value)` of `writes` done.
+fn written(before: &TestMap, writes: &[(Table, u16, u16)]) -> TestMap {
+    let mut m = before.clone();
+    for &(table, addr, value) in writes {
+        m.write(table, addr, value);
+    }
+    m
+}
+
+/// Checks the reply PDU `reply` (function first, no address or CRC) to the request PDU `pdu`,
+/// and the map `after` it, against the map `before` it.
+pub fn check_effect(pdu: &[u8], reply: &[u8], before: &TestMap, after: &TestMap) -> Verdict {
+    let function = pdu.first().copied().unwrap_or(0);
+    if reply.first().is_some_and(|f| f & 0x80 != 0) {
+        if after != before {
+            return Err(format!(
+                "exception {reply:02X?} to {pdu:02X?} changed the map"
+            ));
+        }
+        return Ok(());
+    }
+    let (start, qty) = (word(pdu, 1), word(pdu, 3));
+    let mut map = before.clone();
+    let expected_after = match function {
+        0x01 | 0x02 => {
+            let table = if function == 1 {
+                Table::Coils
+            } else {
+                Table::DiscreteInputs
+            };
+            let mut bytes = std::vec![0u8; usize::from(qty).div_ceil(8)];
+            for i in 0..qty {
+                if map.read(table, start.wrapping_add(i)) != 0 {
+                    bytes[usize::from(i / 8)] |= 1 << (i % 8);
+                }
+            }
+            let mut want = std::vec![function, bytes.len() as u8];
+            want.extend(bytes);
+            if reply != want.as_slice() {
+                return Err(format!(
+                    "read {pdu:02X?} got {reply:02X?}, the map holds {want:02X?}"
+                ));
+            }
+            before.clone()
+        }
+        0x03 | 0x04 => {
+            let table = if function == 3 {
+                Table::HoldingRegisters
+            } else {
+                Table::InputRegisters
+            };
+            let mut want = std::vec![function, (2 * qty) as u8];
+            for i in 0..qty {
+                want.extend(map.read(table, start.wrapping_add(i)).to_be_bytes());
+            }
+            if reply != want.as_slice() {
+                return Err(format!(
+                    "read {pdu:02X?} got {reply:02X?}, the map holds {want:02X?}"
+                ));
+            }
+            before.clone()
+        }
+        0x05 => written(before, &[(Table::Coils, start, u16::from(qty == 0xFF00))]),
+        0x06 => written(before, &[(Table::HoldingRegisters, start, qty)]),
+        0x0F => {
+            let writes: Vec<(Table, u16, u16)> = (0..qty)
+                .map(|i| {
+                    let byte = pdu.get(6 + usize::from(i / 8)).copied().unwrap_or(0);
+                    let bit = u16::from(byte >> (i % 8) & 1);
+                    (Table::Coils, start.wrapping_add(i), bit)
+                })
+                .collect();
+            written(before, &writes)
+        }
+        0x10 => {
+            let writes: Vec<(Table, u16, u16)> = (0..qty)
+                .map(|i| {
+                    let value = word(pdu, 6 + 2 * usize::from(i));
+                    (Table::HoldingRegisters, start.wrapping_add(i), value)
+                })
+                .collect();
+            written(before, &writes)
+        }
+        _ => before.clone(),
+    };
+    if matches!(function, 0x05 | 0x06) && reply != pdu {
+        return Err(format!("write {pdu:02X?} not echoed: {reply:02X?}"));
+    }
+    if matches!(function, 0x0F | 0x10) && reply.get(..5) != pdu.get(..5) {
+        return Err(format!("write {pdu:02X?} answered {reply:02X?}"));
+    }
+    if *after != expected_after {
+        return Err(format!(
+            "{pdu:02X?} changed the map otherwise than it names"
+        ));
+    }
+    Ok(())
+}
