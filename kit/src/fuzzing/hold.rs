@@ -108,7 +108,7 @@ impl Model {
             ..ScanStats::new()
         };
         status.refresh(STATUS_RUNNING, &st, 0, 0);
-        let bits = u16::from(self.held) * STATUS_HELD | u16::from(self.lapsed) * STATUS_LAPSED;
+        let bits = (u16::from(self.held) * STATUS_HELD) | (u16::from(self.lapsed) * STATUS_LAPSED);
         if status.regs[0] != STATUS_RUNNING | bits {
             return Err(format!(
                 "status {:#06X}, bits 4-5 {bits:#06X}",
