@@ -1,6 +1,7 @@
-//! RUN mode's Modbus RTU slave (SPEC §13, §17), between scans: judge a frame once its silence
-//! has passed, carry the request out on the engine (the core's `PlcMap`) and start its reply
-//! at once, then feed the reply to the transmitter a few bytes per visit. The line's timing
+//! RUN mode's Modbus RTU slave (SPEC §13, §17, §18), between scans: judge a frame once its
+//! silence has passed, carry the request out on the engine (the core's `PlcMap`) and start its
+//! reply at once, then feed the reply to the transmitter a few bytes per visit; and whether
+//! the next scan may run (§18's hold, the core's `Hold`, kept in the status). The line's timing
 //! and the slave itself are the hardware layer's (`hal/line.rs`); this file has no `unsafe`.
 //!
 //! The scan comes back for this after the very scan in which the work arose (a frame ended,
@@ -9,6 +10,7 @@
 
 use utile_core::board::Board;
 use utile_core::engine::Engine;
+use utile_core::modbus::hold::{Next, HR_SCAN_CONTROL};
 use utile_core::modbus::plc::{PlcMap, Status, STATUS_OVERRUN, STATUS_RUNNING};
 use utile_core::modbus::plc::{STATUS_STORED, STATUS_WATCHDOG};
 use utile_core::modbus::slave::Event;
@@ -33,10 +35,8 @@ const AHEAD: u8 = 12;
 /// What the RUN loop must do after a visit.
 #[derive(Clone, Copy, PartialEq, Eq)]
 pub enum After {
-    /// Nothing.
+    /// Nothing (a lone `/` went to the receive ring, where KEY takes it).
     Nothing,
-    /// A lone `/` came: the break key (KEY takes it from the receive ring).
-    BreakKey,
     /// The master wrote presets or set-points: reseal the program kept over a warm reset.
     Written,
 }
@@ -61,7 +61,8 @@ impl Server {
     /// RUN starts: the address from EEPROM, the status bits (`by_watchdog`: the last reset
     /// was the watchdog's; `stored`: EEPROM holds a valid program, as the editor knows it),
     /// the program's fingerprint, the line switched to Modbus.
-    pub fn begin(eng: &Engine, board: &mut Nano, by_watchdog: bool, stored: bool) -> Self {
+    #[inline(never)]
+    pub fn begin(&mut self, eng: &Engine, board: &mut Nano, by_watchdog: bool, stored: bool) {
         let mut flags = STATUS_RUNNING;
         if by_watchdog {
             flags |= STATUS_WATCHDOG;
@@ -69,20 +70,20 @@ impl Server {
         if stored {
             flags |= STATUS_STORED;
         }
-        let mut status = Status::default();
-        status.start(&eng.prog.uf);
-        let server = Server {
-            address: store::slave_address(board),
-            flags,
-            status,
-            start_ms: board.now_ms(),
-            overruns_at_start: board.rx_overruns(),
-            pending: false,
-            started: false,
-            reseal: false,
-        };
+        // Field by field, in place: the rest of the status is written at every request
+        // before it is read.
+        self.address = store::slave_address(board);
+        self.flags = flags;
+        self.status.start(&eng.prog.uf);
+        // Free, bit 5 clear. No steps are left: a RUN ends only at a `/`, which ends any
+        // hold (`visit`), or at a reset, which clears static RAM; the lease starts with the
+        // frame that holds.
+        self.status.hold.bits = 0;
+        self.start_ms = board.now_ms();
+        self.overruns_at_start = board.rx_overruns();
+        // No reply (`started` is set with each reply; a seal left over is renewed, harmless).
+        self.pending = false;
         line::serve(true);
-        server
     }
 
     /// RUN ends: the line goes back to the terminal.
@@ -106,28 +107,34 @@ impl Server {
         st: &RunState,
         wraps: u16,
     ) -> After {
-        let mut after = After::Nothing;
         let start = board.stats_ticks();
         if line::take_frame_end() {
-            self.refresh(eng, board, st, wraps);
             let now = board.now_ms();
+            self.refresh(eng, board, st, wraps, now);
             let mut map = PlcMap {
                 eng: &mut *eng,
                 b: &mut *board,
-                status: &self.status,
+                status: &mut self.status,
             };
             match line::judge(self.address, &mut map, now) {
                 Event::Slash => {
                     serial::inject(b'/');
-                    after = After::BreakKey;
+                    // The terminal's break key ends a hold (SPEC §18): KEY stops the
+                    // program at its next scan; a program without KEY runs on.
+                    self.status.hold.write(HR_SCAN_CONTROL, 0);
                 }
                 Event::Reply => {
                     self.pending = true;
                     self.started = false;
                     // Any request may have written: the seal is renewed (0.14 ms) anyway.
                     self.reseal = true;
+                    // A valid frame for this slave: a hold's lease starts again (SPEC §18).
+                    self.status.hold.heard(now);
                 }
-                Event::Broadcast => self.reseal = true,
+                Event::Broadcast => {
+                    self.reseal = true;
+                    self.status.hold.heard(now);
+                }
                 Event::None | Event::Dropped => {}
             }
         } else if !self.pending && self.reseal {
@@ -143,7 +150,7 @@ impl Server {
         if (self.pending && !self.started) || (!self.pending && self.reseal) {
             line::again();
         }
-        after
+        After::Nothing
     }
 
     /// Make reply bytes while the transmit ring has room, at least [`MIN_BYTES`] and then
@@ -159,7 +166,7 @@ impl Server {
         let mut map = PlcMap {
             eng: &mut *eng,
             b: &mut *board,
-            status: &self.status,
+            status: &mut self.status,
         };
         let mut made = 0u8;
         while made < MIN_BYTES || map.b.stats_ticks().wrapping_sub(start) < VISIT_TICKS {
@@ -178,9 +185,14 @@ impl Server {
         }
     }
 
+    /// Between two scans: whether the next scan runs (SPEC §18, the core's `Hold::next`).
+    pub fn next_scan(&mut self, board: &mut Nano) -> Next {
+        self.status.hold.next(board)
+    }
+
     /// The figures the input registers report, as they are now, and the snapshot's
     /// registers of this scan (SPEC §17).
-    fn refresh(&mut self, eng: &Engine, board: &mut Nano, st: &RunState, wraps: u16) {
+    fn refresh(&mut self, eng: &Engine, board: &mut Nano, st: &RunState, wraps: u16, now: u32) {
         let overruns = board.rx_overruns();
         if overruns != self.overruns_at_start {
             self.flags |= STATUS_OVERRUN;
@@ -189,7 +201,7 @@ impl Server {
             min: st.min,
             max: st.max,
             count: (u32::from(wraps) << 16) | u32::from(st.scans),
-            run_ms: board.now_ms().wrapping_sub(self.start_ms),
+            run_ms: now.wrapping_sub(self.start_ms),
         };
         self.status
             .refresh(self.flags, &stats, overruns, line::dropped());

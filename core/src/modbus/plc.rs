@@ -1,7 +1,8 @@
 //! The map of SPEC §13 on top of the engine's own state (no second copy of the I/O image):
 //! coils Y/U/V, discrete inputs A/Q/TQ/CQ/H, holding registers for the presets and
 //! set-points, input registers for status, STAT's figures, counts, readings, time left;
-//! and SPEC §17's snapshot and program windows of input registers ([`super::snapshot`]).
+//! SPEC §17's snapshot and program windows of input registers ([`super::snapshot`]); and
+//! SPEC §18's scan control, holding registers 32–33 ([`super::hold`]).
 
 use crate::analog;
 use crate::board::Board;
@@ -9,6 +10,7 @@ use crate::engine::{Engine, COUNTERS, LINES, SET_POINTS, UNITS};
 use crate::stats::{self, ScanStats};
 
 use super::crc::Crc16;
+use super::hold::{Hold, HR_SCAN_CONTROL};
 use super::map::{Map, Table};
 use super::snapshot::{at, PROGRAM, PROGRAM_LEN, SNAPSHOT, SNAPSHOT_LEN};
 
@@ -51,6 +53,8 @@ pub struct Status {
     /// The running program's fingerprint ([`super::snapshot::fingerprint`]), taken at its start:
     /// a running CRC, so no other copy of one is needed (`.value()` is the register).
     pub fingerprint: Crc16,
+    /// SPEC §18's hold and steps; its status bits join register 0 at [`Status::refresh`].
+    pub hold: Hold,
 }
 
 impl Status {
@@ -63,7 +67,6 @@ impl Status {
     }
 
     /// The program `uf` starts (RUN, EX0, autostart): its fingerprint.
-    #[inline(never)]
     pub fn start(&mut self, uf: &[u8; LINES]) {
         self.fingerprint = Crc16::new();
         for &line in uf {
@@ -71,30 +74,29 @@ impl Status {
         }
     }
 
-    /// Input registers 0..7 as [`Status::new`] makes them; the rest kept.
+    /// Input registers 0..7 as [`Status::new`] makes them, with the hold's status bits 4
+    /// and 5 (SPEC §18); the rest kept.
     pub fn refresh(&mut self, flags: u16, st: &ScanStats, overruns: u16, dropped: u16) {
         // No scan yet shows 0.
         let us = |ticks: u16| if st.count == 0 { 0 } else { ticks >> 1 };
         self.run_ms = st.run_ms;
-        self.regs = [
-            flags,
-            us(st.min),
-            0,
-            us(st.max),
-            (st.count >> 16) as u16,
-            st.count as u16,
-            overruns,
-            dropped,
-        ];
+        // Register 2, the mean, is worked out when it is read: its slot is never written.
+        self.regs[0] = flags | u16::from(self.hold.bits);
+        self.regs[1] = us(st.min);
+        self.regs[3] = us(st.max);
+        self.regs[4] = (st.count >> 16) as u16;
+        self.regs[5] = st.count as u16;
+        self.regs[6] = overruns;
+        self.regs[7] = dropped;
     }
 
     /// Registers 64..71 now, between two scans and just after [`Status::refresh`]: the
     /// status, the inputs and thresholds, every port, flip-flop, timer and counter output,
     /// and the scan count, all of one scan (SPEC §17).
-    #[inline(never)]
     pub fn take_scan<B: Board>(&mut self, eng: &Engine, b: &mut B) {
-        let thresholds = b.analog_bits() >> analog::FIRST_CHANNEL;
-        let inputs = (b.inputs() & 0x3F) | (thresholds << 6);
+        // H6 and H7 are bits 6 and 7 of the board's threshold bits already, the rest 0.
+        const _: () = assert!(analog::FIRST_CHANNEL == 6);
+        let inputs = (b.inputs() & 0x3F) | b.analog_bits();
         self.scan = [
             self.regs[0],
             u16::from_le_bytes([inputs, eng.py]),
@@ -136,8 +138,8 @@ pub struct PlcMap<'a, B: Board> {
     pub eng: &'a mut Engine,
     /// The board: inputs, analog readings, the clock.
     pub b: &'a mut B,
-    /// Status and figures.
-    pub status: &'a Status,
+    /// Status and figures, and the hold that holding registers 32–33 write.
+    pub status: &'a mut Status,
 }
 
 /// Bit `n` (0..7) of `byte`.
@@ -159,6 +161,7 @@ fn window(table: Table, addr: u16) -> Option<u16> {
         Table::DiscreteInputs if addr < 6 => 0,
         Table::DiscreteInputs if (8..50).contains(&addr) => 8,
         Table::HoldingRegisters if addr < HR_SET_POINTS + SET_POINTS as u16 => 0,
+        Table::HoldingRegisters if addr >> 1 == HR_SCAN_CONTROL >> 1 => HR_SCAN_CONTROL,
         Table::InputRegisters if addr < IR_READINGS + SET_POINTS as u16 => 0,
         Table::InputRegisters if (IR_TIME_LEFT..IR_TIME_LEFT + UNITS as u16).contains(&addr) => {
             IR_TIME_LEFT
@@ -210,7 +213,7 @@ impl<B: Board> PlcMap<'_, B> {
             };
             a = usize::from(addr);
         }
-        let s = self.status;
+        let s = &*self.status;
         if addr == IR_MEAN {
             let scans = u32::from(s.regs[4]) << 16 | u32::from(s.regs[5]);
             stats::per_1000(s.run_ms, scans).min(0xFFFF) as u16
@@ -256,7 +259,11 @@ impl<B: Board> Map for PlcMap<'_, B> {
                     // A TQ bit is retired when a scan starts (or the editor idles).
                     3 | 4 => (self.eng.tq, 24),
                     5 => (u16::from(self.eng.cq), 40),
-                    _ => (u16::from(self.b.analog_bits() >> analog::FIRST_CHANNEL), 48),
+                    // H6, H7 (48, 49) are bits 6 and 7 of the threshold bits.
+                    _ => (
+                        u16::from(self.b.analog_bits()),
+                        48 - analog::FIRST_CHANNEL as u16,
+                    ),
                 };
                 bit16(word, addr - first)
             }
@@ -267,8 +274,10 @@ impl<B: Board> Map for PlcMap<'_, B> {
                     u16::from(p.presets[a & 15])
                 } else if addr < HR_SET_POINTS {
                     p.counter_presets[a & 7]
-                } else {
+                } else if addr < HR_SCAN_CONTROL {
                     p.set_points[a & 1]
+                } else {
+                    self.status.hold.read(addr)
                 }
             }
             Table::InputRegisters => self.input_register(addr),
@@ -280,8 +289,10 @@ impl<B: Board> Map for PlcMap<'_, B> {
             value <= 255
         } else if addr < HR_SET_POINTS {
             true
-        } else {
+        } else if addr < HR_SCAN_CONTROL {
             value <= analog::MAX
+        } else {
+            Hold::accepts(addr, value)
         }
     }
 
@@ -306,6 +317,8 @@ impl<B: Board> Map for PlcMap<'_, B> {
                 } else if addr < HR_SET_POINTS {
                     p.counter_presets[a & 7] = value;
                     self.eng.refresh_counter_outputs();
+                } else if addr >= HR_SCAN_CONTROL {
+                    self.status.hold.write(addr, value);
                 } else {
                     p.set_points[a & 1] = value;
                     let sp = p.set_points;

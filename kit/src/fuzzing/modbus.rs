@@ -22,7 +22,7 @@ use crate::modbus::map::TestMap;
 use crate::modbus::{crc_ok, with_crc};
 
 /// The slave address the harness answers as.
-const ADDRESS: u8 = 1;
+pub(super) const ADDRESS: u8 = 1;
 
 /// Check one reply as a master would.
 fn check_reply(reply: &[u8], pdu: &[u8], answer: Answer) -> Verdict {
@@ -63,7 +63,7 @@ fn check_reply(reply: &[u8], pdu: &[u8], answer: Answer) -> Verdict {
 }
 
 /// What the fuzz bytes put on the line.
-enum Line {
+pub(super) enum Line {
     /// A byte; `true` after a 1.5-character gap.
     Byte(u8, bool),
     /// The 3.5-character silence that ends a frame.
@@ -78,7 +78,7 @@ pub const BUILT_MAX: u8 = 64;
 /// gap, 2 the silence that ends a frame, 3 a frame built from the next `value % BUILT_MAX`
 /// values with a correct CRC (so the handler is reached often), addressed by `control >> 6`
 /// (0 all, 1 another slave, else this one), and its end.
-fn line_events(data: &[u8]) -> Vec<Line> {
+pub(super) fn line_events(data: &[u8]) -> Vec<Line> {
     let mut events = Vec::new();
     let mut pairs = data.chunks_exact(2);
     while let Some(pair) = pairs.next() {
@@ -152,18 +152,27 @@ pub fn modbus(data: &[u8]) -> Verdict {
     Ok(())
 }
 
+/// The harness of the slave on the real map (`plc`), in two runs over the same input: the
+/// replies made a byte per visit while scans and stray bytes arrive ([`replies_streamed`]),
+/// and SPEC §18's hold and steps with the RUN loop's decision between frames
+/// ([`super::hold::held`]: held, the scan count moves only by the steps asked for).
+pub fn modbus_plc(data: &[u8]) -> Verdict {
+    replies_streamed(data)?;
+    super::hold::held(data)
+}
+
 /// The harness of the slave on the real map (`plc`): the line events of [`line_events`]
 /// go through [`Slave`] to §13's map over an engine running a program, which scans between
 /// frames. A reply is made one byte per line event after its frame, as the firmware makes
 /// it a few bytes per visit: scans run and stray bytes and silences arrive while it goes out.
 ///
-/// Invariants: no panic; a request changes exactly what it names ([`named_writes`]: PY, PU,
+/// Invariants (this part): no panic; a request changes exactly what it names ([`named_writes`]: PY, PU,
 /// PV, the presets, the set-points, and the counter outputs of the counters whose preset it
 /// wrote), an exception, a dropped frame or a silence during a reply nothing; set-points stay
 /// ≤ 1023; every reply is a valid frame; a read of §17's windows shows the engine as it was
 /// when the frame was judged, the program two lines per register and the program's
 /// fingerprint.
-pub fn modbus_plc(data: &[u8]) -> Verdict {
+fn replies_streamed(data: &[u8]) -> Verdict {
     use utile_core::board::Board;
     use utile_core::engine::Engine;
     use utile_core::modbus::plc::{PlcMap, Status, STATUS_RUNNING};
@@ -188,7 +197,7 @@ pub fn modbus_plc(data: &[u8]) -> Verdict {
             let mut map = PlcMap {
                 eng: &mut eng,
                 b: &mut b,
-                status: &status,
+                status: &mut status,
             };
             let complete = loop {
                 match slave.next_byte(&mut map) {
@@ -223,7 +232,7 @@ pub fn modbus_plc(data: &[u8]) -> Verdict {
             let mut map = PlcMap {
                 eng: &mut eng,
                 b: &mut b,
-                status: &status,
+                status: &mut status,
             };
             let event = slave.end(ADDRESS, &mut map, now);
             if event != Event::None || eng != before {
@@ -240,7 +249,7 @@ pub fn modbus_plc(data: &[u8]) -> Verdict {
         let mut map = PlcMap {
             eng: &mut eng,
             b: &mut b,
-            status: &status,
+            status: &mut status,
         };
         let event = slave.end(ADDRESS, &mut map, now);
         if eng.prog.set_points.iter().any(|&s| s > 1023) {
@@ -405,16 +414,16 @@ pub fn named_writes(
 }
 
 /// What a frame's judgement saw: the engine, the inputs and thresholds, the status.
-struct Judged<'a> {
-    eng: &'a utile_core::engine::Engine,
-    inputs: u8,
-    thresholds: u8,
-    status: &'a utile_core::modbus::plc::Status,
+pub(super) struct Judged<'a> {
+    pub(super) eng: &'a utile_core::engine::Engine,
+    pub(super) inputs: u8,
+    pub(super) thresholds: u8,
+    pub(super) status: &'a utile_core::modbus::plc::Status,
 }
 
 /// An FC04 reply against SPEC §17: registers 64..71 are the engine's as it was judged,
 /// 103 the fingerprint of its program, 256..383 its lines, two per register.
-fn check_windows(request: &[u8], reply: &[u8], j: &Judged<'_>) -> Verdict {
+pub(super) fn check_windows(request: &[u8], reply: &[u8], j: &Judged<'_>) -> Verdict {
     use utile_core::analog::FIRST_CHANNEL;
     use utile_core::modbus::snapshot::{at, fingerprint, PROGRAM, PROGRAM_LEN, SNAPSHOT};
 

@@ -101,6 +101,17 @@ pub struct Args {
     /// keeps it in the EEPROM
     #[arg(long, value_name = "FILE")]
     pub load: Option<PathBuf>,
+    /// A tank on A6 and A7 (examples/tank-fill.utl's one level sensor): its level rises
+    /// 0.4 V/s while the pump Y0 runs and falls 0.2 V/s otherwise (a steady draw), between 0
+    /// and 5 V, from --a6's level; the rig keys 6 and Shift-6 still move it
+    #[arg(long, value_name = "NAME", value_parser = plant, conflicts_with = "bus")]
+    pub plant: Option<super::plant::Kind>,
+}
+
+/// `tank`, the one plant.
+fn plant(name: &str) -> Result<super::plant::Kind, crate::cli::BadValue> {
+    super::plant::Kind::from_name(name)
+        .ok_or_else(|| crate::cli::BadValue(format!("the one plant is tank, not {name}")))
 }
 
 /// `old` or `optiboot`.
@@ -145,6 +156,7 @@ impl Args {
             bootloader: self.bootloader,
             blank: self.blank,
             bus: self.bus.map(usize::from),
+            plant: self.plant,
         }
     }
 }
@@ -186,6 +198,8 @@ pub struct Options {
     pub dtr_reset: bool,
     /// Nanos on one line (`--bus N`).
     pub bus: Option<usize>,
+    /// A plant on the pins (`--plant`).
+    pub plant: Option<super::plant::Kind>,
 }
 
 #[cfg(test)]
@@ -196,6 +210,16 @@ mod tests {
         Args::try_parse_from(std::iter::once("vnano").chain(args.iter().copied()))
             .map(|a| a.options(PathBuf::from("out/vnano.eeprom")))
             .map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn a_plant_is_named() {
+        let o = p(&["--plant", "tank"]).unwrap();
+        assert_eq!(o.plant, Some(super::super::plant::Kind::Tank));
+        assert!(p(&["--plant", "boiler"])
+            .unwrap_err()
+            .contains("the one plant is tank"));
+        assert!(p(&["--plant", "tank", "--bus", "2"]).is_err());
     }
 
     #[test]

@@ -7,7 +7,8 @@
 //! bytes at the simulated time they came), [`status`] (the line below the
 //! screen), [`rig`] (the rig's keys and its view), [`load`] (`--load` through READ),
 //! [`term`] (the user's terminal), [`pty`] (the pseudo-terminal), [`io`] (waiting and
-//! reading on descriptors), [`bus`] (`--bus N`) and [`error`] (why a run failed).
+//! reading on descriptors), [`bus`] (`--bus N`), [`plant`] (`--plant tank`) and [`error`]
+//! (why a run failed).
 
 pub mod args;
 pub mod arrivals;
@@ -15,6 +16,7 @@ pub mod bus;
 pub mod error;
 pub mod io;
 pub mod load;
+pub mod plant;
 pub mod pty;
 pub mod rig;
 pub mod session;

@@ -12,6 +12,7 @@ use super::arrivals::Arrivals;
 use super::error::VnanoError;
 use super::io::{self, STDIN, STDOUT};
 use super::load::{Loader, Step};
+use super::plant::Plant;
 use super::pty::Pty;
 use super::rig::{self, Key, KeyParser, OutputTracker, RigAction};
 use super::term::{self, RawMode};
@@ -57,6 +58,8 @@ pub(super) struct Session {
     dtr_reset: bool,
     /// The pty client's bytes waiting for their simulated time.
     arrivals: Arrivals,
+    /// `--plant`: the plant on A6/A7 that Y0 drives.
+    plant: Option<Plant>,
 }
 
 /// Runs the virtual Nano of `o` on the image `elf` until `q`, a quit signal, `--for` or a
@@ -103,6 +106,9 @@ pub fn run(o: &Options, elf: &Path) -> Result<(), VnanoError> {
         boot: o.bootloader.map(|b| b.section().start()),
         dtr_reset: o.dtr_reset,
         arrivals: Arrivals::default(),
+        plant: o
+            .plant
+            .map(|kind| Plant::new(kind, o.analog_mv[0], nano.cycle())),
     };
     if matches!(s.uart, Uart::Terminal) && stdout_tty {
         // A clean screen below uTile's: its screen is drawn with absolute positions.
@@ -188,6 +194,9 @@ impl Session {
             let state = nano.run_for(step);
             // simavr drops an external level whenever the firmware writes the PORT register.
             nano.assert_pins();
+            if let Some(plant) = &mut self.plant {
+                plant.step(nano, &mut self.analog_mv);
+            }
             let timed = nano.take_output_timed();
             let last_out = timed.last().map(|&(_, cycle)| cycle);
             let mut out: Vec<u8> = timed.into_iter().map(|(b, _)| b).collect();
