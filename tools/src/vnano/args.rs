@@ -106,6 +106,11 @@ pub struct Args {
     /// and 5 V, from --a6's level; the rig keys 6 and Shift-6 still move it
     #[arg(long, value_name = "NAME", value_parser = plant, conflicts_with = "bus")]
     pub plant: Option<super::plant::Kind>,
+    /// Work the rig from another program over a Unix socket at PATH: one JSON object a line
+    /// ({"press": 0}, {"release": 0}, {"a6": 2.5}, {"d8": true}, {"reset": true}, {} to ask),
+    /// each answered with the rig's state: switches, jumpers, A6/A7 in volts, outputs Y0..Y7
+    #[arg(long, value_name = "PATH", conflicts_with = "bus")]
+    pub control: Option<PathBuf>,
 }
 
 /// `tank`, the one plant.
@@ -157,6 +162,7 @@ impl Args {
             blank: self.blank,
             bus: self.bus.map(usize::from),
             plant: self.plant,
+            control: self.control,
         }
     }
 }
@@ -200,6 +206,8 @@ pub struct Options {
     pub bus: Option<usize>,
     /// A plant on the pins (`--plant`).
     pub plant: Option<super::plant::Kind>,
+    /// The rig's control socket (`--control`).
+    pub control: Option<PathBuf>,
 }
 
 #[cfg(test)]

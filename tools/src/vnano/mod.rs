@@ -7,12 +7,13 @@
 //! bytes at the simulated time they came), [`status`] (the line below the
 //! screen), [`rig`] (the rig's keys and its view), [`load`] (`--load` through READ),
 //! [`term`] (the user's terminal), [`pty`] (the pseudo-terminal), [`io`] (waiting and
-//! reading on descriptors), [`bus`] (`--bus N`), [`plant`] (`--plant tank`) and [`error`]
-//! (why a run failed).
+//! reading on descriptors), [`bus`] (`--bus N`), [`plant`] (`--plant tank`), [`control`]
+//! (`--control PATH`, the rig over a socket) and [`error`] (why a run failed).
 
 pub mod args;
 pub mod arrivals;
 pub mod bus;
+pub mod control;
 pub mod error;
 pub mod io;
 pub mod load;

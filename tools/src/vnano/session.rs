@@ -9,6 +9,7 @@ use utile_kit::simavr::{self as nano, Chip, CpuState, Reset, RxPacing};
 
 use super::args::Options;
 use super::arrivals::Arrivals;
+use super::control::Control;
 use super::error::VnanoError;
 use super::io::{self, STDIN, STDOUT};
 use super::load::{Loader, Step};
@@ -60,6 +61,8 @@ pub(super) struct Session {
     arrivals: Arrivals,
     /// `--plant`: the plant on A6/A7 that Y0 drives.
     plant: Option<Plant>,
+    /// `--control`: the rig's socket.
+    control: Option<Control>,
 }
 
 /// Runs the virtual Nano of `o` on the image `elf` until `q`, a quit signal, `--for` or a
@@ -109,6 +112,10 @@ pub fn run(o: &Options, elf: &Path) -> Result<(), VnanoError> {
         plant: o
             .plant
             .map(|kind| Plant::new(kind, o.analog_mv[0], nano.cycle())),
+        control: match &o.control {
+            Some(path) => Some(Control::bind(path)?),
+            None => None,
+        },
     };
     if matches!(s.uart, Uart::Terminal) && stdout_tty {
         // A clean screen below uTile's: its screen is drawn with absolute positions.
@@ -179,6 +186,13 @@ impl Session {
             if loader.is_none() {
                 self.read_input(nano);
                 self.deliver(nano);
+            }
+            if let Some(control) = &mut self.control {
+                let asked = control.poll(nano, &mut self.analog_mv);
+                self.reset |= asked.reset;
+                if asked.handled {
+                    self.drawn = None;
+                }
             }
             if std::mem::take(&mut self.reset) {
                 nano.reset(Reset::External);
