@@ -594,5 +594,30 @@ fn modbus_seeds() -> Vec<(&'static str, Vec<u8>)> {
                 &built(me, &[0x03, 0, 0, 0, 26]),
             ]),
         ),
+        (
+            "hold_steps_lease",
+            cat(&[
+                // SPEC §18: hold, read 32-33, 5 steps with scans between frames.
+                &built(me, &[0x06, 0, 32, 0, 1]),
+                &built(me, &[0x03, 0, 32, 0, 2]),
+                &built(me, &[0x06, 0, 33, 0, 5]),
+                &[2, 0, 2, 0, 2, 0],
+                &built(me, &[0x04, 0, 0, 0, 1]),
+                &built(me, &[0x04, 0, 64, 0, 8]),
+                // Long silences: the lease runs out and sets status bit 5.
+                &[2, 0].repeat(11),
+                &built(me, &[0x04, 0, 64, 0, 8]),
+                &built(me, &[0x03, 0, 32, 0, 2]),
+                // Both registers in one FC16, then exception 03 for 2 and for 1001 steps.
+                &built(me, &[0x10, 0, 32, 0, 2, 4, 0, 0, 0, 3]),
+                &built(me, &[0x06, 0, 32, 0, 2]),
+                &built(me, &[0x06, 0, 33, 0x03, 0xE9]),
+                // A broadcast hold, then the terminal's `/` ends it.
+                &built(0, &[0x06, 0, 32, 0, 1]),
+                &built(me, &[0x03, 0, 32, 0, 2]),
+                &[0, b'/', 2, 0],
+                &built(me, &[0x03, 0, 32, 0, 2]),
+            ]),
+        ),
     ]
 }
