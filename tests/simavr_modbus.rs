@@ -8,7 +8,7 @@
 mod support;
 
 use support::chip::CYCLES_PER_MS;
-use support::master::{char_cycles, pdu, read_input, stored, Line, ADDRESS};
+use support::master::{bytes, char_cycles, pdu, read_input, stored, Line, ADDRESS};
 use utile_core::engine::Program;
 use utile_core::modbus::plc::{STATUS_RUNNING, STATUS_STORED};
 use utile_core::modbus::snapshot::{self, Snapshot, PROGRAM, SNAPSHOT, SNAPSHOT_LEN};

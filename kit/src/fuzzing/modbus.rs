@@ -398,7 +398,10 @@ pub fn named_writes(
                 want.prog.counter_presets[a - 16] = v;
                 cq_free |= 1 << (a - 16);
             }
-            _ => want.prog.set_points[(a - 24) & 1] = v,
+            24..=25 => want.prog.set_points[a - 24] = v,
+            // SPEC §18's scan control and steps move the hold, not the engine (the hold's
+            // own model checks them: `super::hold`).
+            _ => {}
         }
     }
     if (after.cq ^ before.cq) & !cq_free != 0 {
