@@ -11,7 +11,7 @@
 //! and calls `after_scan`, and KEY's `/` ends in `on_break`.
 //!
 //! Rooms: `term.rs` (the terminal model), `main_loop.rs`, and the harnesses by subject:
-//! `editor.rs`, `storage.rs`, `modbus.rs`.
+//! `editor.rs`, `storage.rs`, `modbus.rs`, `ladder.rs` (the ladder importers).
 
 use std::format;
 use std::string::{String, ToString};
@@ -38,12 +38,14 @@ pub const ESC_PAUSE_MS: u32 = 60;
 pub const RX_RING: usize = 64;
 
 mod editor;
+mod ladder;
 mod main_loop;
 mod modbus;
 mod storage;
 mod term;
 
 pub use editor::{editor, editor_loop, keys, lines, sample_program};
+pub use ladder::{ldmicro, plcopen};
 pub use main_loop::MainLoop;
 pub use modbus::{modbus, modbus_plc};
 pub use storage::{eeprom, hex_roundtrip, ihex, image_decode};
@@ -53,7 +55,7 @@ pub use term::Term;
 pub type Harness = fn(&[u8]) -> Verdict;
 
 /// Every harness by the name its fuzz target and corpus directory use.
-pub const TARGETS: [(&str, Harness); 9] = [
+pub const TARGETS: [(&str, Harness); 11] = [
     ("editor", editor),
     ("lines", lines),
     ("keys", keys),
@@ -63,4 +65,6 @@ pub const TARGETS: [(&str, Harness); 9] = [
     ("eeprom", eeprom),
     ("modbus", modbus),
     ("modbus_plc", modbus_plc),
+    ("plcopen", plcopen),
+    ("ldmicro", ldmicro),
 ];

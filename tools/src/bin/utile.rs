@@ -8,6 +8,8 @@
 //!           [--signals A0,Y0,TQ0,C0,A6,H6] [--svg out.svg] [--vcd out.vcd]
 //! utile push prog.utl|prog.hex --port /dev/ttyUSB0 [--store] [--stop]
 //! utile pull --port /dev/ttyUSB0 [-o prog.utl] [--hex]
+//! utile ladder prog.utl [-o prog.svg]  listing -> ladder drawing
+//! utile import plc.xml|prog.ld [-o prog.utl] [--map NAME=SIGNAL,...]
 //! utile live --port /dev/ttyUSB0 [--units 1,2,3 | --scan] [--http ADDR:PORT] [--tcp ADDR:PORT]
 //! ```
 
@@ -15,7 +17,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use utile_kit::{diagram, listing, simulate};
-use utile_tools::{link, live};
+use utile_tools::{ladder_cmd, link, live};
 
 /// The usage text: the commands here, then `live`'s.
 fn usage() -> String {
@@ -29,6 +31,9 @@ const USAGE: &str = "usage:
   utile sim PROG.utl --inputs TIMELINE [--until 120s] [--scans 4]
             [--signals A0,Y0,TQ0,C0,A6,H6,...] [--svg OUT.svg] [--vcd OUT.vcd]
                                        simulate and print the output changes
+  utile ladder PROG.utl [-o PROG.svg]  draw the listing's rungs (docs/LADDER.md)
+  utile import PLC.xml|PROG.ld [-o PROG.utl] [--map NAME=SIGNAL,...]
+                                       a PLCopen XML or LDmicro program as a listing
   utile push PROG.utl|PROG.hex --port PATH [--store] [--stop] [--wait SECS]
                                        send a program to uTile's editor (READ), check
                                        its answer and read it back; --store: STORE it too
@@ -309,6 +314,16 @@ fn main() -> ExitCode {
         "sim" => sim(rest),
         "push" => push(rest),
         "pull" => pull(rest),
+        "ladder" => Args::parse(rest, &["-o"]).and_then(|a| {
+            let out = a.flag("-o").map(Path::new);
+            (ladder_cmd::ladder(&a.one_input()?, out).map(drop)).map_err(|e| e.to_string())
+        }),
+        "import" => Args::parse(rest, &["-o", "--map"]).and_then(|a| {
+            let (out, map) = (a.flag("-o").map(Path::new), a.flag("--map"));
+            let text = ladder_cmd::import(&a.one_input()?, out, map).map_err(|e| e.to_string())?;
+            print!("{}", text.unwrap_or_default());
+            Ok(())
+        }),
         "live" => live::main(rest),
         "-h" | "--help" | "help" => {
             println!("{}", usage());
