@@ -355,3 +355,17 @@ fn ldmicro_refusals_say_the_rung_and_the_element() {
     let l = utile_ok(&["import", &path, "--map", "Xa=H6,Xg=A0"]);
     assert!(l.starts_with("000 A0.\n001 .Y0\n"), "{l}");
 }
+
+#[test]
+fn a_thousand_elements_import_and_branches_are_not_repeated() {
+    // 100 rungs of four pairs of parallel contacts in series: 1,000 elements. Branches that
+    // meet again are taken out once (p AND (a OR b)), so the listing grows with the
+    // elements, and uTile's 256 lines are too few: said so.
+    let err = refused(
+        "big-1000.xml",
+        &std::fs::read(data("big-1000.xml")).unwrap(),
+        None,
+        &["the program needs 1802 lines and uTile has 256"],
+    );
+    assert_eq!(err.lines().count(), 1);
+}

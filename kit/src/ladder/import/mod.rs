@@ -93,9 +93,15 @@ impl Expr {
         }
     }
 
-    /// `a OR b`.
+    /// `a OR b`, with a power both come through taken out: `(p AND a) OR (p AND b)` is
+    /// `p AND (a OR b)` (branches that meet again, without their common part twice).
     pub fn or(a: Expr, b: Expr) -> Expr {
-        Expr::Or(Box::new(a), Box::new(b))
+        match (a, b) {
+            (Expr::And(p, x), Expr::And(q, y)) if p == q => {
+                Expr::And(p, Box::new(Expr::or(*x, *y)))
+            }
+            (a, b) => Expr::Or(Box::new(a), Box::new(b)),
+        }
     }
 
     /// `NOT a`.
