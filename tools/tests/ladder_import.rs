@@ -369,3 +369,27 @@ fn a_thousand_elements_import_and_branches_are_not_repeated() {
     );
     assert_eq!(err.lines().count(), 1);
 }
+
+#[test]
+fn chapter_11_programs_drawn_in_ladder_run_as_the_manuals_listings() {
+    use support::ladder::{random_events, run};
+    use utile_kit::rng::Rng;
+    let mut rng = Rng::new(11);
+    for (fixture, stem) in [
+        ("ch11-2-n-switches.xml", "11.2-n-switches"),
+        ("ch11-3b-motor-starter.xml", "11.3b-motor-starter"),
+    ] {
+        let text = utile_ok(&["import", &data(fixture)]);
+        let drawn = listing::parse(fixture, &text).unwrap();
+        let path = example(&format!("{stem}.utl"));
+        let manual = listing::parse(&path, &std::fs::read_to_string(&path).unwrap()).unwrap();
+        for _ in 0..200 {
+            let events = random_events(&mut rng, 0x0F, 2000, 30);
+            let (a, b) = (
+                run(&drawn, &events, 2000, 4),
+                run(&manual, &events, 2000, 4),
+            );
+            assert_eq!(a, b, "{fixture} against {stem}, events {events:?}");
+        }
+    }
+}
