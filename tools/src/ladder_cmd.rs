@@ -1,5 +1,5 @@
-//! `utile ladder` and `utile import`: a listing drawn as ladder, a PLCopen XML or LDmicro
-//! program turned into a listing (docs/LADDER.md). The work is `utile_kit::ladder`'s; here
+//! `utile ladder`, `utile import` and `utile export`: a listing drawn as ladder, a PLCopen
+//! XML or LDmicro program turned into a listing, a listing as PLCopen XML (docs/LADDER.md). The work is `utile_kit::ladder`'s; here
 //! are the files.
 
 use std::fmt;
@@ -22,6 +22,8 @@ pub enum LadderError {
     Listing(listing::FileErrors),
     /// The program does not fit uTile's 256 lines.
     TooLong(String, ladder::TooLong),
+    /// The listing cannot be exported (`file: line NNN: why — what to do` lines).
+    Export(String, Vec<String>),
     /// The file to import is refused (`file: element (localId N): why — what to do` lines).
     Import(ladder::import::Refused),
 }
@@ -33,6 +35,10 @@ impl fmt::Display for LadderError {
             LadderError::Listing(e) => write!(f, "{e}"),
             LadderError::TooLong(file, e) => write!(f, "{file}: {e}"),
             LadderError::Import(e) => write!(f, "{e}"),
+            LadderError::Export(file, reasons) => {
+                let lines: Vec<String> = reasons.iter().map(|r| format!("{file}: {r}")).collect();
+                write!(f, "{}", lines.join("\n"))
+            }
         }
     }
 }
@@ -95,4 +101,20 @@ pub fn import(
         Some(out) => write(out, text.as_bytes()).map(|()| None),
         None => Ok(Some(text)),
     }
+}
+
+/// `utile export PROG.utl [-o PLC.xml]`: the listing as a PLCopen XML project (OpenPLC
+/// Editor's `plc.xml`) with one LD program, in `output` or beside the input with the
+/// extension `.xml`; nothing is written when any line has no export.
+pub fn export(input: &Path, output: Option<&Path>) -> Result<PathBuf, LadderError> {
+    let prog = load(input)?;
+    let model = ladder::from_program(&prog);
+    let stem = input
+        .file_stem()
+        .map_or_else(|| "program".into(), |n| n.to_string_lossy().into_owned());
+    let xml = ladder::plcopen_export::export(&model, &stem)
+        .map_err(|r| LadderError::Export(input.display().to_string(), r))?;
+    let out = output.map_or_else(|| input.with_extension("xml"), Path::to_path_buf);
+    write(&out, xml.as_bytes())?;
+    Ok(out)
 }

@@ -5,12 +5,13 @@
 //! [`to_listing`] (the two directions between a program and its rungs), [`svg`] (the
 //! drawing), [`import`] (what the importers share, and the importers: [`import::plcopen`],
 //! [`import::ldmicro`]) and [`iec`] (IEC's timers, edges and flip-flops built from uTile's
-//! own).
+//! own), and [`plcopen_export`] (a program as OpenPLC Editor's PLCopen XML).
 
 pub mod from_listing;
 pub mod iec;
 pub mod import;
 pub mod model;
+pub mod plcopen_export;
 pub mod svg;
 pub mod to_listing;
 

@@ -10,6 +10,7 @@
 //! utile pull --port /dev/ttyUSB0 [-o prog.utl] [--hex]
 //! utile ladder prog.utl [-o prog.svg]  listing -> ladder drawing
 //! utile import plc.xml|prog.ld [-o prog.utl] [--map NAME=SIGNAL,...]
+//! utile export prog.utl [-o plc.xml]  listing -> PLCopen XML (OpenPLC Editor)
 //! utile live --port /dev/ttyUSB0 [--units 1,2,3 | --scan] [--http ADDR:PORT] [--tcp ADDR:PORT]
 //! ```
 
@@ -34,6 +35,7 @@ const USAGE: &str = "usage:
   utile ladder PROG.utl [-o PROG.svg]  draw the listing's rungs (docs/LADDER.md)
   utile import PLC.xml|PROG.ld [-o PROG.utl] [--map NAME=SIGNAL,...]
                                        a PLCopen XML or LDmicro program as a listing
+  utile export PROG.utl [-o PLC.xml]   the listing as OpenPLC Editor's PLCopen XML (LD)
   utile push PROG.utl|PROG.hex --port PATH [--store] [--stop] [--wait SECS]
                                        send a program to uTile's editor (READ), check
                                        its answer and read it back; --store: STORE it too
@@ -323,6 +325,10 @@ fn main() -> ExitCode {
             let text = ladder_cmd::import(&a.one_input()?, out, map).map_err(|e| e.to_string())?;
             print!("{}", text.unwrap_or_default());
             Ok(())
+        }),
+        "export" => Args::parse(rest, &["-o"]).and_then(|a| {
+            let out = a.flag("-o").map(Path::new);
+            (ladder_cmd::export(&a.one_input()?, out).map(drop)).map_err(|e| e.to_string())
         }),
         "live" => live::main(rest),
         "-h" | "--help" | "help" => {

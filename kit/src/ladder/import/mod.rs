@@ -223,6 +223,24 @@ pub fn signal_push(name: &str) -> Option<u8> {
     Some(op)
 }
 
+/// The push opcode of one of uTile's read-only bits named as the listing names them
+/// (`H6`, `H7`, `CLKA`..`CLKC`, `AD0`..`AD5`, any case): an unlocated BOOL with such a name
+/// reads that bit (`utile export` declares them so).
+pub fn read_only_push(name: &str) -> Option<u8> {
+    let n = name.trim().to_ascii_uppercase();
+    match n.as_str() {
+        "H6" => Some(PUSH_H),
+        "H7" => Some(PUSH_H + 1),
+        "CLKA" => Some(opcodes::CLKA),
+        "CLKB" => Some(opcodes::CLKB),
+        "CLKC" => Some(opcodes::CLKC),
+        _ => {
+            let d: u8 = n.strip_prefix("AD")?.parse().ok()?;
+            (d < 6).then_some(opcodes::PUSH_AD + d)
+        }
+    }
+}
+
 /// The pop opcode that writes the signal a push opcode reads (`Y0.` → `.Y0`), if any.
 pub fn pop_of(push: u8) -> Option<u8> {
     (PUSH_Y..PUSH_V + 8)
@@ -282,7 +300,11 @@ impl Signals {
             return Ok(());
         }
         let op = match address.map(str::trim).filter(|a| !a.is_empty()) {
-            None => self.free_uv(name)?,
+            // uTile's read-only bits by their names (what `utile export` declares).
+            None => match read_only_push(name) {
+                Some(op) => op,
+                None => self.free_uv(name)?,
+            },
             Some(addr) => {
                 let up = addr.to_ascii_uppercase();
                 let located = |prefix: &str| -> Option<u32> {
