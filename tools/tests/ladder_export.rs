@@ -17,10 +17,9 @@ fn load(stem: &str) -> Program {
 }
 
 /// The examples with no PLCopen form, and a word of why each is refused.
-const REFUSED: [(&str, &str); 3] = [
+const REFUSED: [(&str, &str); 2] = [
     ("11.1b-continuous-timers", "TQ0. is read above its .TK0"),
     ("11.2b-intrusion-alarm", ".TR0 has no PLCopen form"),
-    ("parts-counter", ".CU0: uTile's counter is not exported yet"),
 ];
 
 /// `utile export` must fail with exit 1; its stderr.
@@ -109,6 +108,16 @@ fn the_xml_has_openplc_shape() {
         let events = random_events(&mut rng, 0x03, 3000, 30);
         assert_eq!(run(&prog, &events, 3000, 2), run(&back, &events, 3000, 2));
     }
+    // parts-counter: C0 as a CTU with its PV, CU and R from their rungs, Q read below.
+    let (xml, _) = round_trip("parts-counter");
+    for want in [
+        "<variable name=\"CTU0\"><type><derived name=\"CTU\"/></type></variable>",
+        "typeName=\"CTU\" instanceName=\"CTU0\"",
+        "<expression>5</expression>",
+        "formalParameter=\"Q\"/>",
+    ] {
+        assert!(xml.contains(want), "'{want}' not in:\n{xml}");
+    }
     // A timer of each unit gives its PT in its own unit.
     let src = "000 A0.\n001 .TK4\n002 A1.\n003 .TKC\n004 A2.\n005 .TKF\n006 TQ4.\n007 TQC.\n008 OR\n009 TQF.\n010 OR\n011 .Y0\n012 END\nT4 = 90\nTC = 2\nTF = 1\n";
     let path = write_scratch("units.utl", src);
@@ -142,6 +151,14 @@ fn what_has_no_ladder_form_is_refused_by_line() {
         assert!(err.starts_with(&format!("{input}: line ")), "{err}");
         assert!(err.contains(why), "{stem}: '{why}' not in {err}");
     }
+    // CQ0. between .CU0 and .CR0: one CTU cannot say it.
+    let src = "000 A0.\n001 .CU0\n002 CQ0.\n003 .Y0\n004 A1.\n005 .CR0\n006 END\nC0 = 2\n";
+    let path = write_scratch("ctu-between.utl", src);
+    let err = export_refused(&path, &scratch("ctu-between.xml"));
+    assert!(
+        err.contains("line 001..005: outputs or CQ0. between .CU0 and .CR0"),
+        "{err}"
+    );
     let src = "000 A0.\n001 A1.\n002 SWAP\n003 .Y0\n004 .Y1\n005 END\n";
     let path = write_scratch("swap.utl", src);
     let out = scratch("swap.xml");

@@ -5,7 +5,8 @@
 //! and `V0`..`V7` (`%MX1.n`); `ALn.`/`ATn.` as rising/falling contacts; series, parallel
 //! (a wired OR), XOR/NOT/AND as IEC functions; coils plain or negated; `.TKm` as a TOF block
 //! with its PT (`TQm.` wired to its Q); a flip-flop's `.Sm`/`.Rm` as set/reset coils on a
-//! BOOL `Qm`. What would not run the same is refused, naming its lines.
+//! BOOL `Qm`; `.CUm`/`.CRm` as a CTU block. What would not run the same is refused, naming
+//! its lines.
 
 use std::fmt::Write as _;
 use std::string::String;
@@ -13,7 +14,7 @@ use std::vec::Vec;
 
 use utile_core::opcodes::{
     END, KEY, NOP, POP_CR, POP_CU, POP_R, POP_S, POP_TK, POP_TR, POP_V, POP_Y, PUSH_A, PUSH_AD,
-    PUSH_AL, PUSH_AT, PUSH_Q, PUSH_TQ, PUSH_U, PUSH_V, PUSH_Y, SET,
+    PUSH_AL, PUSH_AT, PUSH_CQ, PUSH_Q, PUSH_TQ, PUSH_U, PUSH_V, PUSH_Y, SET,
 };
 
 use super::import::read_only_push;
@@ -61,6 +62,7 @@ pub fn export(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
     let first = |c: &Contact| c.lines[0];
     let coil_line = |c: &Coil| *c.lines.last().unwrap_or(&0);
     let mut tof = [0u32; 16];
+    let mut ctu = [0u32; 8];
     let mut next_id = 2;
     let mut edges: Vec<u8> = Vec::new();
     for c in &contacts {
@@ -82,6 +84,18 @@ pub fn export(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
             match tk {
                 None => problems.push(format!("line {l:03}: {w} reads timer {m}, which no .TK{m} starts — remove the contact (it is always open)")),
                 Some(k) if coil_line(k) > l => problems.push(format!("line {l:03}: {w} is read above its .TK{m} (line {:03}) — IEC's TOF gives Q where it is called; move the timer's rung above its readers", coil_line(k))),
+                _ => {}
+            }
+        } else if (PUSH_CQ..PUSH_CQ + 8).contains(&op) {
+            let m = op - PUSH_CQ;
+            let last = coils
+                .iter()
+                .filter(|k| k.op == POP_CU + m || k.op == POP_CR + m)
+                .map(|k| coil_line(k))
+                .max();
+            match last {
+                None => problems.push(format!("line {l:03}: {w} reads counter {m}, which no .CU{m} counts — remove the contact (it is always open)")),
+                Some(h) if h > l => problems.push(format!("line {l:03}: {w} is read above counter {m}'s last rung (line {h:03}) — IEC's CTU gives Q where it is called; move the counter's rungs above its readers")),
                 _ => {}
             }
         } else if (PUSH_Q..PUSH_Q + 16).contains(&op) {
@@ -115,7 +129,44 @@ pub fn export(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
                 problems.push(format!("line {l:03}: {w} has no PLCopen form (IEC's TOF has no reset input) — keep the program as a listing"));
             }
             op if (POP_CU..POP_CR + 8).contains(&op) => {
-                problems.push(format!("line {l:03}: {w}: uTile's counter is not exported yet (its count and reset rungs would run in another order as one CTU) — keep the program as a listing"));
+                let m = (op - POP_CU) % 8;
+                let cu = op < POP_CR;
+                if coils.iter().any(|o| o.op == op && coil_line(o) < l) {
+                    problems.push(format!(
+                        "line {l:03}: a second {w} — one CTU a counter; drive it from one rung"
+                    ));
+                }
+                if k.negated {
+                    problems.push(format!(
+                        "line {l:03}: a negated {w} — feed the rung its complement"
+                    ));
+                }
+                if cu {
+                    if ladder.counter_presets[usize::from(m)] == 0 {
+                        problems.push(format!("line {l:03}: C{m} has preset 0 (never counts to it) — give it a preset (C{m} = n)"));
+                    }
+                    if ctu[usize::from(m)] == 0 {
+                        ctu[usize::from(m)] = next_id;
+                        next_id += 1;
+                    }
+                } else if !coils.iter().any(|o| o.op == POP_CU + m) {
+                    problems.push(format!("line {l:03}: {w} resets counter {m}, which no .CU{m} counts — remove the rung"));
+                }
+                // One CTU evaluates CU and R at one place: nothing may be written or read
+                // between the two rungs.
+                if let Some(o) = coils
+                    .iter()
+                    .find(|o| o.op == (if cu { POP_CR } else { POP_CU }) + m)
+                {
+                    let (lo, hi) = (l.min(coil_line(o)), l.max(coil_line(o)));
+                    let between = coils.iter().map(|c| coil_line(c)).any(|x| lo < x && x < hi)
+                        || contacts
+                            .iter()
+                            .any(|c| c.op == PUSH_CQ + m && lo < first(c) && first(c) < hi);
+                    if between && cu {
+                        problems.push(format!("line {lo:03}..{hi:03}: outputs or CQ{m}. between .CU{m} and .CR{m} — IEC's CTU takes CU and R at once; put the two rungs one after the other"));
+                    }
+                }
             }
             _ => {}
         }
@@ -184,6 +235,8 @@ pub fn export(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
         col: 0,
         rail: 1,
         tof,
+        ctu,
+        pending: Default::default(),
         memory,
         problems: Vec::new(),
     };
@@ -256,7 +309,7 @@ fn net_contacts<'a>(n: &'a Net, out: &mut Vec<&'a Contact>) {
     }
 }
 
-fn flow_parts<'a>(f: &'a Flow, cs: &mut Vec<&'a Contact>, ks: &mut Vec<&'a Coil>) {
+pub(super) fn flow_parts<'a>(f: &'a Flow, cs: &mut Vec<&'a Contact>, ks: &mut Vec<&'a Coil>) {
     match f {
         Flow::Coil(c) => ks.push(c),
         Flow::Then(s, f) => {
@@ -355,6 +408,19 @@ fn variables(contacts: &[&Contact], coils: &[&Coil], memory: &[bool; 16]) -> Str
                 }
             }
         }
+    }
+    let mut counters: Vec<u8> = coils
+        .iter()
+        .filter(|k| (POP_CU..POP_CR).contains(&k.op))
+        .map(|k| k.op - POP_CU)
+        .collect();
+    counters.sort_unstable();
+    counters.dedup();
+    for m in counters {
+        let _ = writeln!(
+            s,
+            "          <variable name=\"CTU{m}\"><type><derived name=\"CTU\"/></type></variable>"
+        );
     }
     let mut timers: Vec<u8> = coils
         .iter()

@@ -7,7 +7,8 @@ use std::vec::Vec;
 
 use utile_core::engine::unit_ms;
 use utile_core::opcodes::{
-    CLR, POP_R, POP_S, POP_TK, POP_TR, PUSH_AL, PUSH_AT, PUSH_Q, PUSH_TQ, SET,
+    CLR, POP_CR, POP_CU, POP_R, POP_S, POP_TK, POP_TR, PUSH_AL, PUSH_AT, PUSH_CQ, PUSH_Q, PUSH_TQ,
+    SET,
 };
 
 use super::super::iec::time_text;
@@ -25,9 +26,26 @@ pub(super) struct Writer {
     pub(super) rail: u32,
     /// The TOF block of each timer (localId), given before the body is written.
     pub(super) tof: [u32; 16],
+    /// The CTU block of each counter (localId).
+    pub(super) ctu: [u32; 8],
+    /// A counter's CU (0) and R (1) power, kept until its last rung.
+    pub(super) pending: [[Option<Vec<Src>>; 2]; 8],
     /// The flip-flops written through memory coils (`Qm_S`, `Qm_R`) and updated last.
     pub(super) memory: [bool; 16],
     pub(super) problems: Vec<String>,
+}
+
+/// Whether any rung of `ladder` pops `op`.
+fn ladder_has(ladder: &Ladder, op: u8) -> bool {
+    let mut found = false;
+    for item in &ladder.items {
+        if let super::super::model::Item::Rung(r) = item {
+            let (mut cs, mut ks) = (Vec::new(), Vec::new());
+            super::flow_parts(&r.flow, &mut cs, &mut ks);
+            found |= ks.iter().any(|k| k.op == op);
+        }
+    }
+    found
 }
 
 pub(super) fn project(name: &str, vars: &str, body: &str) -> String {
@@ -136,14 +154,21 @@ impl Writer {
             op if (PUSH_AT..PUSH_AT + 6).contains(&op) => "falling",
             _ => "none",
         };
-        if (PUSH_TQ..PUSH_TQ + 16).contains(&c.op) {
-            let q = std::vec![(self.tof[usize::from(c.op - PUSH_TQ)], Some("Q"))];
+        let block_q = if (PUSH_TQ..PUSH_TQ + 16).contains(&c.op) {
+            Some(self.tof[usize::from(c.op - PUSH_TQ)])
+        } else if (PUSH_CQ..PUSH_CQ + 8).contains(&c.op) {
+            Some(self.ctu[usize::from(c.op - PUSH_CQ)])
+        } else {
+            None
+        };
+        if let Some(block) = block_q {
+            let q = std::vec![(block, Some("Q"))];
             let q = if c.negated {
                 self.function("NOT", &[q])
             } else {
                 q
             };
-            return self.function("AND", &[input, q]);
+            return self.and(input, q);
         }
         self.element("contact", &var, c.negated, edge, "none", input)
     }
@@ -287,6 +312,33 @@ impl Writer {
         }
     }
 
+    /// `.CUm` / `.CRm`: the CTU block, written at the counter's last rung.
+    fn counter(&mut self, k: &Coil, power: Vec<Src>, ladder: &Ladder) {
+        let m = usize::from((k.op - POP_CU) % 8);
+        let slot = usize::from(k.op >= POP_CR);
+        self.pending[m][slot] = Some(power);
+        let waits = ladder_has(ladder, POP_CR + m as u8) && self.pending[m][1].is_none()
+            || self.pending[m][0].is_none();
+        if waits {
+            return;
+        }
+        let pv = self.id();
+        let at = self.at();
+        let preset = ladder.counter_presets[m];
+        let _ = writeln!(self.body, "        <inVariable localId=\"{pv}\" height=\"20\" width=\"50\">{at}<connectionPointOut><relPosition x=\"50\" y=\"10\"/></connectionPointOut><expression>{preset}</expression></inVariable>");
+        let cu = self.pending[m][0].take().unwrap_or_default();
+        let r = self.pending[m][1].take().unwrap_or_default();
+        let id = self.ctu[m];
+        let at = self.at();
+        let _ = writeln!(
+            self.body,
+            "        <block localId=\"{id}\" typeName=\"CTU\" instanceName=\"CTU{m}\" height=\"80\" width=\"50\">{at}<inputVariables><variable formalParameter=\"CU\">{}</variable><variable formalParameter=\"R\">{}</variable><variable formalParameter=\"PV\">{}</variable></inputVariables><inOutVariables/><outputVariables><variable formalParameter=\"Q\"><connectionPointOut><relPosition x=\"50\" y=\"30\"/></connectionPointOut></variable><variable formalParameter=\"CV\"><connectionPointOut><relPosition x=\"50\" y=\"50\"/></connectionPointOut></variable></outputVariables></block>",
+            conns(&cu),
+            conns(&r),
+            conns(&[(pv, None)])
+        );
+    }
+
     fn coil(&mut self, k: &Coil, power: Vec<Src>, ladder: &Ladder) {
         // Each output on a row of its own, below the ones before it: the import's order.
         self.row += 1;
@@ -310,6 +362,10 @@ impl Writer {
                 conns(&power),
                 conns(&[(konst, None)])
             );
+            return;
+        }
+        if (POP_CU..POP_CR + 8).contains(&k.op) {
+            self.counter(k, power, ladder);
             return;
         }
         let Some(push) = coil_push(k.op) else {
