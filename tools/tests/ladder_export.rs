@@ -118,6 +118,19 @@ fn the_xml_has_openplc_shape() {
     ] {
         assert!(xml.contains(want), "'{want}' not in:\n{xml}");
     }
+    // tank-fill: H6/H7 by name, the set-points as INT variables read back.
+    let (xml, back) = round_trip("tank-fill");
+    assert!(
+        xml.contains("<variable name=\"H6\"><type><BOOL/></type></variable>"),
+        "{xml}"
+    );
+    assert!(
+        xml.contains(
+            "<variable name=\"S6\"><type><INT/></type><initialValue><simpleValue value=\"800\"/>"
+        ),
+        "{xml}"
+    );
+    assert_eq!(back.set_points, load("tank-fill").set_points);
     // A timer of each unit gives its PT in its own unit.
     let src = "000 A0.\n001 .TK4\n002 A1.\n003 .TKC\n004 A2.\n005 .TKF\n006 TQ4.\n007 TQC.\n008 OR\n009 TQF.\n010 OR\n011 .Y0\n012 END\nT4 = 90\nTC = 2\nTF = 1\n";
     let path = write_scratch("units.utl", src);

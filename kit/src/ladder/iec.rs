@@ -21,7 +21,7 @@
 use std::string::String;
 use std::vec::Vec;
 
-use utile_core::engine::{unit_ms, COUNTERS, SET_POINTS, UNITS};
+use utile_core::engine::{unit_ms, COUNTERS, UNITS};
 use utile_core::opcodes::{
     BLANK, CLR, END, KEY, NOP, POP_CR, POP_CU, POP_TK, POP_U, PUSH_A, PUSH_AL, PUSH_AT, PUSH_CQ,
     PUSH_TQ, PUSH_U, SET,
@@ -219,7 +219,7 @@ pub fn lower(prog: &IecProgram) -> Result<Ladder, Vec<String>> {
         fill: NOP,
         presets: l.presets,
         counter_presets: l.counter_presets,
-        set_points: [0; SET_POINTS],
+        set_points: prog.set_points,
     })
     .map(|mut lad: Ladder| {
         if lad.items.is_empty() {

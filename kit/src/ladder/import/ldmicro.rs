@@ -148,6 +148,7 @@ pub fn read(text: &str, signals: Signals) -> Result<IecProgram, Vec<String>> {
         edges: 0,
         edge_what: Vec::new(),
         used_uv: r.signals.used_uv,
+        set_points: [0; 2],
     })
 }
 

@@ -291,11 +291,20 @@ pub fn read(text: &str, signals: Signals) -> Result<IecProgram, Vec<String>> {
     if !r.problems.is_empty() {
         return Err(r.problems);
     }
+    let set_point = |name: &str| {
+        r.constants
+            .get(name)
+            .and_then(|v| v.trim().parse::<u16>().ok())
+            .filter(|&v| v <= 1023)
+            .unwrap_or(0)
+    };
+    let set_points = [set_point("S6"), set_point("S7")];
     Ok(IecProgram {
         edges: r.edges.len(),
         edge_what: r.edge_what,
         stmts: r.stmts,
         used_uv: r.signals.used_uv,
+        set_points,
     })
 }
 

@@ -277,6 +277,12 @@ pub fn export(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
         return Err(w.problems);
     }
     let mut vars = variables(&contacts, &coils, &memory);
+    // H6/H7 compare A6/A7 with the set-points: INT variables the import reads back.
+    for (i, sp) in ladder.set_points.iter().enumerate() {
+        if *sp != 0 {
+            let _ = writeln!(vars, "          <variable name=\"S{}\"><type><INT/></type><initialValue><simpleValue value=\"{sp}\"/></initialValue></variable>", i + 6);
+        }
+    }
     for l in latches {
         let _ = writeln!(
             vars,
