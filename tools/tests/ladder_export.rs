@@ -1,7 +1,8 @@
 //! `utile export`: every example that has a PLCopen form is written as OpenPLC Editor's
 //! `plc.xml` (located variables, TOF blocks with their PT, set/reset coils) and imported back
 //! to a program whose outputs equal the listing's at every ms over random input timelines;
-//! the rest are refused by line, exit 1, nothing written.
+//! the rest are refused by line, exit 1, nothing written; random programs of rungs export and
+//! run the same, or are refused.
 
 mod support;
 
@@ -180,4 +181,110 @@ fn what_has_no_ladder_form_is_refused_by_line() {
         err.contains("line 000, 001, 002, 003, 004: A0. A1. SWAP .Y0 .Y1 has no ladder form"),
         "{err}"
     );
+}
+
+/// A random program of rungs of the kinds the export takes (contacts on inputs, outputs,
+/// memory bits, flip-flops, timers, input edges; AND, OR, XOR, `!`, DUP; every kind of coil).
+fn random_rungs(rng: &mut Rng) -> String {
+    use utile_core::opcodes::{self, AND, DUP, END, NOT, OR, XOR};
+    let mut ops: Vec<u8> = Vec::new();
+    let mut edges: Vec<u8> = Vec::new();
+    let mut contact = |rng: &mut Rng, ops: &mut Vec<u8>| {
+        let op = match rng.below(7) {
+            0 | 1 => opcodes::PUSH_A + rng.below(4) as u8,
+            2 => opcodes::PUSH_Y + rng.below(4) as u8,
+            3 => opcodes::PUSH_U + rng.below(3) as u8,
+            4 => opcodes::PUSH_Q + rng.below(2) as u8,
+            5 => opcodes::PUSH_TQ + rng.below(2) as u8,
+            _ => {
+                let e = [opcodes::PUSH_AL, opcodes::PUSH_AT][rng.below(2) as usize]
+                    + rng.below(4) as u8;
+                if edges.contains(&e) {
+                    opcodes::PUSH_A
+                } else {
+                    edges.push(e);
+                    e
+                }
+            }
+        };
+        ops.push(op);
+        if rng.below(4) == 0 {
+            ops.push(NOT);
+        }
+    };
+    for _ in 0..rng.range(2, 10) {
+        contact(rng, &mut ops);
+        for _ in 0..rng.below(3) {
+            contact(rng, &mut ops);
+            ops.push([AND, OR, XOR][rng.below(3) as usize]);
+        }
+        let pops = [
+            opcodes::POP_Y,
+            opcodes::POP_Y + 1,
+            opcodes::POP_Y + 2,
+            opcodes::POP_U,
+            opcodes::POP_U + 1,
+            opcodes::POP_S,
+            opcodes::POP_R,
+            opcodes::POP_S + 1,
+            opcodes::POP_R + 1,
+            opcodes::POP_TK,
+            opcodes::POP_TK + 1,
+        ];
+        let n = rng.range(1, 3);
+        for i in 0..n {
+            if i + 1 < n {
+                ops.push(DUP);
+            }
+            if rng.below(4) == 0 {
+                ops.push(NOT);
+            }
+            ops.push(pops[rng.below(pops.len() as u32) as usize]);
+        }
+    }
+    ops.push(END);
+    let mut text = String::new();
+    for (l, op) in ops.iter().enumerate() {
+        text.push_str(&format!(
+            "{l:03} {}\n",
+            opcodes::name(*op).unwrap().as_str()
+        ));
+    }
+    text.push_str(&format!(
+        "T0 = {}\nT1 = {}\n",
+        rng.range(1, 30),
+        rng.range(1, 30)
+    ));
+    text
+}
+
+#[test]
+fn random_programs_export_and_run_the_same_or_are_refused() {
+    let mut rng = Rng::new(0xe4);
+    let mut exported = 0;
+    for i in 0..300 {
+        let src = random_rungs(&mut rng);
+        let Ok(prog) = listing::parse("random.utl", &src) else {
+            continue;
+        };
+        let path = write_scratch(&format!("random{i}.utl"), &src);
+        let out = scratch(&format!("random{i}.xml"));
+        let r = utile(&["export", &path, "-o", out.to_str().unwrap()]);
+        if r.status.code() == Some(1) {
+            assert!(!out.exists());
+            continue;
+        }
+        assert!(r.status.success(), "{src}");
+        let text = utile_ok(&["import", out.to_str().unwrap()]);
+        let back = listing::parse("back", &text).unwrap();
+        for _ in 0..5 {
+            let events = random_events(&mut rng, 0x0F, 4000, 30);
+            let (a, b) = (run(&prog, &events, 4000, 2), run(&back, &events, 4000, 2));
+            if let Some(t) = (0..a.len()).find(|&t| a[t] != b[t]) {
+                panic!("at {t} ms {:?} against {:?}:\n{src}\n{text}", a[t], b[t]);
+            }
+        }
+        exported += 1;
+    }
+    assert!(exported >= 40, "only {exported} of 300 exported");
 }
