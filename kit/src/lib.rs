@@ -16,6 +16,7 @@
 
 pub mod diagram;
 pub mod fuzzing;
+pub mod ladder;
 pub mod listing;
 pub mod modbus;
 pub mod rng;

@@ -8,6 +8,8 @@ pub mod bench;
 pub mod cli;
 /// Symbols and section sizes of a firmware ELF (AVR binutils), for `cargo fw` and the bench.
 pub mod elf;
+/// `utile ladder`, `utile import`: listings as ladder; PLCopen XML and LDmicro as listings.
+pub mod ladder_cmd;
 /// Programs to and from a uTile over a serial port (`utile push`, `utile pull`).
 pub mod link;
 /// Every uTile on a line live in the browser, the terminal and a Modbus TCP gateway

@@ -12,7 +12,7 @@
 //!
 //! Rooms: `term.rs` (the terminal model), `main_loop.rs`, and the harnesses by subject:
 //! `editor.rs`, `storage.rs`, `modbus.rs` (with `modbus_oracle.rs`, what a request must do,
-//! and `hold.rs`, SPEC §18's part of it).
+//! and `hold.rs`, SPEC §18's part of it), `ladder.rs` (the ladder importers).
 
 use std::format;
 use std::string::{String, ToString};
@@ -40,6 +40,7 @@ pub const RX_RING: usize = 64;
 
 mod editor;
 mod hold;
+mod ladder;
 mod main_loop;
 mod modbus;
 mod modbus_oracle;
@@ -47,6 +48,7 @@ mod storage;
 mod term;
 
 pub use editor::{editor, editor_loop, keys, lines, sample_program};
+pub use ladder::{ldmicro, plcopen};
 pub use main_loop::MainLoop;
 pub use modbus::{modbus, modbus_plc, named_writes, BUILT_MAX};
 pub use modbus_oracle::check_effect;
@@ -57,7 +59,7 @@ pub use term::Term;
 pub type Harness = fn(&[u8]) -> Verdict;
 
 /// Every harness by the name its fuzz target and corpus directory use.
-pub const TARGETS: [(&str, Harness); 9] = [
+pub const TARGETS: [(&str, Harness); 11] = [
     ("editor", editor),
     ("lines", lines),
     ("keys", keys),
@@ -67,4 +69,6 @@ pub const TARGETS: [(&str, Harness); 9] = [
     ("eeprom", eeprom),
     ("modbus", modbus),
     ("modbus_plc", modbus_plc),
+    ("plcopen", plcopen),
+    ("ldmicro", ldmicro),
 ];

@@ -6,12 +6,15 @@
 //!   cross-checks);
 //! - [`utile`]: running the `utile` tool, scratch files, examples, its table, SVG and VCD
 //!   (`utile_*`, `crosscheck_examples`);
+//! - [`ladder`]: random timelines, runs sampled every ms and a ladder SVG's elements
+//!   (`ladder_*`);
 //! - [`live`]: `utile live` on the virtual Nano, an HTTP client for its API, a raw Modbus
 //!   TCP client (`live_*`).
 //!
 //! Each test binary uses only part of it.
 #![allow(dead_code, unused_imports)]
 
+pub mod ladder;
 pub mod live;
 pub mod utile;
 pub mod vnano;

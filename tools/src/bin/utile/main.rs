@@ -8,6 +8,7 @@
 
 mod board;
 mod files;
+mod ladder;
 mod sim;
 
 use std::process::ExitCode;
@@ -21,6 +22,7 @@ Examples:
   cargo utile asm examples/tank-fill.utl                    writes examples/tank-fill.hex
   cargo utile sim examples/tank-fill.utl --inputs examples/tank-fill.timeline --svg t.svg
   cargo utile push prog.utl --port /dev/ttyUSB0 --store
+  cargo utile import plc.xml -o prog.utl                    OpenPLC Editor's program
   cargo utile live --port /dev/ttyUSB0 --units 1,2,3
   cargo utile completions bash > ~/.local/share/bash-completion/completions/utile
 
@@ -49,6 +51,12 @@ enum Command {
     Push(board::Push),
     /// The program from uTile (WRITE) as a listing, or the Intel HEX file with --hex
     Pull(board::Pull),
+    /// Draw the listing's rungs as SVG (docs/LADDER.md)
+    Ladder(ladder::Ladder),
+    /// A PLCopen XML (OpenPLC Editor) or LDmicro program as a listing
+    Import(ladder::Import),
+    /// The listing as OpenPLC Editor's PLCopen XML (LD)
+    Export(ladder::Export),
     /// Every uTile on the line live in the browser, the terminal beside it, a Modbus TCP
     /// gateway
     Live(live::args::LiveArgs),
@@ -78,6 +86,9 @@ fn main() -> ExitCode {
         Command::Sim(a) => a.run(),
         Command::Push(a) => a.run(),
         Command::Pull(a) => a.run(),
+        Command::Ladder(a) => a.run(),
+        Command::Import(a) => a.run(),
+        Command::Export(a) => a.run(),
         Command::Live(a) => live::main(&a.into()).map_err(anyhow::Error::msg),
         Command::Completions(c) => {
             clap_complete::generate(

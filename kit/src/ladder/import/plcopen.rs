@@ -1,0 +1,689 @@
+//! PLCopen TC6 0201 XML (OpenPLC Editor's `plc.xml`): the first program POU's LD or FBD body
+//! read as IEC statements ([`super::Stmt`]).
+//!
+//! Elements: left and right power rails, contacts (negated, `edge="rising|falling"`), coils
+//! (negated, `storage="set|reset"`), several connections on one input as a wired OR, the
+//! blocks TON, TOF, TP, CTU, R_TRIG, F_TRIG, SR, RS and the functions AND, OR, XOR, NOT
+//! (EN optional, ENO passed through), FBD's in-, out- and in-out variables, connectors and
+//! continuations. The sinks (coils, output variables, function blocks) run top to bottom,
+//! then left to right, as the picture shows them.
+
+use std::collections::HashMap;
+use std::string::String;
+use std::vec::Vec;
+
+use roxmltree::{Document, Node};
+
+use super::{pop_of, CoilMode, Expr, IecProgram, Signals, Stmt, TimerKind};
+
+/// Words for an element in a refusal: `coil Lamp (localId 7)`.
+fn what(n: Node) -> String {
+    let tag = n.tag_name().name();
+    let id = n.attribute("localId").unwrap_or("?");
+    let name = match tag {
+        "contact" | "coil" => child_text(n, "variable"),
+        "block" => n
+            .attribute("instanceName")
+            .or(n.attribute("typeName"))
+            .map(str::to_string),
+        "inVariable" | "outVariable" | "inOutVariable" => child_text(n, "expression"),
+        _ => None,
+    };
+    match name {
+        Some(v) => format!("{tag} {} (localId {id})", v.trim()),
+        None => format!("{tag} (localId {id})"),
+    }
+}
+
+fn child<'a, 'i>(n: Node<'a, 'i>, tag: &str) -> Option<Node<'a, 'i>> {
+    n.children().find(|c| c.tag_name().name() == tag)
+}
+
+fn child_text(n: Node, tag: &str) -> Option<String> {
+    child(n, tag).map(|c| c.text().unwrap_or("").trim().to_string())
+}
+
+/// A time literal (`T#500ms`, `TIME#1m30s`, `t#1.5s`) in ms.
+pub fn parse_time(text: &str) -> Option<u32> {
+    let t = text.trim().replace('_', "").to_ascii_lowercase();
+    let body = t
+        .strip_prefix("time#")
+        .or_else(|| t.strip_prefix("t#"))
+        .unwrap_or(&t);
+    if body.is_empty() {
+        return None;
+    }
+    if body.bytes().all(|b| b.is_ascii_digit()) {
+        return body.parse().ok();
+    }
+    let mut ms = 0f64;
+    let mut rest = body;
+    while !rest.is_empty() {
+        let end = rest
+            .find(|c: char| !c.is_ascii_digit() && c != '.')
+            .unwrap_or(rest.len());
+        let num: f64 = rest[..end].parse().ok()?;
+        rest = &rest[end..];
+        let (scale, len) = if rest.starts_with("ms") {
+            (1.0, 2)
+        } else if rest.starts_with('d') {
+            (86_400_000.0, 1)
+        } else if rest.starts_with('h') {
+            (3_600_000.0, 1)
+        } else if rest.starts_with('m') {
+            (60_000.0, 1)
+        } else if rest.starts_with('s') {
+            (1000.0, 1)
+        } else {
+            return None;
+        };
+        ms += num * scale;
+        rest = &rest[len..];
+    }
+    (ms <= f64::from(u32::MAX)).then_some(ms.round() as u32)
+}
+
+/// The reader's state: the body's elements by localId, the signals, the statements.
+struct Reader<'a, 'i> {
+    elems: HashMap<u64, Node<'a, 'i>>,
+    connectors: HashMap<String, Node<'a, 'i>>,
+    signals: Signals,
+    /// Non-BOOL variables' initial values (upper-cased name → text).
+    constants: HashMap<String, String>,
+    /// Function-block instance names declared with a standard type.
+    stmts: Vec<Stmt>,
+    /// Statement of each FB element already emitted.
+    emitted: HashMap<u64, usize>,
+    /// Elements being followed (a loop of wires comes back to one).
+    visiting: Vec<u64>,
+    /// Edge memories by contact localId.
+    edges: HashMap<u64, usize>,
+    edge_what: Vec<String>,
+    problems: Vec<String>,
+}
+
+type Res<T> = Result<T, String>;
+
+fn local_id(n: Node) -> Option<u64> {
+    n.attribute("localId").and_then(|s| s.trim().parse().ok())
+}
+
+fn pos(n: Node) -> (i64, i64) {
+    let p = child(n, "position");
+    let num = |a: &str| {
+        p.and_then(|p| p.attribute(a))
+            .and_then(|v| v.trim().parse::<f64>().ok())
+            .map_or(0, |v| v as i64)
+    };
+    (num("y"), num("x"))
+}
+
+const FB_TYPES: [&str; 8] = ["TON", "TOF", "TP", "CTU", "R_TRIG", "F_TRIG", "SR", "RS"];
+const FUNCTIONS: [&str; 4] = ["AND", "OR", "XOR", "NOT"];
+
+/// Read a PLCopen XML document's first program.
+pub fn read(text: &str, signals: Signals) -> Result<IecProgram, Vec<String>> {
+    let opts = roxmltree::ParsingOptions {
+        allow_dtd: false,
+        nodes_limit: 2_000_000,
+    };
+    let doc = Document::parse_with_options(text, opts).map_err(|e| {
+        std::vec![format!(
+            "file: not well-formed XML ({e}) — save the project again from OpenPLC Editor, or check the file is a PLCopen plc.xml"
+        )]
+    })?;
+    let root = doc.root_element();
+    if root.tag_name().name() != "project" {
+        return Err(std::vec![format!(
+            "file: the root element is <{}>, not a PLCopen <project> — is this a plc.xml?",
+            root.tag_name().name()
+        )]);
+    }
+    let pous: Vec<Node> = root
+        .descendants()
+        .filter(|n| n.tag_name().name() == "pou")
+        .collect();
+    let Some(pou) = pous
+        .iter()
+        .copied()
+        .find(|p| p.attribute("pouType") == Some("program"))
+    else {
+        return Err(std::vec![
+            "file: no program POU — a PLCopen project for uTile holds one program in LD or FBD"
+                .into()
+        ]);
+    };
+    let pou_name = pou.attribute("name").unwrap_or("program");
+    let Some(body) = child(pou, "body") else {
+        return Err(std::vec![format!("program {pou_name}: no body")]);
+    };
+    let Some(lang) = body.children().find(|c| c.is_element()) else {
+        return Err(std::vec![format!("program {pou_name}: an empty body")]);
+    };
+    match lang.tag_name().name() {
+        "LD" | "FBD" => {}
+        other => {
+            return Err(std::vec![format!(
+                "program {pou_name}: its body is {other} — uTile imports LD and FBD only; redraw it in LD"
+            )])
+        }
+    }
+
+    let mut r = Reader {
+        elems: HashMap::new(),
+        connectors: HashMap::new(),
+        signals,
+        constants: HashMap::new(),
+        stmts: Vec::new(),
+        emitted: HashMap::new(),
+        visiting: Vec::new(),
+        edges: HashMap::new(),
+        edge_what: Vec::new(),
+        problems: Vec::new(),
+    };
+    // Variables: the program's interface, then global variables anywhere in the project.
+    let mut vars: Vec<Node> = Vec::new();
+    if let Some(iface) = child(pou, "interface") {
+        vars.extend(
+            iface
+                .descendants()
+                .filter(|n| n.tag_name().name() == "variable"),
+        );
+    }
+    vars.extend(
+        root.descendants()
+            .filter(|n| n.tag_name().name() == "globalVars")
+            .flat_map(|g| g.children().filter(|n| n.tag_name().name() == "variable")),
+    );
+    for v in vars {
+        let Some(name) = v.attribute("name") else {
+            continue;
+        };
+        let ty = child(v, "type").and_then(|t| t.children().find(|c| c.is_element()));
+        let ty_name = ty.map_or("", |t| t.tag_name().name());
+        if ty_name == "BOOL" {
+            if let Err(why) = r.signals.declare(name, v.attribute("address")) {
+                r.problems.push(why);
+            }
+        } else if ty_name != "derived" {
+            if let Some(val) = v
+                .descendants()
+                .find(|n| n.tag_name().name() == "simpleValue")
+                .and_then(|s| s.attribute("value"))
+            {
+                r.constants.insert(name.to_ascii_uppercase(), val.into());
+            }
+        }
+    }
+
+    // The body's elements, also inside CODESYS's rungs.
+    let mut order: Vec<Node> = Vec::new();
+    let mut stack: Vec<Node> = lang.children().filter(|c| c.is_element()).collect();
+    stack.reverse();
+    while let Some(n) = stack.pop() {
+        let tag = n.tag_name().name();
+        match tag {
+            "rung" | "network" => {
+                let mut kids: Vec<Node> = n.children().filter(|c| c.is_element()).collect();
+                kids.reverse();
+                stack.extend(kids);
+                continue;
+            }
+            "comment" | "addData" | "documentation" => continue,
+            "leftPowerRail" | "rightPowerRail" | "contact" | "coil" | "block" | "inVariable"
+            | "outVariable" | "inOutVariable" | "connector" | "continuation" => {}
+            "jump" | "label" | "return" => {
+                r.problems.push(format!(
+                    "{}: jumps and returns have no uTile form — every rung runs every scan; redraw without them",
+                    what(n)
+                ));
+                continue;
+            }
+            other => {
+                r.problems.push(format!(
+                    "{}: <{other}> is not an element uTile knows (rails, contacts, coils, TON/TOF/TP/CTU/R_TRIG/F_TRIG/SR/RS, AND/OR/XOR/NOT, variables) — remove it",
+                    what(n)
+                ));
+                continue;
+            }
+        }
+        let Some(id) = local_id(n) else {
+            r.problems.push(format!(
+                "{}: no localId — save the file again from the editor",
+                what(n)
+            ));
+            continue;
+        };
+        if tag == "connector" {
+            if let Some(name) = n.attribute("name") {
+                r.connectors.insert(name.to_ascii_uppercase(), n);
+            }
+        }
+        if r.elems.insert(id, n).is_some() {
+            r.problems.push(format!(
+                "{}: two elements share localId {id} — save the file again from the editor",
+                what(n)
+            ));
+        }
+        order.push(n);
+    }
+    if !r.problems.is_empty() {
+        return Err(r.problems);
+    }
+
+    // Sinks top to bottom, then left to right.
+    let mut sinks: Vec<Node> = order
+        .iter()
+        .copied()
+        .filter(|n| match n.tag_name().name() {
+            "coil" | "outVariable" | "inOutVariable" => true,
+            "block" => FB_TYPES.contains(&n.attribute("typeName").unwrap_or("")),
+            _ => false,
+        })
+        .collect();
+    sinks.sort_by_key(|n| (pos(*n), local_id(*n)));
+    for s in sinks {
+        if let Err(why) = r.sink(s) {
+            r.problems.push(why);
+            break;
+        }
+    }
+    if !r.problems.is_empty() {
+        return Err(r.problems);
+    }
+    let set_point = |name: &str| {
+        r.constants
+            .get(name)
+            .and_then(|v| v.trim().parse::<u16>().ok())
+            .filter(|&v| v <= 1023)
+            .unwrap_or(0)
+    };
+    let set_points = [set_point("S6"), set_point("S7")];
+    Ok(IecProgram {
+        edges: r.edges.len(),
+        edge_what: r.edge_what,
+        stmts: r.stmts,
+        used_uv: r.signals.used_uv,
+        set_points,
+    })
+}
+
+impl<'a, 'i> Reader<'a, 'i> {
+    fn sink(&mut self, n: Node<'a, 'i>) -> Res<()> {
+        match n.tag_name().name() {
+            "coil" | "outVariable" | "inOutVariable" => {
+                let power = self.input_of(n, child(n, "connectionPointIn"))?;
+                if n.tag_name().name() == "inOutVariable" && child(n, "connectionPointIn").is_none()
+                {
+                    return Ok(());
+                }
+                let name = if n.tag_name().name() == "coil" {
+                    child_text(n, "variable")
+                } else {
+                    child_text(n, "expression")
+                }
+                .unwrap_or_default();
+                let push = self.var(n, &name)?;
+                let Some(pop) = pop_of(push) else {
+                    return Err(format!(
+                        "{}: {name} is an input and cannot be written — write an output or a memory bit",
+                        what(n)
+                    ));
+                };
+                let negated = n.attribute("negated") == Some("true");
+                let mode = match (n.attribute("storage").unwrap_or("none"), negated) {
+                    ("set", _) => CoilMode::Set,
+                    ("reset", _) => CoilMode::Reset,
+                    (_, true) => CoilMode::Negated,
+                    _ => CoilMode::Normal,
+                };
+                if n.attribute("edge").is_some_and(|e| e != "none") {
+                    return Err(format!(
+                        "{}: edge coils have no uTile form — use an edge contact before a plain coil",
+                        what(n)
+                    ));
+                }
+                self.stmts.push(Stmt::Coil {
+                    power,
+                    pop,
+                    push,
+                    mode,
+                });
+                Ok(())
+            }
+            _ => self.block_stmt(n).map(|_| ()),
+        }
+    }
+
+    /// The push opcode of a variable named in an element.
+    fn var(&self, n: Node, name: &str) -> Res<u8> {
+        self.signals.get(name).ok_or_else(|| {
+            if self.constants.contains_key(&name.trim().to_ascii_uppercase()) {
+                format!(
+                    "{}: {name} is not a BOOL — uTile's contacts and coils are bits",
+                    what(n)
+                )
+            } else {
+                format!(
+                    "{}: variable {name} is not declared as a BOOL — declare it, or name its signal with --map {name}=SIGNAL",
+                    what(n)
+                )
+            }
+        })
+    }
+
+    /// The power on a connectionPointIn: the OR of its connections (none: FALSE).
+    fn input_of(&mut self, n: Node<'a, 'i>, point: Option<Node<'a, 'i>>) -> Res<Expr> {
+        let Some(point) = point else {
+            return Ok(Expr::Const(false));
+        };
+        let mut power: Option<Expr> = None;
+        for c in point
+            .children()
+            .filter(|c| c.tag_name().name() == "connection")
+        {
+            let Some(id) = c
+                .attribute("refLocalId")
+                .and_then(|s| s.trim().parse().ok())
+            else {
+                return Err(format!(
+                    "{}: a connection without refLocalId — save the file again from the editor",
+                    what(n)
+                ));
+            };
+            let e = self.output_of(n, id, c.attribute("formalParameter"))?;
+            power = Some(match power {
+                None => e,
+                Some(p) => Expr::or(p, e),
+            });
+        }
+        Ok(power.unwrap_or(Expr::Const(false)))
+    }
+
+    /// The value leaving element `id` (at its output `formal`), for the element `from`.
+    fn output_of(&mut self, from: Node, id: u64, formal: Option<&str>) -> Res<Expr> {
+        let Some(&n) = self.elems.get(&id) else {
+            return Err(format!(
+                "{}: wired to localId {id}, which is not in the body — redraw the wire",
+                what(from)
+            ));
+        };
+        if self.visiting.contains(&id) {
+            return Err(format!(
+                "{}: a loop of wires comes back to it — uTile's rungs flow left to right; break the loop with a coil and a contact",
+                what(n)
+            ));
+        }
+        self.visiting.push(id);
+        let r = self.output_inner(n, id, formal);
+        self.visiting.pop();
+        r
+    }
+
+    fn output_inner(&mut self, n: Node<'a, 'i>, id: u64, formal: Option<&str>) -> Res<Expr> {
+        match n.tag_name().name() {
+            "leftPowerRail" => Ok(Expr::Const(true)),
+            "contact" => {
+                let power = self.input_of(n, child(n, "connectionPointIn"))?;
+                let name = child_text(n, "variable").unwrap_or_default();
+                let push = self.var(n, &name)?;
+                let negated = n.attribute("negated") == Some("true");
+                let value = match n.attribute("edge").unwrap_or("none") {
+                    "none" => Expr::Var(push),
+                    e @ ("rising" | "falling") => {
+                        let next = self.edges.len();
+                        let eid = *self.edges.entry(id).or_insert(next);
+                        if eid == next {
+                            self.edge_what.push(what(n));
+                        }
+                        Expr::Edge {
+                            var: push,
+                            rising: e == "rising",
+                            id: eid,
+                        }
+                    }
+                    other => {
+                        return Err(format!(
+                            "{}: edge=\"{other}\" is not rising or falling",
+                            what(n)
+                        ))
+                    }
+                };
+                let value = if negated { Expr::negate(value) } else { value };
+                Ok(Expr::and(power, value))
+            }
+            "coil" => self.input_of(n, child(n, "connectionPointIn")),
+            "inVariable" | "inOutVariable" => {
+                let name = child_text(n, "expression").unwrap_or_default();
+                let value = match name.to_ascii_uppercase().as_str() {
+                    "TRUE" | "1" => Expr::Const(true),
+                    "FALSE" | "0" => Expr::Const(false),
+                    _ => Expr::Var(self.var(n, &name)?),
+                };
+                Ok(if n.attribute("negated") == Some("true") {
+                    Expr::negate(value)
+                } else {
+                    value
+                })
+            }
+            "continuation" => {
+                let name = n.attribute("name").unwrap_or("").to_ascii_uppercase();
+                let Some(&c) = self.connectors.get(&name) else {
+                    return Err(format!(
+                        "{}: no connector named {name} — draw the connector or the wire",
+                        what(n)
+                    ));
+                };
+                let cid = local_id(c).unwrap_or(0);
+                self.output_of(n, cid, None)
+            }
+            "connector" => self.input_of(n, child(n, "connectionPointIn")),
+            "block" => self.block_output(n, formal.unwrap_or("")),
+            _ => Err(format!(
+                "{}: nothing flows out of it — redraw the wire",
+                what(n)
+            )),
+        }
+    }
+
+    /// A block's input by formal name (`IN`, `PT`, `IN1`, …).
+    fn block_input(&self, n: Node<'a, 'i>, formal: &str) -> Option<Node<'a, 'i>> {
+        child(n, "inputVariables")?.children().find(|v| {
+            v.tag_name().name() == "variable"
+                && v.attribute("formalParameter")
+                    .is_some_and(|f| f.eq_ignore_ascii_case(formal))
+        })
+    }
+
+    fn bool_input(&mut self, n: Node<'a, 'i>, formal: &str) -> Res<Expr> {
+        match self.block_input(n, formal) {
+            Some(v) => {
+                let e = self.input_of(n, child(v, "connectionPointIn"))?;
+                Ok(if v.attribute("negated") == Some("true") {
+                    Expr::negate(e)
+                } else {
+                    e
+                })
+            }
+            None => Ok(Expr::Const(false)),
+        }
+    }
+
+    /// A constant input (PT, PV): an inVariable's literal, or a variable's initial value.
+    fn constant_input(&self, n: Node, formal: &str) -> Res<String> {
+        let missing = || {
+            format!(
+                "{}: {formal} must come from a constant or a variable with an initial value",
+                what(n)
+            )
+        };
+        let v = self.block_input(n, formal).ok_or_else(missing)?;
+        let conn = child(v, "connectionPointIn")
+            .and_then(|p| p.children().find(|c| c.tag_name().name() == "connection"))
+            .ok_or_else(missing)?;
+        let id: u64 = conn
+            .attribute("refLocalId")
+            .and_then(|s| s.trim().parse().ok())
+            .ok_or_else(missing)?;
+        let src = self.elems.get(&id).ok_or_else(|| {
+            format!(
+                "{}: wired to localId {id}, which is not in the body — redraw the wire",
+                what(n)
+            )
+        })?;
+        if src.tag_name().name() != "inVariable" {
+            return Err(missing());
+        }
+        let text = child_text(*src, "expression").unwrap_or_default();
+        Ok(self
+            .constants
+            .get(&text.to_ascii_uppercase())
+            .cloned()
+            .unwrap_or(text))
+    }
+
+    fn enable_ok(&mut self, n: Node<'a, 'i>) -> Res<()> {
+        if self.block_input(n, "EN").is_some() {
+            let en = self.bool_input(n, "EN")?;
+            if en != Expr::Const(true) {
+                return Err(format!(
+                    "{}: EN from a condition — uTile runs every block every scan; wire the condition into the block's input instead and EN to the left rail",
+                    what(n)
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn block_output(&mut self, n: Node<'a, 'i>, formal: &str) -> Res<Expr> {
+        let ty = n.attribute("typeName").unwrap_or("").to_ascii_uppercase();
+        if formal.eq_ignore_ascii_case("ENO") {
+            self.enable_ok(n)?;
+            return Ok(Expr::Const(true));
+        }
+        if FUNCTIONS.contains(&ty.as_str()) {
+            self.enable_ok(n)?;
+            let mut ins: Vec<Expr> = Vec::new();
+            let names: Vec<String> = child(n, "inputVariables")
+                .map(|iv| {
+                    iv.children()
+                        .filter(|v| v.tag_name().name() == "variable")
+                        .filter_map(|v| v.attribute("formalParameter").map(str::to_string))
+                        .filter(|f| !f.eq_ignore_ascii_case("EN"))
+                        .collect()
+                })
+                .unwrap_or_default();
+            for f in &names {
+                ins.push(self.bool_input(n, f)?);
+            }
+            let mut it = ins.into_iter();
+            let first = it.next().ok_or_else(|| format!("{}: no inputs", what(n)))?;
+            let e = match ty.as_str() {
+                "NOT" => Expr::negate(first),
+                "AND" => it.fold(first, |a, b| Expr::And(Box::new(a), Box::new(b))),
+                "OR" => it.fold(first, Expr::or),
+                _ => it.fold(first, |a, b| Expr::Xor(Box::new(a), Box::new(b))),
+            };
+            return Ok(e);
+        }
+        if FB_TYPES.contains(&ty.as_str()) {
+            let q = if matches!(ty.as_str(), "SR" | "RS") {
+                "Q1"
+            } else {
+                "Q"
+            };
+            if !formal.is_empty() && !formal.eq_ignore_ascii_case(q) {
+                return Err(format!(
+                    "{}: its output {formal} has no uTile form (only {q} and ENO) — leave it unwired",
+                    what(n)
+                ));
+            }
+            let s = self.block_stmt(n)?;
+            return Ok(Expr::Out(s));
+        }
+        Err(self.unknown_block(n, &ty))
+    }
+
+    fn unknown_block(&self, n: Node, ty: &str) -> String {
+        let why = match ty {
+            "CTD" | "CTUD" => "uTile's counters count up only (CTU)",
+            "GT" | "GE" | "EQ" | "NE" | "LE" | "LT" => "uTile has no comparisons of numbers",
+            "ADD" | "SUB" | "MUL" | "DIV" | "MOD" | "MOVE" | "SEL" | "MUX" | "MAX" | "MIN"
+            | "LIMIT" => "uTile has no arithmetic or moves of numbers",
+            t if t.contains("_TO_") => "uTile has no conversions of numbers",
+            _ => "uTile knows only TON, TOF, TP, CTU, R_TRIG, F_TRIG, SR, RS, AND, OR, XOR, NOT (user function blocks cannot be imported)",
+        };
+        format!("{}: {ty}: {why} — redraw it with those", what(n))
+    }
+
+    /// The statement of a function block, emitted once (its inputs first).
+    fn block_stmt(&mut self, n: Node<'a, 'i>) -> Res<usize> {
+        let id = local_id(n).unwrap_or(0);
+        if let Some(&s) = self.emitted.get(&id) {
+            return Ok(s);
+        }
+        self.enable_ok(n)?;
+        let ty = n.attribute("typeName").unwrap_or("").to_ascii_uppercase();
+        let w = what(n);
+        let stmt = match ty.as_str() {
+            "TON" | "TOF" | "TP" => {
+                let input = self.bool_input(n, "IN")?;
+                let pt_text = self.constant_input(n, "PT")?;
+                let pt_ms = parse_time(&pt_text).ok_or_else(|| {
+                    format!("{w}: PT '{pt_text}' is not a time (T#500ms, T#2s, T#1m30s)")
+                })?;
+                let kind = match ty.as_str() {
+                    "TON" => TimerKind::Ton,
+                    "TOF" => TimerKind::Tof,
+                    _ => TimerKind::Tp,
+                };
+                Stmt::Timer {
+                    kind,
+                    input,
+                    pt_ms,
+                    what: w,
+                }
+            }
+            "CTU" => {
+                let cu = self.bool_input(n, "CU")?;
+                let reset = self.bool_input(n, "R")?;
+                let pv_text = self.constant_input(n, "PV")?;
+                let pv = pv_text
+                    .trim()
+                    .parse::<u16>()
+                    .ok()
+                    .filter(|&v| v >= 1)
+                    .ok_or_else(|| {
+                        format!(
+                            "{w}: PV '{pv_text}' is not a preset uTile's counters hold (1..65535)"
+                        )
+                    })?;
+                Stmt::Counter {
+                    cu,
+                    reset,
+                    pv,
+                    what: w,
+                }
+            }
+            "R_TRIG" | "F_TRIG" => Stmt::Trig {
+                clk: self.bool_input(n, "CLK")?,
+                rising: ty == "R_TRIG",
+            },
+            "SR" => Stmt::FlipFlop {
+                set: self.bool_input(n, "S1")?,
+                reset: self.bool_input(n, "R")?,
+                set_dominant: true,
+            },
+            "RS" => Stmt::FlipFlop {
+                set: self.bool_input(n, "S")?,
+                reset: self.bool_input(n, "R1")?,
+                set_dominant: false,
+            },
+            _ => return Err(self.unknown_block(n, &ty)),
+        };
+        self.stmts.push(stmt);
+        let s = self.stmts.len() - 1;
+        self.emitted.insert(id, s);
+        Ok(s)
+    }
+}
