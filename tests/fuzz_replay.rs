@@ -461,6 +461,30 @@ fn seeds() -> Vec<Seed> {
         write("modbus", name, &data);
         write("modbus_plc", name, &data);
     }
+
+    // plcopen and ldmicro: the importers' fixtures (every element of each format), an
+    // LDmicro file with a `map` line for the harness, and one whose last rung has no END.
+    let fixture = |name: &str| {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/tests/data/ladder");
+        std::fs::read(path.join(name)).expect("a ladder fixture")
+    };
+    for name in ["blocks.xml", "contacts.xml", "fbd.xml", "timers.xml"] {
+        write("plcopen", name, &fixture(name));
+    }
+    write("ldmicro", "every.ld", &fixture("every.ld"));
+    write(
+        "ldmicro",
+        "map.ld",
+        b"map Xa=A3,Yb=Y7\nLDmicro0.1\nIO LIST\n    Xa at 2\n    Yb at 3\nEND\nPROGRAM\nRUNG\n    \
+          CONTACTS Xa 1\n    OSR\n    COIL Yb 0 1 0\nEND\n",
+    );
+    write(
+        "ldmicro",
+        "noend.ld",
+        b"LDmicro0.2\nPROGRAM\nRUNG\n    PARALLEL\n        CONTACTS Xa 0\n        SERIES\n            \
+          CONTACTS Rb 1\n            TON Tt 1000000 0\n        END\n    END\n    CTU Cc 4 0\n    \
+          COIL Ya 0 0 0 0\nEND\nRUNG\n    CONTACTS Xb 0\n    RES Cc\n",
+    );
     out
 }
 
