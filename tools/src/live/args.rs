@@ -6,14 +6,17 @@ use std::time::Duration;
 /// The usage text.
 pub const USAGE: &str = "\
   utile live --port PATH [--units 1,2,3 | --scan] [--http ADDR:PORT] [--tcp ADDR:PORT]
-             [--no-tcp] [--read-only] [--program PROG.utl] [--wait SECS]
+             [--no-tcp] [--read-only] [--program PROG.utl] [--wait SECS] [--mqtt URL …]
                                        every uTile on the line live in the browser, the
                                        terminal beside it, a Modbus TCP gateway
     --units  the slave addresses on the line (default 1); --scan looks for them
     --http   where the page is served (default 127.0.0.1:8080)
     --tcp    the Modbus TCP gateway (default 127.0.0.1:1502; unit id = slave address)
     --read-only  refuse every write (page, terminal keys and TCP)
-    --program    check that the listing is the program that runs (its fingerprint)";
+    --program    check that the listing is the program that runs (its fingerprint)
+    --mqtt mqtt://HOST[:PORT] | mqtts://HOST[:PORT]  publish every uTile to a broker
+       [--mqtt-ca FILE] [--mqtt-user NAME --mqtt-password-file FILE] [--name LINE]
+       [--mqtt-prefix P] [--mqtt-commands] [--ha-discovery]   (docs/LIVE.md, MQTT)";
 
 /// Options of one run.
 #[derive(Clone, Debug, PartialEq)]
@@ -34,6 +37,8 @@ pub struct Options {
     pub program: Option<String>,
     /// The longest wait for uTile after the port opens.
     pub boot_wait: Duration,
+    /// The MQTT flags (`--mqtt URL` …).
+    pub mqtt: super::mqtt::options::Flags,
 }
 
 /// `ADDR:PORT`, or a bare port on 127.0.0.1.
@@ -56,6 +61,7 @@ pub fn parse(words: &[String]) -> Result<Options, String> {
         read_only: false,
         program: None,
         boot_wait: Duration::from_millis(2500),
+        mqtt: Default::default(),
     };
     let mut it = words.iter();
     while let Some(w) = it.next() {
@@ -98,6 +104,7 @@ pub fn parse(words: &[String]) -> Result<Options, String> {
                     .ok_or_else(|| format!("--wait takes seconds (0..60), not '{v}'"))?;
                 o.boot_wait = Duration::from_secs_f64(secs);
             }
+            other if o.mqtt.take(other, &mut value)? => {}
             other => return Err(format!("unknown option '{other}'\nusage:\n{USAGE}")),
         }
     }

@@ -18,6 +18,7 @@
 //! | `state.rs` | what the threads share; the API's JSON |
 //! | `http.rs` | the web server: page, API, events, writes, terminal WebSocket |
 //! | `gateway.rs` | the Modbus TCP gateway |
+//! | `mqtt/` | the MQTT publisher, Home Assistant discovery, `set` commands |
 //! | `assets.rs`, `page/` | the page's files, built into the binary |
 
 pub mod args;
@@ -26,6 +27,7 @@ pub mod gateway;
 pub mod http;
 pub mod line;
 pub mod line_use;
+pub mod mqtt;
 pub mod port;
 pub mod queue;
 pub mod rtu;
@@ -79,6 +81,7 @@ impl Drop for Running {
 /// `say` gets the lines a console shows.
 pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Running, String> {
     assets::check()?;
+    let mqtt = mqtt::options::Settings::new(&opts.mqtt, &opts.port)?;
     let file = match &opts.program {
         Some(path) => {
             let text =
@@ -154,6 +157,17 @@ pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Ru
     }
     if opts.read_only {
         say("read-only: every write is refused");
+    }
+    if let Some(m) = mqtt {
+        say(&format!(
+            "MQTT: line '{}' to {}:{} (topics {})",
+            m.topics.line(),
+            m.broker.host,
+            m.broker.port,
+            m.topics.status().trim_end_matches("/status")
+        ));
+        let (reports, writes) = mqtt::adapter::start(shared.clone());
+        mqtt::start(m, reports, writes);
     }
     Ok(Running {
         shared,

@@ -7,11 +7,14 @@
 //! - [`utile`]: running the `utile` tool, scratch files, examples, its table, SVG and VCD
 //!   (`utile_*`, `crosscheck_examples`);
 //! - [`live`]: `utile live` on the virtual Nano, an HTTP client for its API, a raw Modbus
-//!   TCP client (`live_*`).
+//!   TCP client (`live_*`);
+//! - [`mqtt`]: mosquitto on loopback (password file, TLS listener, certificates), an MQTT
+//!   client that subscribes and publishes (`live_mqtt`).
 //!
 //! Each test binary uses only part of it.
 #![allow(dead_code, unused_imports)]
 
 pub mod live;
+pub mod mqtt;
 pub mod utile;
 pub mod vnano;
