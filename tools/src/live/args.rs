@@ -16,7 +16,10 @@ pub const USAGE: &str = "\
     --program    check that the listing is the program that runs (its fingerprint)
     --mqtt mqtt://HOST[:PORT] | mqtts://HOST[:PORT]  publish every uTile to a broker
        [--mqtt-ca FILE] [--mqtt-user NAME --mqtt-password-file FILE] [--name LINE]
-       [--mqtt-prefix P] [--mqtt-commands] [--ha-discovery]   (docs/LIVE.md, MQTT)";
+       [--mqtt-prefix P] [--mqtt-commands] [--ha-discovery]   (docs/LIVE.md, MQTT)
+    beyond loopback (docs/LIVE.md, Security): --http needs a token (printed, or
+       --token-file FILE) for every write, and for reads unless --public-read;
+       --tcp needs --tcp-allow CIDR[,CIDR...] (the clients' networks)";
 
 /// Options of one run.
 #[derive(Clone, Debug, PartialEq)]
@@ -39,6 +42,12 @@ pub struct Options {
     pub boot_wait: Duration,
     /// The MQTT flags (`--mqtt URL` …).
     pub mqtt: super::mqtt::options::Flags,
+    /// `--token-file`: the page's token beyond loopback.
+    pub token_file: Option<String>,
+    /// `--public-read`: reads need no token.
+    pub public_read: bool,
+    /// `--tcp-allow`: the networks the gateway takes clients from.
+    pub tcp_allow: Vec<super::allow::Cidr>,
 }
 
 /// `ADDR:PORT`, or a bare port on 127.0.0.1.
@@ -62,6 +71,9 @@ pub fn parse(words: &[String]) -> Result<Options, String> {
         program: None,
         boot_wait: Duration::from_millis(2500),
         mqtt: Default::default(),
+        token_file: None,
+        public_read: false,
+        tcp_allow: Vec::new(),
     };
     let mut it = words.iter();
     while let Some(w) = it.next() {
@@ -104,6 +116,9 @@ pub fn parse(words: &[String]) -> Result<Options, String> {
                     .ok_or_else(|| format!("--wait takes seconds (0..60), not '{v}'"))?;
                 o.boot_wait = Duration::from_secs_f64(secs);
             }
+            "--token-file" => o.token_file = Some(value()?),
+            "--public-read" => o.public_read = true,
+            "--tcp-allow" => o.tcp_allow = super::allow::parse_list(&value()?)?,
             other if o.mqtt.take(other, &mut value)? => {}
             other => return Err(format!("unknown option '{other}'\nusage:\n{USAGE}")),
         }
@@ -120,6 +135,17 @@ pub fn parse(words: &[String]) -> Result<Options, String> {
         o.units.push(1);
     }
     Ok(o)
+}
+
+/// The gateway beyond loopback needs `--tcp-allow`.
+pub fn check_tcp(o: &Options) -> Result<(), String> {
+    match o.tcp {
+        Some(a) if !a.ip().is_loopback() && o.tcp_allow.is_empty() => Err(format!(
+            "--tcp {a} listens beyond this computer: give --tcp-allow CIDR[,CIDR…] with the \
+             networks its clients come from (e.g. --tcp-allow 192.168.1.0/24)"
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// The warning for an address other than loopback, or `None`.
@@ -163,5 +189,10 @@ mod tests {
         assert!(parse(&words("--port p --scan --units 2")).is_err());
         assert!(parse(&words("--port p --http nowhere")).is_err());
         assert!(parse(&words("--port p --bogus")).is_err());
+        let o = parse(&words("--port p --tcp 0.0.0.0:1502")).unwrap();
+        assert!(check_tcp(&o).unwrap_err().contains("--tcp-allow"));
+        let o = parse(&words("--port p --tcp 0.0.0.0:1502 --tcp-allow 10.0.0.0/8")).unwrap();
+        assert!(check_tcp(&o).is_ok());
+        assert!(parse(&words("--port p --tcp-allow 10.0.0.0/40")).is_err());
     }
 }

@@ -147,12 +147,22 @@ async fn forward(shared: &Shared, req: SlaveRequest<'static>) -> Reply {
     Ok(Response::Custom(f, Bytes::copy_from_slice(data)))
 }
 
-/// Serves Modbus TCP on `listener` until the program ends.
-pub async fn serve(listener: TcpListener, shared: Arc<Shared>) -> std::io::Result<()> {
+/// Serves Modbus TCP on `listener` until the program ends; a client from outside `allow`
+/// (when given) has its connection closed at once and is counted.
+pub async fn serve(
+    listener: TcpListener,
+    shared: Arc<Shared>,
+    allow: Vec<super::allow::Cidr>,
+) -> std::io::Result<()> {
     let server = Server::new(listener);
-    let on_connected = |stream, _addr: SocketAddr| {
+    let on_connected = |stream, addr: SocketAddr| {
         let shared = shared.clone();
+        let allowed = super::allow::allowed(&allow, addr.ip());
         async move {
+            if !allowed {
+                shared.tcp.refused_clients.fetch_add(1, Ordering::Relaxed);
+                return Ok(None);
+            }
             shared.tcp.clients.fetch_add(1, Ordering::Relaxed);
             let _ = tokio::net::TcpStream::set_nodelay(&stream, true);
             Ok(Some((Gateway { shared }, stream)))

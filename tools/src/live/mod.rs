@@ -18,12 +18,15 @@
 //! | `state.rs` | what the threads share; the API's JSON |
 //! | `http.rs` | the web server: page, API, events, writes, terminal WebSocket |
 //! | `gateway.rs` | the Modbus TCP gateway |
+//! | `guard.rs`, `allow.rs` | beyond loopback: the page's token; the gateway's networks |
 //! | `mqtt/` | the MQTT publisher, Home Assistant discovery, `set` commands |
 //! | `assets.rs`, `page/` | the page's files, built into the binary |
 
+pub mod allow;
 pub mod args;
 pub mod assets;
 pub mod gateway;
+pub mod guard;
 pub mod http;
 pub mod line;
 pub mod line_use;
@@ -82,6 +85,7 @@ impl Drop for Running {
 pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Running, String> {
     assets::check()?;
     let mqtt = mqtt::options::Settings::new(&opts.mqtt, &opts.port)?;
+    args::check_tcp(opts)?;
     let file = match &opts.program {
         Some(path) => {
             let text =
@@ -118,18 +122,20 @@ pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Ru
         .await
         .map_err(|e| format!("--http {}: {e}", opts.http))?;
     let http_addr = http.local_addr().map_err(|e| e.to_string())?;
+    let guard = guard::Guard::new(&http_addr, opts.token_file.as_deref(), opts.public_read)?;
     let tcp_addr = match opts.tcp {
         Some(a) => {
             let l = tokio::net::TcpListener::bind(a)
                 .await
                 .map_err(|e| format!("--tcp {a}: {e}"))?;
             let bound = l.local_addr().map_err(|e| e.to_string())?;
-            tokio::spawn(gateway::serve(l, shared.clone()));
+            tokio::spawn(gateway::serve(l, shared.clone(), opts.tcp_allow.clone()));
             Some(bound)
         }
         None => None,
     };
-    let router = http::router(shared.clone());
+    let token_url = guard.url(&http_addr, &mqtt::options::host_name());
+    let router = guard::layer(http::router(shared.clone()), guard);
     tokio::spawn(async move {
         let _ = axum::serve(http, router).await;
     });
@@ -144,9 +150,6 @@ pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Ru
     )
     .map_err(|e| format!("cannot start the line's thread: {e}"))?;
     say(&format!("the page is at http://{http_addr}/"));
-    if let Some(w) = args::exposed("the page", &http_addr) {
-        say(&w);
-    }
     if let Some(t) = tcp_addr {
         say(&format!(
             "Modbus TCP gateway on {t} (unit id = slave address)"
@@ -154,6 +157,16 @@ pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Ru
         if let Some(w) = args::exposed("the Modbus TCP gateway", &t) {
             say(&w);
         }
+    }
+    if let Some(url) = token_url {
+        let reads = if opts.public_read {
+            "every write"
+        } else {
+            "every read and write"
+        };
+        say(&format!(
+            "the page listens beyond this computer: {reads} needs its token; open {url}"
+        ));
     }
     if opts.read_only {
         say("read-only: every write is refused");

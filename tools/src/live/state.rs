@@ -80,6 +80,8 @@ pub struct TcpCounters {
     pub requests: AtomicU64,
     /// Requests refused (read-only, an address outside 1..247, no answer).
     pub refused: AtomicU64,
+    /// Clients refused: not in `--tcp-allow`'s networks.
+    pub refused_clients: AtomicU64,
     /// What the gateway added to its requests beyond the wait for the line and the time on
     /// it: the sum and the largest, µs.
     overhead_sum_us: AtomicU64,
@@ -180,6 +182,7 @@ impl Shared {
                 "tcp_clients": self.tcp.clients.load(Ordering::Relaxed),
                 "tcp_requests": self.tcp.requests.load(Ordering::Relaxed),
                 "tcp_refused": self.tcp.refused.load(Ordering::Relaxed),
+                "tcp_refused_clients": self.tcp.refused_clients.load(Ordering::Relaxed),
                 "tcp_overhead_ms": {"mean": mean, "max": max},
             },
             "units": units,

@@ -115,7 +115,7 @@ pub fn level(s: &str) -> String {
 }
 
 /// This computer's host name.
-fn host_name() -> String {
+pub fn host_name() -> String {
     let mut buf = [0u8; 256];
     // SAFETY: gethostname writes at most `buf.len()` bytes into the buffer it is given.
     let r = unsafe { libc::gethostname(buf.as_mut_ptr().cast(), buf.len()) };

@@ -94,4 +94,33 @@ function connect() {
   };
 }
 
-connect();
+// Beyond loopback utile live wants its token (docs/LIVE.md, "Security beyond loopback"):
+// the URL printed at its start brings it once (the server keeps it in a cookie), else the
+// page asks for it when a read or a write gets 401.
+function askToken() {
+  const given = prompt(
+    "This utile live listens beyond its computer and needs its token " +
+    "(the URL it printed at its start ends in ?token=…):");
+  if (given) {
+    const token = given.trim().replace(/^.*[?&]token=/, "");
+    location.href = "/?token=" + encodeURIComponent(token);
+  }
+}
+window.addEventListener("utile-token", askToken);
+
+async function start() {
+  const url = new URL(location.href);
+  if (url.searchParams.has("token")) {
+    url.searchParams.delete("token");
+    history.replaceState(null, "", url);
+  }
+  const res = await fetch("/api/state").catch(() => null);
+  if (res && res.status === 401) {
+    $("mode").textContent = "this utile live needs its token";
+    askToken();
+    return;
+  }
+  connect();
+}
+
+start();

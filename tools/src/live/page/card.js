@@ -235,6 +235,7 @@ export class Card {
       });
       answer = await res.json();
       if (res.ok) return;
+      if (res.status === 401) window.dispatchEvent(new Event("utile-token"));
     } catch (e) {
       answer = { error: `the server did not answer (${e})` };
     }
