@@ -372,24 +372,30 @@ fn home_assistant_discovery_configs_use_the_keys_ha_documents() {
     console_line(&live, "MQTT: connected to", T);
     let sub = Subscriber::connect(broker.port, &["homeassistant/#", "utile/plant3/#"]);
     let y0 = "homeassistant/switch/utile_plant3_1_Y0/config";
-    sub.wait(y0, T, |_| true);
-    // Everything retained is there by the time the subscription is answered; wait a little
-    // for the last of them.
+    // The configs are sent again once the firmware's id (Report Server ID) is known.
+    sub.wait(y0, T, |p| json(p)["device"]["sw_version"].is_string());
+    // Wait a little for the last of them; the last of each topic counts.
     std::thread::sleep(Duration::from_millis(500));
-    let mut by_component = std::collections::BTreeMap::<String, usize>::new();
     let mut configs = std::collections::BTreeMap::new();
     for m in sub
         .all()
         .into_iter()
         .filter(|m| m.topic.starts_with("homeassistant/"))
     {
-        assert!(m.retained, "{}: discovery is retained", m.topic);
-        let cfg = json(&m.text);
-        *by_component
-            .entry(check_config(&m.topic, &cfg))
-            .or_default() += 1;
-        configs.insert(m.topic.clone(), cfg);
+        configs.insert(m.topic.clone(), json(&m.text));
     }
+    let mut by_component = std::collections::BTreeMap::<String, usize>::new();
+    for (topic, cfg) in &configs {
+        *by_component.entry(check_config(topic, cfg)).or_default() += 1;
+    }
+    // Retained: a client that comes now gets them all from the broker.
+    let late = Subscriber::connect(broker.port, &["homeassistant/#"]);
+    late.wait(y0, T, |p| json(p)["device"]["sw_version"].is_string());
+    std::thread::sleep(Duration::from_millis(300));
+    let kept = late.all();
+    assert!(kept.iter().all(|m| m.retained));
+    let topics: std::collections::BTreeSet<&String> = kept.iter().map(|m| &m.topic).collect();
+    assert_eq!(topics.len(), configs.len());
     // One uTile: 48 bits + the line's connectivity, 24 switches, 26 numbers, 15 sensors.
     assert_eq!(by_component["binary_sensor"], 49, "{by_component:?}");
     assert_eq!(by_component["switch"], 24);
@@ -401,6 +407,13 @@ fn home_assistant_discovery_configs_use_the_keys_ha_documents() {
     assert_eq!(y0["state_topic"], "utile/plant3/1/Y0");
     assert_eq!(y0["device"]["model"], "uTile");
     assert_eq!(y0["device"]["via_device"], "utile_plant3");
+    assert!(
+        y0["device"]["sw_version"]
+            .as_str()
+            .unwrap()
+            .starts_with("uTile "),
+        "the firmware's id (Report Server ID): {y0}"
+    );
     assert!(y0["device"]["name"].as_str().unwrap().contains("plant3"));
     let topics: Vec<&str> = y0["availability"]
         .as_array()
@@ -635,4 +648,168 @@ fn tls_and_the_login_are_checked_and_refusals_back_off_without_a_crash() {
     eprintln!("MEASURE login refused: {tries} tries in 6 s");
     assert!((3..=10).contains(&tries), "{tries} tries in 6 s:\n{log}");
     assert!(sub.last("utile/pw1/status").is_none());
+}
+
+/// The bench program of `bench live`: T0 (preset 255, 0.1 s units) runs free, so its time left
+/// in each state tells the simulation's pace; U0 drives Y0.
+fn bench_program() -> utile_core::engine::Program {
+    let mut p = utile_kit::listing::commands(&["TQ0.", "!", ".TK0", "U0.", ".Y0", "END"]);
+    p.presets[0] = 255;
+    p
+}
+
+/// Simulated seconds over a uTile's state messages (T0's time left falls 10 a second and
+/// starts again from 255).
+fn simulated_secs(states: &[Value]) -> f64 {
+    let tl: Vec<i64> = states.iter().filter_map(|s| s["TL0"].as_i64()).collect();
+    let fell: i64 = tl
+        .windows(2)
+        .map(|w| {
+            if w[1] <= w[0] {
+                w[0] - w[1]
+            } else {
+                w[0] + 256 - w[1]
+            }
+        })
+        .sum();
+    fell as f64 / 10.0
+}
+
+/// min / median / max.
+fn spread(mut v: Vec<f64>) -> String {
+    v.sort_by(f64::total_cmp);
+    format!(
+        "{:.1} / {:.1} / {:.1}",
+        v[0],
+        v[v.len() / 2],
+        v[v.len() - 1]
+    )
+}
+
+#[test]
+#[ignore = "a benchmark for BENCHMARKS.md: cargo nextest run --release -p utile-tools --test live_mqtt --run-ignored only --no-capture"]
+fn bench_one_utile_rig_to_subscriber_and_broker_back() {
+    let _one = one_at_a_time();
+    let mut broker = Broker::start("bench-one");
+    let sub = Subscriber::connect(broker.port, &["utile/#"]);
+    let spec = NanoSpec::single("mqtt-bench-one", &bench_program(), false);
+    let mut nano = spec.start();
+    let args = broker.live_args("bench1");
+    let live = Live::start(&spec.link, &strs(&args));
+    sub.wait("utile/bench1/1/A0", T, |_| true);
+    let mut rig = Vec::new();
+    for i in 0..20 {
+        // Varied phases of the polling.
+        std::thread::sleep(Duration::from_millis(300 + (i * 37) % 100));
+        let before = sub.last("utile/bench1/1/A0").unwrap();
+        let from = sub.count();
+        let t0 = Instant::now();
+        nano.key("0");
+        let m = sub.wait_from(from, "utile/bench1/1/A0", T, |p| p != before);
+        rig.push((m.at - t0).as_secs_f64() * 1e3);
+    }
+    eprintln!(
+        "BENCH rig switch -> subscriber (min / median / max): {} ms",
+        spread(rig)
+    );
+    let mut back = Vec::new();
+    for _ in 0..5 {
+        broker.down();
+        console_line(&live, "cannot reach the broker", T);
+        // The client's back-off has reached its longest wait.
+        std::thread::sleep(Duration::from_secs(3));
+        let t0 = Instant::now();
+        broker.up();
+        let (_, at) = console_line(&live, "connected again", T);
+        back.push((at - t0).as_secs_f64() * 1e3);
+    }
+    eprintln!(
+        "BENCH broker back -> reconnected (min / median / max): {} ms",
+        spread(back)
+    );
+}
+
+#[test]
+#[ignore = "a benchmark for BENCHMARKS.md: cargo nextest run --release -p utile-tools --test live_mqtt --run-ignored only --no-capture"]
+fn bench_three_lines_of_three_into_one_broker() {
+    let _one = one_at_a_time();
+    let broker = Broker::start("bench-three");
+    let sub = Subscriber::connect(broker.port, &["utile/#"]);
+    let mut rigs = Vec::new();
+    for l in 0..3 {
+        let spec = NanoSpec::bus(&format!("mqtt-bench-bus{l}"), 3, &bench_program());
+        let nano = spec.start();
+        let mut args = broker.live_args(&format!("bus{l}"));
+        args.extend(["--units", "1,2,3"].map(String::from));
+        let live = Live::start(&spec.link, &strs(&args));
+        rigs.push((nano, live));
+    }
+    for l in 0..3 {
+        for a in 1..=3 {
+            sub.wait(&format!("utile/bus{l}/{a}/availability"), T, |p| {
+                p == "online"
+            });
+            sub.wait(&format!("utile/bus{l}/{a}/Y0"), T, |p| p == "0");
+        }
+    }
+    // 10 s: every 0.5 s one uTile's U0 toggled through the page's API, in turn.
+    let from = sub.count();
+    let t0 = Instant::now();
+    let mut toggles = [0u32; 9];
+    let mut on = [false; 9];
+    let mut k = 0;
+    while t0.elapsed() < Duration::from_secs(10) {
+        let (l, a) = (k % 3, k / 3 % 3 + 1);
+        let i = l * 3 + a - 1;
+        on[i] = !on[i];
+        let (code, body) = rigs[l].1.post(
+            &format!("/api/units/{a}/write"),
+            &json!({"signal": "U0", "value": u8::from(on[i])}),
+        );
+        assert_eq!(code, 200, "{body}");
+        toggles[i] += 1;
+        k += 1;
+        std::thread::sleep(Duration::from_millis(500));
+    }
+    let wall = t0.elapsed().as_secs_f64();
+    std::thread::sleep(Duration::from_secs(2));
+    let all = sub.all();
+    let mut rates = Vec::new();
+    let mut sim_rates = Vec::new();
+    for l in 0..3 {
+        for a in 1..=3 {
+            let i = l * 3 + a - 1;
+            let state_topic = format!("utile/bus{l}/{a}/state");
+            let states: Vec<Value> = all[from..]
+                .iter()
+                .filter(|m| m.topic == state_topic && m.at - t0 <= Duration::from_secs_f64(wall))
+                .map(|m| json(&m.text))
+                .collect();
+            let sim = simulated_secs(&states);
+            rates.push(states.len() as f64 / wall);
+            sim_rates.push(states.len() as f64 / sim.max(0.1));
+            // None lost on change: one Y0 message per toggle, ending where the API ends.
+            let y0: Vec<&str> = all[from..]
+                .iter()
+                .filter(|m| m.topic == format!("utile/bus{l}/{a}/Y0"))
+                .map(|m| m.text.as_str())
+                .collect();
+            assert_eq!(y0.len() as u32, toggles[i], "bus{l} uTile {a}: {y0:?}");
+            assert_eq!(y0.last().copied(), Some(if on[i] { "1" } else { "0" }));
+            eprintln!(
+                "bus{l} uTile {a}: {} states in {wall:.1} s ({sim:.1} simulated s), {} toggles, {} Y0 messages",
+                states.len(),
+                toggles[i],
+                y0.len()
+            );
+        }
+    }
+    eprintln!(
+        "BENCH state updates per second, each uTile (min / median / max): {}",
+        spread(rates)
+    );
+    eprintln!(
+        "BENCH state updates per simulated second, each uTile (min / median / max): {}",
+        spread(sim_rates)
+    );
 }

@@ -1,10 +1,11 @@
 //! The MQTT room's one joint with the live view (the only file here that knows it): reports
-//! made from the API's own JSON after each change (at most one per [`GAP`]), and write
+//! made from the API's own JSON after each change (at most one per [`GAP`]), each uTile's
+//! firmware id asked once it answers (Report Server ID through the line's queue), and write
 //! requests carried out as the page's writes are (`--read-only`, the uTile on the line, the
 //! signal and its range, then the line's queue and the uTile's answer).
 
 use std::collections::BTreeMap;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use serde_json::Value;
@@ -28,9 +29,29 @@ pub fn start(shared: Arc<Shared>) -> (mpsc::Receiver<Vec<Report>>, mpsc::Sender<
     let s = shared.clone();
     tokio::spawn(async move {
         let mut changed = s.changed.subscribe();
+        // Firmware ids by address: `None` while asked, `Some` once known.
+        let ids = Arc::new(Mutex::new(BTreeMap::<u8, Option<String>>::new()));
         loop {
+            let mut units = reports(&s);
+            for r in &mut units {
+                let known = ids
+                    .lock()
+                    .unwrap_or_else(|e| e.into_inner())
+                    .get(&r.addr)
+                    .cloned();
+                match known {
+                    Some(id) => r.firmware = id.filter(|t| !t.is_empty()),
+                    None if r.online => {
+                        ids.lock()
+                            .unwrap_or_else(|e| e.into_inner())
+                            .insert(r.addr, None);
+                        tokio::spawn(ask_id(s.clone(), r.addr, ids.clone()));
+                    }
+                    None => {}
+                }
+            }
             // A full channel drops this report: the next change brings the same values.
-            if report_tx.try_send(reports(&s)).is_err() && report_tx.is_closed() {
+            if report_tx.try_send(units).is_err() && report_tx.is_closed() {
                 return;
             }
             tokio::time::sleep(GAP).await;
@@ -71,6 +92,36 @@ fn reports(shared: &Shared) -> Vec<Report> {
             })
         })
         .collect()
+}
+
+/// Asks uTile `addr` for its firmware id (Report Server ID: address, run indicator, the id
+/// text); on no answer it is asked again at the next report, after an exception (firmware
+/// without it) never.
+async fn ask_id(shared: Arc<Shared>, addr: u8, ids: Arc<Mutex<BTreeMap<u8, Option<String>>>>) {
+    let (job, rx) = Job::new(addr, vec![0x11], Origin::Page);
+    let text = if shared.inputs.send(Input::Job(job)).is_ok() {
+        match tokio::time::timeout(WRITE_WAIT, rx).await {
+            Ok(Ok(Ok(done))) if done.pdu.first() == Some(&0x11) => done.pdu.get(4..).map(|t| {
+                String::from_utf8_lossy(t)
+                    .trim_end_matches('\0')
+                    .trim()
+                    .to_string()
+            }),
+            Ok(Ok(Ok(_))) => Some(String::new()),
+            _ => None,
+        }
+    } else {
+        None
+    };
+    let mut ids = ids.lock().unwrap_or_else(|e| e.into_inner());
+    match text {
+        Some(t) => {
+            ids.insert(addr, Some(t));
+        }
+        None => {
+            ids.remove(&addr);
+        }
+    }
 }
 
 /// Writes `signal = value` to uTile `addr`, or says why not (nothing written).
