@@ -330,6 +330,21 @@ pub fn to_hex(prog: &Program) -> Vec<u8> {
     out
 }
 
+/// Why an Intel HEX file is not a program READ would take: the hex reader's error, the
+/// image's, or no end.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum HexFileError {
+    /// The hex text is damaged (the core's reader says how).
+    #[error("{}", hex_error_text(*.0))]
+    Hex(HexError),
+    /// The records are whole but the image in them is refused.
+    #[error("{}", image_error_text(*.0))]
+    Image(ImageError),
+    /// The text ends before its end-of-file record.
+    #[error("no end-of-file record")]
+    NoEnd,
+}
+
 /// Words for a hex reader error.
 fn hex_error_text(e: HexError) -> &'static str {
     match e {
@@ -354,17 +369,17 @@ fn image_error_text(e: ImageError) -> String {
 }
 
 /// Read a hex file (as READ would) into a program; the error says why it was refused.
-pub fn from_hex(bytes: &[u8]) -> Result<Program, String> {
+pub fn from_hex(bytes: &[u8]) -> Result<Program, HexFileError> {
     let mut reader = HexReader::new();
     for &b in bytes {
         match reader.feed(b) {
             HexEvent::More => {}
-            HexEvent::Error(e) => return Err(hex_error_text(e).into()),
+            HexEvent::Error(e) => return Err(HexFileError::Hex(e)),
             HexEvent::Done { len } => {
                 let data = reader.data().get(..usize::from(len)).unwrap_or(&[]);
-                return image::decode(data).map_err(image_error_text);
+                return image::decode(data).map_err(HexFileError::Image);
             }
         }
     }
-    Err("no end-of-file record".into())
+    Err(HexFileError::NoEnd)
 }

@@ -22,25 +22,49 @@ pub struct Symbol {
     pub name: String,
 }
 
+/// One of the AVR binutils could not read the ELF.
+#[derive(Debug, thiserror::Error)]
+pub enum ElfError {
+    /// The tool is not there (`apt-get install binutils-avr`).
+    #[error("cannot run {tool} (binutils-avr)")]
+    NoTool {
+        /// The tool.
+        tool: &'static str,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The tool ran and refused the file (its own words).
+    #[error("{tool} failed on {}: {said}", elf.display())]
+    Failed {
+        /// The tool.
+        tool: &'static str,
+        /// The file.
+        elf: std::path::PathBuf,
+        /// What it said on standard error.
+        said: String,
+    },
+}
+
 /// Runs one of the AVR binutils on `elf` and returns its standard output.
-fn run(tool: &str, args: &[&str], elf: &Path) -> Result<String, String> {
+fn run(tool: &'static str, args: &[&str], elf: &Path) -> Result<String, ElfError> {
     let out = Command::new(tool)
         .args(args)
         .arg(elf)
         .output()
-        .map_err(|e| format!("cannot run {tool} (binutils-avr): {e}"))?;
+        .map_err(|source| ElfError::NoTool { tool, source })?;
     if !out.status.success() {
-        return Err(format!(
-            "{tool} failed on {}: {}",
-            elf.display(),
-            String::from_utf8_lossy(&out.stderr).trim()
-        ));
+        return Err(ElfError::Failed {
+            tool,
+            elf: elf.to_path_buf(),
+            said: String::from_utf8_lossy(&out.stderr).trim().to_string(),
+        });
     }
     Ok(String::from_utf8_lossy(&out.stdout).into_owned())
 }
 
 /// The defined symbols of `elf`, sorted by address.
-pub fn symbols(elf: &Path) -> Result<Vec<Symbol>, String> {
+pub fn symbols(elf: &Path) -> Result<Vec<Symbol>, ElfError> {
     Ok(parse_nm(&run("avr-nm", &["-n", "-S"], elf)?))
 }
 
@@ -96,7 +120,7 @@ impl Sections {
 }
 
 /// The section sizes of `elf`.
-pub fn sections(elf: &Path) -> Result<Sections, String> {
+pub fn sections(elf: &Path) -> Result<Sections, ElfError> {
     Ok(parse_size(&run("avr-size", &["-A"], elf)?))
 }
 

@@ -4,6 +4,8 @@
 
 /// Benchmarks of the real firmware image in simavr (`bench` binary).
 pub mod bench;
+/// What the command lines share: typed values, `--wait`, the log (`RUST_LOG`).
+pub mod cli;
 /// Symbols and section sizes of a firmware ELF (AVR binutils), for `cargo fw` and the bench.
 pub mod elf;
 /// Programs to and from a uTile over a serial port (`utile push`, `utile pull`).

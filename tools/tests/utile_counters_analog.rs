@@ -203,7 +203,7 @@ fn signals_of_counters_and_analog_channels_by_name() {
     for bad in ["H5", "H8", "C8", "CQ8", "A8"] {
         assert!(
             utile_err(&["sim", &prog, "--signals", bad])
-                .contains(&format!("--signals: unknown signal '{bad}'")),
+                .contains(&format!("for '--signals <LIST>': unknown signal '{bad}'")),
             "{bad}"
         );
     }

@@ -445,10 +445,11 @@ fn timeline_errors() {
 fn command_line_errors() {
     let prog = example("11.2-n-switches.utl");
     assert!(utile_err(&["sim", &prog, "--until", "0s"]).contains("at least 1 ms"));
-    assert!(utile_err(&["sim", &prog, "--until", "ten"]).contains("--until: bad time 'ten'"));
-    assert!(utile_err(&["sim", &prog, "--scans", "0"]).contains("--scans: '0'"));
+    assert!(utile_err(&["sim", &prog, "--until", "ten"])
+        .contains("invalid value 'ten' for '--until <TIME>': bad time 'ten'"));
+    assert!(utile_err(&["sim", &prog, "--scans", "0"]).contains("'0' for '--scans <N>'"));
     assert!(utile_err(&["sim", &prog, "--signals", "A0,TQG"])
-        .contains("--signals: unknown signal 'TQG'"));
+        .contains("for '--signals <LIST>': unknown signal 'TQG'"));
     let bad = write_scratch("bad.utl", "NOPE\n");
     assert_eq!(
         utile_err(&["sim", &bad]).trim(),

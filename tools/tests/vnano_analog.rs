@@ -76,7 +76,7 @@ fn bad_levels_are_refused_before_the_start() {
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("--a6: a level is 0..5 volts, not 5.5"),
+        err.contains("for '--a6 <VOLTS>': a level is 0..5 volts, not 5.5"),
         "{err}"
     );
 }

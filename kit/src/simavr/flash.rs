@@ -5,6 +5,16 @@ use super::chip::{BootSection, Chip, FLASH_SIZE};
 use super::LoadError;
 use std::path::{Path, PathBuf};
 
+/// An Intel HEX line that is not a record this reader takes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("line {line}: {why}")]
+pub struct HexLineError {
+    /// The line of the file (1-based).
+    pub line: usize,
+    /// What is wrong with it.
+    pub why: &'static str,
+}
+
 /// Bytes at flash addresses, in the order the file gave them (a later record wins).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct FlashImage {
@@ -18,11 +28,11 @@ impl FlashImage {
     pub fn read_hex(path: &Path) -> Result<FlashImage, LoadError> {
         let shown = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|_| LoadError::Missing(shown.clone()))?;
-        FlashImage::parse_hex(&text).map_err(|why| LoadError::BadHex(format!("{shown}: {why}")))
+        FlashImage::parse_hex(&text).map_err(|error| LoadError::HexFile { file: shown, error })
     }
 
     /// Parses Intel HEX text; the error names the bad line.
-    pub fn parse_hex(text: &str) -> Result<FlashImage, String> {
+    pub fn parse_hex(text: &str) -> Result<FlashImage, HexLineError> {
         let mut image = FlashImage::default();
         let mut base = 0u32;
         for (n, line) in text.lines().enumerate() {
@@ -30,7 +40,7 @@ impl FlashImage {
             if line.is_empty() {
                 continue;
             }
-            let bad = |why: &str| format!("line {}: {why}", n + 1);
+            let bad = |why: &'static str| HexLineError { line: n + 1, why };
             let hex = line.strip_prefix(':').ok_or_else(|| bad("no ':'"))?;
             if hex.len() % 2 != 0 || hex.len() < 10 {
                 return Err(bad("odd or short record"));
@@ -205,6 +215,7 @@ mod tests {
         assert_eq!((image.start(), image.end()), (0x10030, 0x10033));
         assert!(FlashImage::parse_hex(":0300300002337A1F\n")
             .unwrap_err()
+            .to_string()
             .contains("checksum"));
     }
 

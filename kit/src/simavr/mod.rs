@@ -44,11 +44,9 @@ pub mod uart;
 
 pub use bus::{Bus, BusByte, Collision};
 pub use chip::{BootSection, Chip, CpuState, Reset};
-pub use flash::{ArduinoBoot, FlashImage};
+pub use flash::{ArduinoBoot, FlashImage, HexLineError};
 pub use pins::RigPin;
 pub use uart::RxPacing;
-
-use std::fmt;
 
 /// CPU clock of the Nano (16 MHz crystal).
 pub const F_CPU: u64 = 16_000_000;
@@ -88,29 +86,27 @@ pub(crate) const fn ioctl_def(a: u8, b: u8, c: u8, d: u8) -> u32 {
 }
 
 /// Why an image could not be loaded ([`Chip::load`], [`Chip::load_boot`]).
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum LoadError {
     /// The ELF file does not exist.
+    #[error("firmware image {0} not found: run `cargo fw` first")]
     Missing(String),
     /// simavr could not read the ELF file.
+    #[error("simavr cannot read the ELF file {0}")]
     BadElf(String),
     /// simavr does not know the MCU.
+    #[error("simavr does not know the atmega328p")]
     NoMcu,
-    /// An Intel HEX image that cannot be read or does not fit where it must go.
+    /// An Intel HEX file that cannot be read as one (the line and why are its source).
+    #[error("flash image {file}")]
+    HexFile {
+        /// The file.
+        file: String,
+        /// The line that is wrong.
+        #[source]
+        error: flash::HexLineError,
+    },
+    /// An Intel HEX image that does not fit where it must go.
+    #[error("flash image: {0}")]
     BadHex(String),
 }
-
-impl fmt::Display for LoadError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            LoadError::Missing(p) => {
-                write!(f, "firmware image {p} not found: run `cargo fw` first")
-            }
-            LoadError::BadElf(p) => write!(f, "simavr cannot read the ELF file {p}"),
-            LoadError::NoMcu => write!(f, "simavr does not know the atmega328p"),
-            LoadError::BadHex(why) => write!(f, "flash image: {why}"),
-        }
-    }
-}
-
-impl std::error::Error for LoadError {}

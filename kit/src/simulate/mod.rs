@@ -30,7 +30,10 @@ pub use run::{
     simulate, simulate_after_boot, simulate_timeline, simulate_timeline_after_boot, SimResult,
     Trace,
 };
-pub use signal::{default_signals, default_signals_with_analog, parse_signals, Signal};
+pub use signal::{
+    default_signals, default_signals_with_analog, parse_signals, Signal, SignalError,
+};
 pub use timeline::{
-    format_time, mv_to_counts, parse_time, parse_timeline, AnalogEvent, Event, Timeline, AVCC_MV,
+    format_time, mv_to_counts, parse_time, parse_timeline, AnalogEvent, Event, TimeError, Timeline,
+    AVCC_MV,
 };

@@ -75,7 +75,7 @@ impl Signal {
 
     /// Parse a signal name (any case): A0..A5, A6/A7 (analog levels), H6, H7, Y0..Y7,
     /// U0..U7, V0..V7, Q0..QF, TQ0..TQF, C0..C7, CQ0..CQ7, CLKA..CLKC.
-    pub fn parse(word: &str) -> Result<Signal, String> {
+    pub fn parse(word: &str) -> Result<Signal, SignalError> {
         let up = word.to_ascii_uppercase();
         let num = |s: &str, radix: u32, count: u8| {
             (s.len() == 1)
@@ -115,19 +115,30 @@ impl Signal {
         } else {
             None
         };
-        sig.ok_or_else(|| format!("unknown signal '{word}' ({SIGNAL_NAMES})"))
+        sig.ok_or_else(|| SignalError::Unknown(word.into()))
     }
 }
 
+/// A signal name or list that names none.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum SignalError {
+    /// Not a signal's name (the message lists the names).
+    #[error("unknown signal '{0}' ({SIGNAL_NAMES})")]
+    Unknown(String),
+    /// An empty list.
+    #[error("no signals named")]
+    NoneNamed,
+}
+
 /// Parse a comma- or space-separated list of signals.
-pub fn parse_signals(list: &str) -> Result<Vec<Signal>, String> {
+pub fn parse_signals(list: &str) -> Result<Vec<Signal>, SignalError> {
     let sigs: Vec<Signal> = list
         .split([',', ' '])
         .filter(|w| !w.is_empty())
         .map(Signal::parse)
         .collect::<Result<_, _>>()?;
     if sigs.is_empty() {
-        return Err("no signals named".into());
+        return Err(SignalError::NoneNamed);
     }
     Ok(sigs)
 }

@@ -53,9 +53,23 @@ pub struct Timeline {
     pub signals: Option<Vec<Signal>>,
 }
 
+/// A time that is not one: the word as given, and why.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum TimeError {
+    /// Not a number with a unit.
+    #[error("bad time '{0}' (expected e.g. 1500ms, 0.5s, 2min)")]
+    Bad(String),
+    /// Finer than a millisecond.
+    #[error("time '{0}' is not a whole number of milliseconds")]
+    NotWholeMs(String),
+    /// Past the longest simulation.
+    #[error("time '{0}' is too long")]
+    TooLong(String),
+}
+
 /// Parse a time such as `0.5s`, `1500ms`, `2min` or `120s` into whole milliseconds.
-pub fn parse_time(word: &str) -> Result<u32, String> {
-    let bad = || format!("bad time '{word}' (expected e.g. 1500ms, 0.5s, 2min)");
+pub fn parse_time(word: &str) -> Result<u32, TimeError> {
+    let bad = || TimeError::Bad(word.into());
     let lower = word.to_ascii_lowercase();
     let (number, unit_ms) = if let Some(n) = lower.strip_suffix("ms") {
         (n, 1u64)
@@ -84,15 +98,13 @@ pub fn parse_time(word: &str) -> Result<u32, String> {
     };
     let frac_ms = frac_n * unit_ms;
     if !frac_ms.is_multiple_of(scale) {
-        return Err(format!(
-            "time '{word}' is not a whole number of milliseconds"
-        ));
+        return Err(TimeError::NotWholeMs(word.into()));
     }
     let ms = whole
         .checked_mul(unit_ms)
         .and_then(|w| w.checked_add(frac_ms / scale))
         .filter(|&ms| ms <= u64::from(u32::MAX / 2))
-        .ok_or_else(|| format!("time '{word}' is too long"))?;
+        .ok_or_else(|| TimeError::TooLong(word.into()))?;
     Ok(ms as u32)
 }
 
@@ -159,15 +171,17 @@ fn parse_timeline_line(words: &[&str], last_ms: u32) -> Result<Line, String> {
     };
     if first.eq_ignore_ascii_case("until") {
         return match rest {
-            [t] => parse_time(t).map(Line::Until),
+            [t] => parse_time(t).map(Line::Until).map_err(|e| e.to_string()),
             _ => Err("'until' needs one time, e.g. 'until 20s'".into()),
         };
     }
     if first.eq_ignore_ascii_case("signals") {
         let list = rest.join(",");
-        return parse_signals(&list).map(Line::Signals);
+        return parse_signals(&list)
+            .map(Line::Signals)
+            .map_err(|e| e.to_string());
     }
-    let ms = parse_time(first)?;
+    let ms = parse_time(first).map_err(|e| e.to_string())?;
     if ms < last_ms {
         return Err(format!(
             "time {first} goes backwards (the previous event is at {})",

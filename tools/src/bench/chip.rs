@@ -2,6 +2,7 @@
 //! steady line and the 3.4 ms EEPROM write time modelled, plus run loops that keep the
 //! rig's pins asserted and stop when a condition holds.
 
+use super::error::BenchError;
 use std::path::Path;
 use utile_kit::simavr::{Chip, CpuState, RxPacing, RX_FIXED_CYCLES_PER_BYTE};
 
@@ -18,8 +19,8 @@ pub const RETI: u16 = 0x9518;
 
 /// Loads the ELF into a fresh ATmega328P (power-on: RAM cleared, EEPROM erased), set up
 /// for measurements: input paced at a fixed rate, EEPROM writes taking their real time.
-pub fn load(elf: &Path) -> Result<Chip, String> {
-    let mut nano = Chip::load(elf).map_err(|e| e.to_string())?;
+pub fn load(elf: &Path) -> Result<Chip, BenchError> {
+    let mut nano = Chip::load(elf)?;
     nano.set_rx_pacing(RxPacing::Fixed);
     nano.set_eeprom_write_time(true);
     Ok(nano)

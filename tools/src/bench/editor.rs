@@ -9,6 +9,7 @@ use utile_kit::modbus;
 use utile_kit::simavr::Chip;
 
 use super::chip::{self, BenchRun, CYCLES_PER_MS};
+use super::error::BenchError;
 use super::programs::{eeprom_with, every_opcode_program, example};
 
 /// Byte painted over free RAM at boot by the HAL (`utile::hal::STACK_PAINT`, AVR-only).
@@ -42,7 +43,7 @@ fn exchange(chip: &mut Chip, input: &[u8]) -> usize {
 }
 
 /// Counts the editor's UART bytes (D8 open, erased EEPROM).
-pub fn measure_uart(elf: &Path) -> Result<UartBytes, String> {
+pub fn measure_uart(elf: &Path) -> Result<UartBytes, BenchError> {
     let mut chip = chip::load(elf)?;
     chip.run_until_quiet(40, 5000);
     let power_up = chip.take_output().len();
@@ -58,7 +59,7 @@ pub fn measure_uart(elf: &Path) -> Result<UartBytes, String> {
 }
 
 /// Stack use: (bytes of stack used at the deepest point, free bytes never touched).
-pub fn measure_stack(elf: &Path) -> Result<(usize, usize, Vec<String>), String> {
+pub fn measure_stack(elf: &Path) -> Result<(usize, usize, Vec<String>), BenchError> {
     let syms = crate::elf::symbols(elf)?;
     let heap = crate::elf::address(&syms, "__heap_start").ok_or("no __heap_start symbol")?;
     // A data-space address: without the ELF's offset of the data space.
@@ -162,7 +163,7 @@ fn timed_store(chip: &mut Chip) -> StoreTiming {
 
 /// STORE after a one-line change (both slots hold the loaded program) and STORE into an
 /// erased EEPROM (every byte written).
-pub fn measure_store(elf: &Path) -> Result<(StoreTiming, StoreTiming), String> {
+pub fn measure_store(elf: &Path) -> Result<(StoreTiming, StoreTiming), BenchError> {
     let prog = example("11.2b-intrusion-alarm.utl")?;
     let mut chip = chip::load(elf)?;
     chip.set_eeprom(0, &eeprom_with(&prog, 2)?);

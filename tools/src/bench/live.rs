@@ -142,7 +142,7 @@ fn run(nano: &mut Child, link: &Path, units: usize, secs: u32) -> Result<LiveFig
     .iter()
     .map(|s| s.to_string())
     .collect();
-    let opts = args::parse(&words)?;
+    let opts = args::parse(&words).map_err(|e| e.to_string())?;
     std::thread::sleep(Duration::from_millis(500));
     let running = rt.block_on(live::start(&opts, &mut |_| {}))?;
     let all_online = || {

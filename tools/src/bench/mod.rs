@@ -4,7 +4,8 @@
 //! live view.
 //! Results are reported, never asserted; BENCHMARKS.md explains each row.
 //!
-//! One job a file: [`chip`] (the harness as the benchmarks run it), [`programs`] (what they
+//! One job a file: [`chip`] (the harness as the benchmarks run it), [`error`] (why a
+//! measurement has no figure), [`programs`] (what they
 //! run), [`stats`] (the spread of a sample), [`isr`] (interrupt handlers' cycles), then the
 //! measurements — [`scan`], [`timing`], [`editor`], [`modbus`], [`live`] (`utile live` on
 //! the virtual Nano) — and [`report`], the rows
@@ -13,6 +14,7 @@
 
 pub mod chip;
 pub mod editor;
+pub mod error;
 pub mod isr;
 pub mod live;
 pub mod modbus;
@@ -23,6 +25,7 @@ pub mod stats;
 pub mod timing;
 
 pub use editor::{measure_stack, measure_store, measure_uart, StoreTiming, UartBytes, STACK_PAINT};
+pub use error::BenchError;
 pub use programs::{
     all_counters_program, autostarting, eeprom_with, every_opcode_program, example, nops_program,
     program,

@@ -12,6 +12,7 @@ use utile_core::engine::Program;
 use utile_kit::simavr::{frame_cycles, Chip, RxPacing};
 
 use super::chip::{BenchRun, CYCLES_PER_MS};
+use super::error::BenchError;
 use super::programs::{autostarting, every_opcode_program, program};
 use super::stats::Spread;
 use crate::elf;
@@ -64,7 +65,7 @@ struct Master {
 impl Master {
     /// The image autostarting `prog` with its line timed as a wire, the RUN screen gone out
     /// (1 s).
-    fn new(image: &Path, prog: &Program) -> Result<Self, String> {
+    fn new(image: &Path, prog: &Program) -> Result<Self, BenchError> {
         let mut chip = autostarting(image, prog)?;
         chip.set_rx_pacing(RxPacing::Line { baud: 19_200 });
         chip.run_rig(1_000 * CYCLES_PER_MS);
@@ -106,7 +107,7 @@ impl Master {
 
     /// Sends `pdu` 3.5 characters after the last reply and waits for the whole reply;
     /// returns its start after the request's last stop bit, in ms.
-    fn transact(&mut self, pdu: &[u8]) -> Result<f64, String> {
+    fn transact(&mut self, pdu: &[u8]) -> Result<f64, BenchError> {
         let frame = utile_kit::modbus::frame(ADDRESS, pdu);
         let len = reply_len(pdu);
         self.chip.take_output_timed();
@@ -118,14 +119,17 @@ impl Master {
             sent - self.chip.cycle() + reply_time + 50 * CYCLES_PER_MS,
             |ch| ch.output_len() >= len && ch.cycle() > ch.last_output_cycle() + 3 * c,
         )
-        .ok_or_else(|| format!("no whole reply to {pdu:02X?}"))?;
+        .ok_or_else(|| BenchError::NoReply(pdu.to_vec()))?;
         // Before a master is heard, a RUN display may still be going out ahead of the reply.
         let mut got = self.chip.take_output_timed();
         got.drain(..got.len() - len);
         let bytes: Vec<u8> = got.iter().map(|&(b, _)| b).collect();
-        let reply = utile_kit::modbus::reply_pdu(ADDRESS, &bytes).map_err(|e| e.to_string())?;
+        let reply = utile_kit::modbus::reply_pdu(ADDRESS, &bytes)?;
         if reply[0] != pdu[0] {
-            return Err(format!("reply {reply:02X?} to {pdu:02X?}"));
+            return Err(BenchError::WrongReply {
+                reply: reply.to_vec(),
+                request: pdu.to_vec(),
+            });
         }
         // The next request may start 3.5 characters after this reply's last stop bit.
         let last_stop = got[len - 1].1;
@@ -135,7 +139,7 @@ impl Master {
     }
 
     /// `n` requests of `pdu`; their reply starts.
-    fn polls(&mut self, pdu: &[u8], n: usize) -> Result<Vec<f64>, String> {
+    fn polls(&mut self, pdu: &[u8], n: usize) -> Result<Vec<f64>, BenchError> {
         (0..n).map(|_| self.transact(pdu)).collect()
     }
 
@@ -161,7 +165,7 @@ pub struct ModbusFigures {
 }
 
 /// Polls FC03 × 16 back to back for `polls` requests; see [`ModbusFigures`].
-pub fn measure_modbus(elf: &Path, polls: usize) -> Result<ModbusFigures, String> {
+pub fn measure_modbus(elf: &Path, polls: usize) -> Result<ModbusFigures, BenchError> {
     let prog = program(&["Y0.", "!", ".Y0", "END"]);
     let mut m = Master::new(elf, &prog)?;
     let t0 = m.chip.cycle();
@@ -218,7 +222,7 @@ pub struct ProgramTiming {
 }
 
 /// The programs of issue 24's timing list: short and long, KEY, no END.
-pub fn timing_programs() -> Vec<(String, Result<Program, String>)> {
+pub fn timing_programs() -> Vec<(String, Result<Program, BenchError>)> {
     let pairs = |lines: usize| {
         let words: Vec<&str> = ["A0.", ".Y0"]
             .iter()
@@ -234,8 +238,8 @@ pub fn timing_programs() -> Vec<(String, Result<Program, String>)> {
             .join("../tests/data")
             .join(name);
         std::fs::read_to_string(&path)
-            .map_err(|e| format!("{}: {e}", path.display()))
-            .and_then(|t| utile_kit::listing::parse(name, &t).map_err(|e| e.to_string()))
+            .map_err(|source| BenchError::File { path, source })
+            .and_then(|t| Ok(utile_kit::listing::parse(name, &t)?))
     };
     vec![
         (
@@ -269,7 +273,11 @@ pub fn timing_programs() -> Vec<(String, Result<Program, String>)> {
 }
 
 /// `prog`'s Modbus timing with `polls` requests of each kind.
-pub fn measure_program(elf: &Path, prog: &Program, polls: usize) -> Result<ProgramTiming, String> {
+pub fn measure_program(
+    elf: &Path,
+    prog: &Program,
+    polls: usize,
+) -> Result<ProgramTiming, BenchError> {
     let mut m = Master::new(elf, prog)?;
     let first = m.transact(&FC03_16)?;
     let fc03 = m.polls(&FC03_16, polls)?;
@@ -294,7 +302,7 @@ pub fn measure_program(elf: &Path, prog: &Program, polls: usize) -> Result<Progr
 }
 
 /// Press → Y0 latency (`A0. ! .Y0 END`) while a master polls at line rate.
-pub fn measure_latency_served(elf: &Path, presses: usize) -> Result<Spread, String> {
+pub fn measure_latency_served(elf: &Path, presses: usize) -> Result<Spread, BenchError> {
     let prog = program(&["A0.", "!", ".Y0", "END"]);
     let mut m = Master::new(elf, &prog)?;
     let chip = &mut m.chip;
@@ -329,7 +337,7 @@ pub fn measure_latency_served(elf: &Path, presses: usize) -> Result<Spread, Stri
 /// The reply start of a first request that arrives while the RUN screen is still being
 /// drawn after an autostart (`U0. .Y1 A0. .Y0 KEY END`, the request 200 ms after power-up):
 /// the drawing stops as the request comes in, but what it queued goes out first.
-pub fn measure_first_during_screen(elf: &Path) -> Result<f64, String> {
+pub fn measure_first_during_screen(elf: &Path) -> Result<f64, BenchError> {
     let prog = program(&["U0.", ".Y1", "A0.", ".Y0", "KEY", "END"]);
     let mut chip = autostarting(elf, &prog)?;
     chip.set_rx_pacing(RxPacing::Line { baud: 19_200 });
@@ -354,6 +362,6 @@ pub fn measure_first_during_screen(elf: &Path) -> Result<f64, String> {
     }
     let reply = &got[got.len() - len..];
     let bytes: Vec<u8> = reply.iter().map(|&(b, _)| b).collect();
-    utile_kit::modbus::reply_pdu(ADDRESS, &bytes).map_err(|e| e.to_string())?;
+    utile_kit::modbus::reply_pdu(ADDRESS, &bytes)?;
     Ok((reply[0].1 - c).saturating_sub(sent) as f64 / CYCLES_PER_MS as f64)
 }

@@ -10,6 +10,7 @@ use utile_kit::setup;
 use utile_kit::simavr::{Chip, RigPin};
 
 use super::chip;
+use super::error::BenchError;
 
 /// A program from command names, line 0 onwards; the rest of the UF is NOP.
 pub fn program(words: &[&str]) -> Program {
@@ -75,19 +76,22 @@ pub fn every_opcode_program() -> Program {
 }
 
 /// A `.utl` listing from the repository's examples directory.
-pub fn example(name: &str) -> Result<Program, String> {
+pub fn example(name: &str) -> Result<Program, BenchError> {
     let path = setup::workspace_root().join("examples").join(name);
-    let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-    listing::parse(name, &text).map_err(|e| e.to_string())
+    let text = std::fs::read_to_string(&path).map_err(|source| BenchError::File {
+        path: path.clone(),
+        source,
+    })?;
+    Ok(listing::parse(name, &text)?)
 }
 
 /// [`utile_kit::sim::stored_eeprom`] with the bench's error text.
-pub fn eeprom_with(prog: &Program, stores: usize) -> Result<Vec<u8>, String> {
-    utile_kit::sim::stored_eeprom(prog, stores).map_err(|e| format!("STORE: {e:?}"))
+pub fn eeprom_with(prog: &Program, stores: usize) -> Result<Vec<u8>, BenchError> {
+    utile_kit::sim::stored_eeprom(prog, stores).map_err(BenchError::Store)
 }
 
 /// A chip with `prog` stored in EEPROM and D8 grounded: it autostarts at power-up.
-pub fn autostarting(elf: &Path, prog: &Program) -> Result<Chip, String> {
+pub fn autostarting(elf: &Path, prog: &Program) -> Result<Chip, BenchError> {
     let mut chip = chip::load(elf)?;
     chip.set_eeprom(0, &eeprom_with(prog, 1)?);
     chip.hold_low(RigPin::D8, true);

@@ -7,6 +7,7 @@ use utile_core::engine::Program;
 use utile_kit::simavr::{Chip, CpuState};
 
 use super::chip::{BenchRun, CYCLES_PER_MS, F_CPU};
+use super::error::BenchError;
 use super::isr::IsrTrack;
 use super::programs::autostarting;
 use super::stats::Spread;
@@ -50,7 +51,7 @@ pub fn measure_scans(
     prog: &Program,
     scans: usize,
     settle_ms: u64,
-) -> Result<ScanResult, String> {
+) -> Result<ScanResult, BenchError> {
     let mut chip = autostarting(elf, prog)?;
     chip.run_rig(settle_ms * CYCLES_PER_MS);
     let candidates = tcnt1_reads(&chip);

@@ -10,12 +10,17 @@ use utile_kit::sim::SimBoard;
 use utile_kit::simavr::{ArduinoBoot, Chip, Reset, RigPin};
 
 use super::chip::{self, BenchRun, CYCLES_PER_MS};
+use super::error::BenchError;
 use super::programs::{autostarting, eeprom_with, program};
 use super::stats::Spread;
 
 /// Press-to-output and release-to-output latency (ms) of `A0. ! .Y0 END` over `presses`
 /// presses at random moments (fixed seed).
-pub fn measure_latency(elf: &Path, presses: usize, seed: u64) -> Result<(Spread, Spread), String> {
+pub fn measure_latency(
+    elf: &Path,
+    presses: usize,
+    seed: u64,
+) -> Result<(Spread, Spread), BenchError> {
     let prog = program(&["A0.", "!", ".Y0", "END"]);
     let mut chip = autostarting(elf, &prog)?;
     chip.run_rig(300 * CYCLES_PER_MS);
@@ -51,7 +56,7 @@ pub fn measure_latency(elf: &Path, presses: usize, seed: u64) -> Result<(Spread,
 /// autostart: `Y0. ! .Y0 END` inverts Y0 every scan, and the longest time Y0 holds still
 /// is one scan plus whatever the main loop did between two scans (a drawing step, the
 /// displays). It bounds what a drawing step adds to a press → output latency.
-pub fn measure_run_gap(elf: &Path) -> Result<f64, String> {
+pub fn measure_run_gap(elf: &Path) -> Result<f64, BenchError> {
     let prog = program(&["Y0.", "!", ".Y0", "END"]);
     let mut chip = autostarting(elf, &prog)?;
     // The screen (about 1,070 bytes at 19200 baud) takes about 560 ms to go out.
@@ -86,7 +91,7 @@ pub fn timer_program(m: u8, preset: u8) -> Program {
 }
 
 /// Timer error in ms (measured off-delay minus preset × unit) in simavr.
-pub fn measure_timer_simavr(elf: &Path, m: u8, preset: u8) -> Result<f64, String> {
+pub fn measure_timer_simavr(elf: &Path, m: u8, preset: u8) -> Result<f64, BenchError> {
     let mut chip = autostarting(elf, &timer_program(m, preset))?;
     chip.run_rig(300 * CYCLES_PER_MS);
     chip.hold_low(RigPin::Switch(0), true);
@@ -106,7 +111,7 @@ pub fn measure_timer_simavr(elf: &Path, m: u8, preset: u8) -> Result<f64, String
 }
 
 /// The same measurement on the host core (`SimBoard`, 1 ms resolution, one scan per ms).
-pub fn measure_timer_host(m: u8, preset: u8) -> Result<f64, String> {
+pub fn measure_timer_host(m: u8, preset: u8) -> Result<f64, BenchError> {
     let mut eng = Engine::new(timer_program(m, preset));
     let mut board = SimBoard::new();
     eng.clear_runtime(&mut board);
@@ -132,7 +137,7 @@ pub fn measure_timer_host(m: u8, preset: u8) -> Result<f64, String> {
 }
 
 /// Milliseconds from power-up to the first output change of an autostarted `SET .Y0 END`.
-pub fn measure_autostart(elf: &Path) -> Result<f64, String> {
+pub fn measure_autostart(elf: &Path) -> Result<f64, BenchError> {
     let mut chip = autostarting(elf, &program(&["SET", ".Y0", "END"]))?;
     let c = chip
         .run_until(3000 * CYCLES_PER_MS, |c| c.y(0))
@@ -152,7 +157,7 @@ pub struct BootStart {
 
 /// Runs `chip` from a reset at `reset_cycle` until the boot loader hands over (PC below
 /// `boot_start`) and then until Y0 comes on.
-fn boot_start(chip: &mut Chip, reset_cycle: u64, boot_start: u32) -> Result<BootStart, String> {
+fn boot_start(chip: &mut Chip, reset_cycle: u64, boot_start: u32) -> Result<BootStart, BenchError> {
     let ms = |c: u64| (c - reset_cycle) as f64 / CYCLES_PER_MS as f64;
     let handed = chip
         .run_until(5000 * CYCLES_PER_MS, |c| c.pc() < boot_start)
@@ -172,10 +177,10 @@ pub fn measure_autostart_boot(
     elf: &Path,
     boot: ArduinoBoot,
     port_open: bool,
-) -> Result<BootStart, String> {
+) -> Result<BootStart, BenchError> {
     let mut chip = chip::load(elf)?;
     chip.set_eeprom(0, &eeprom_with(&program(&["SET", ".Y0", "END"]), 1)?);
-    boot.load_into(&mut chip).map_err(|e| e.to_string())?;
+    boot.load_into(&mut chip)?;
     chip.hold_low(RigPin::D8, true);
     let start = boot.section().start();
     let from = chip.cycle();

@@ -23,23 +23,63 @@ mod size;
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode};
 
-use utile_tools::elf;
+use anyhow::Context;
+use clap::{Parser, Subcommand};
+use utile_tools::{cli, elf};
+
+/// Build tasks (`cargo fw` runs `xtask fw`).
+#[derive(Parser)]
+#[command(
+    name = "xtask",
+    bin_name = "cargo",
+    after_help = "Examples:\n  cargo fw                   the firmware in out/, its size\n  cargo fw --help            every option of fw"
+)]
+struct Xtask {
+    #[command(subcommand)]
+    task: Task,
+}
+
+/// The tasks.
+#[derive(Subcommand)]
+enum Task {
+    /// Build the release firmware, write out/m328-nano-utile.hex and .elf, print flash and
+    /// RAM use against the budgets of memory.x; fails if the image links a panic path
+    Fw(Fw),
+}
+
+/// `cargo fw [--features F] [--size] [--check-budget-enforced]`.
+#[derive(clap::Args)]
+#[command(after_help = "Examples:
+  cargo fw                                   out/m328-nano-utile.hex and .elf
+  cargo fw --size                            and the flash of each room, largest first
+  cargo fw --features hang-test              out/m328-nano-utile-hang-test.hex and .elf
+  cargo fw --check-budget-enforced           prove an image over budget cannot link")]
+struct Fw {
+    /// Firmware features (e.g. hang-test, scan-check); the files are named after them
+    #[arg(long, value_name = "F")]
+    features: Option<String>,
+    /// Also print the flash of each room (scan, engine, editor files ...), largest first
+    #[arg(long)]
+    size: bool,
+    /// Link with a 1 KiB flash region, then a 64 B RAM region: succeed only if both fail
+    #[arg(long, conflicts_with_all = ["features", "size"])]
+    check_budget_enforced: bool,
+}
 
 /// A region length from `memory.x` (`__NAME__ = 1152;` or `= 30K;`), so the printed budgets
 /// are the ones the linker enforces.
-fn budget(symbol: &str) -> Result<u64, String> {
-    let text = std::fs::read_to_string(root().join("memory.x"))
-        .map_err(|e| format!("cannot read memory.x: {e}"))?;
+fn budget(symbol: &str) -> anyhow::Result<u64> {
+    let text = std::fs::read_to_string(root().join("memory.x")).context("cannot read memory.x")?;
     let value = text
         .lines()
         .find_map(|l| l.trim().strip_prefix(symbol)?.trim().strip_prefix('='))
         .map(|v| v.trim().trim_end_matches(';').trim())
-        .ok_or_else(|| format!("memory.x does not define {symbol}"))?;
+        .with_context(|| format!("memory.x does not define {symbol}"))?;
     match value.strip_suffix('K') {
         Some(k) => k.parse::<u64>().map(|k| k * 1024),
         None => value.parse::<u64>(),
     }
-    .map_err(|e| format!("memory.x: {symbol} = {value}: {e}"))
+    .with_context(|| format!("memory.x: {symbol} = {value}"))
 }
 /// RAM of the ATmega328P.
 const RAM_TOTAL: u64 = 2048;
@@ -56,15 +96,15 @@ const BOOT_LOADERS: [(&str, u64); 3] = [
 const RAM_BUDGET: u64 = 1536;
 
 fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let result = match args.first().map(String::as_str) {
-        Some("fw") => fw(&args[1..]),
-        _ => Err("usage: xtask fw [--features F] [--size] [--check-budget-enforced]".into()),
+    cli::start_log();
+    // Usage errors (and --help) exit here: 2 with clap's message, or 0.
+    let result = match Xtask::parse().task {
+        Task::Fw(args) => fw(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e}");
+            eprintln!("error: {e:#}");
             ExitCode::FAILURE
         }
     }
@@ -143,52 +183,38 @@ fn avr_build(features: Option<&str>, memory_x: Option<&Path>) -> Command {
     cmd
 }
 
-fn fw(args: &[String]) -> Result<(), String> {
-    let mut features: Option<String> = None;
-    let mut check = false;
-    let mut by_room = false;
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "--features" => features = it.next().cloned(),
-            "--check-budget-enforced" => check = true,
-            "--size" => by_room = true,
-            other => match other.strip_prefix("--features=") {
-                Some(f) => features = Some(f.to_string()),
-                None => return Err(format!("unknown argument `{other}`")),
-            },
-        }
-    }
-    if check {
+fn fw(args: &Fw) -> anyhow::Result<()> {
+    let features = &args.features;
+    if args.check_budget_enforced {
         return check_budget_enforced();
     }
     let started = std::time::Instant::now();
     let status = avr_build(features.as_deref(), None)
         .status()
-        .map_err(|e| format!("cannot run cargo: {e}"))?;
+        .context("cannot run cargo")?;
     if !status.success() {
-        return Err("firmware build failed".into());
+        anyhow::bail!("firmware build failed");
     }
     let root = root();
     let built = root.join("target/avr-atmega328p/release/utile-fw.elf");
     let out = root.join("out");
-    std::fs::create_dir_all(&out).map_err(|e| format!("cannot create {}: {e}", out.display()))?;
+    std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
     let stem = match &features {
         Some(f) if !f.is_empty() => format!("m328-nano-utile-{}", f.replace([',', ' '], "-")),
         _ => "m328-nano-utile".to_string(),
     };
     let out_elf = out.join(format!("{stem}.elf"));
     let out_hex = out.join(format!("{stem}.hex"));
-    std::fs::copy(&built, &out_elf).map_err(|e| format!("cannot copy {}: {e}", built.display()))?;
+    std::fs::copy(&built, &out_elf).with_context(|| format!("cannot copy {}", built.display()))?;
     // Only flash contents: .text and the initial values of .data (never .noinit/.eeprom).
     let status = Command::new("avr-objcopy")
         .args(["-O", "ihex", "-j", ".text", "-j", ".data"])
         .arg(&out_elf)
         .arg(&out_hex)
         .status()
-        .map_err(|e| format!("cannot run avr-objcopy (binutils-avr): {e}"))?;
+        .context("cannot run avr-objcopy (binutils-avr)")?;
     if !status.success() {
-        return Err("avr-objcopy failed".into());
+        anyhow::bail!("avr-objcopy failed");
     }
     let sections = elf::sections(&out_elf)?;
     let elf::Sections {
@@ -222,13 +248,13 @@ fn fw(args: &[String]) -> Result<(), String> {
     if let Some((table, gap)) = scan_table_gap(&out_elf) {
         println!("       scan dispatch table at 0x{table:04X}; {gap} bytes of alignment gap in front of it");
     }
-    if by_room {
+    if args.size {
         let remapped = Path::new(REMAP_ROOT);
         size::print(&size::rooms(&out_elf, remapped, text, data)?, flash_budget);
     }
     println!("built in {:.1} s", started.elapsed().as_secs_f64());
     if flash > flash_budget || ram > static_budget {
-        return Err("over budget".into());
+        anyhow::bail!("over budget");
     }
     panics::guard(&out_elf, Path::new(REMAP_ROOT))?;
     println!("no panic path linked");
@@ -267,12 +293,12 @@ fn is_region_error(line: &str) -> bool {
 
 /// Link with a shrunken flash region, then with a shrunken RAM region: both must fail with
 /// the linker's region-overflow error. The normal image is relinked afterwards by `cargo fw`.
-fn check_budget_enforced() -> Result<(), String> {
+fn check_budget_enforced() -> anyhow::Result<()> {
     let root = root();
-    let original = std::fs::read_to_string(root.join("memory.x"))
-        .map_err(|e| format!("cannot read memory.x: {e}"))?;
+    let original =
+        std::fs::read_to_string(root.join("memory.x")).context("cannot read memory.x")?;
     let dir = root.join("target/budget-check");
-    std::fs::create_dir_all(&dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let cases = [
         ("__TEXT_REGION_LENGTH__", "1K", "flash budget of 1 KiB"),
         (
@@ -294,34 +320,30 @@ fn check_budget_enforced() -> Result<(), String> {
             .collect::<Vec<_>>()
             .join("\n");
         if !shrunk.contains(&format!("{symbol} = {value};")) {
-            return Err(format!("memory.x does not define {symbol}"));
+            anyhow::bail!("memory.x does not define {symbol}");
         }
         let path = dir.join(format!(
             "memory-{}.x",
             symbol.trim_matches('_').to_lowercase()
         ));
         std::fs::write(&path, shrunk)
-            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+            .with_context(|| format!("cannot write {}", path.display()))?;
         let out = avr_build(None, Some(&path))
             .output()
-            .map_err(|e| format!("cannot run cargo: {e}"))?;
+            .context("cannot run cargo")?;
         let stderr = String::from_utf8_lossy(&out.stderr);
         let overflow = stderr.lines().any(is_region_error);
         if out.status.success() || !overflow {
             eprintln!("{stderr}");
-            return Err(format!(
-                "the image linked with a {what}: budgets are NOT enforced"
-            ));
+            anyhow::bail!("the image linked with a {what}: budgets are NOT enforced");
         }
         let line = stderr.lines().find(|l| is_region_error(l)).unwrap_or("");
         println!("ok: with a {what} the link fails: {}", line.trim());
     }
     // Relink the real image so target/ holds the in-budget firmware again.
-    let status = avr_build(None, None)
-        .status()
-        .map_err(|e| format!("cannot run cargo: {e}"))?;
+    let status = avr_build(None, None).status().context("cannot run cargo")?;
     if !status.success() {
-        return Err("the normal firmware build failed after the check".into());
+        anyhow::bail!("the normal firmware build failed after the check");
     }
     println!("budgets in memory.x are enforced by the linker");
     Ok(())

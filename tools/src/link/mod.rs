@@ -5,4 +5,5 @@
 pub mod port;
 pub mod session;
 
-pub use session::{Options, Session};
+pub use port::PortError;
+pub use session::{LinkError, Options, Session};

@@ -12,6 +12,26 @@ pub const BAUD: u32 = 19_200;
 /// How long one read waits for a byte.
 const POLL: Duration = Duration::from_millis(20);
 
+/// A failure of the port itself; its cause (the system's words) is its source.
+#[derive(Debug, thiserror::Error)]
+pub enum PortError {
+    /// The port cannot be opened (no such device, no permission, in use).
+    #[error("cannot open {path}")]
+    Open {
+        /// The port's path.
+        path: String,
+        /// Why.
+        #[source]
+        source: serialport::Error,
+    },
+    /// Sending failed (the adapter was unplugged?).
+    #[error("writing to the port")]
+    Write(#[source] std::io::Error),
+    /// Receiving failed (the adapter was unplugged?).
+    #[error("reading from the port")]
+    Read(#[source] std::io::Error),
+}
+
 /// An open port and the transcript of what came in.
 pub struct Port {
     port: Box<dyn SerialPort>,
@@ -22,7 +42,7 @@ pub struct Port {
 impl Port {
     /// Opens `path` at 19200 baud, 8N1, no flow control. On a Nano the open resets the chip
     /// (DTR), so the boot loader runs first.
-    pub fn open(path: &str) -> Result<Port, String> {
+    pub fn open(path: &str) -> Result<Port, PortError> {
         let port = serialport::new(path, BAUD)
             .data_bits(serialport::DataBits::Eight)
             .parity(serialport::Parity::None)
@@ -30,7 +50,10 @@ impl Port {
             .flow_control(serialport::FlowControl::None)
             .timeout(POLL)
             .open()
-            .map_err(|e| format!("cannot open {path}: {e}"))?;
+            .map_err(|source| PortError::Open {
+                path: path.into(),
+                source,
+            })?;
         Ok(Port {
             port,
             seen: Vec::new(),
@@ -38,15 +61,15 @@ impl Port {
     }
 
     /// Sends `bytes` and waits until the system has taken them.
-    pub fn send(&mut self, bytes: &[u8]) -> Result<(), String> {
+    pub fn send(&mut self, bytes: &[u8]) -> Result<(), PortError> {
         self.port
             .write_all(bytes)
             .and_then(|()| self.port.flush())
-            .map_err(|e| format!("writing to the port: {e}"))
+            .map_err(PortError::Write)
     }
 
     /// One read of up to a poll's time; whether anything came.
-    fn pump(&mut self) -> Result<bool, String> {
+    fn pump(&mut self) -> Result<bool, PortError> {
         let mut buf = [0u8; 512];
         match self.port.read(&mut buf) {
             Ok(0) => Ok(false),
@@ -56,7 +79,7 @@ impl Port {
             }
             Err(e) if e.kind() == std::io::ErrorKind::TimedOut => Ok(false),
             Err(e) if e.kind() == std::io::ErrorKind::Interrupted => Ok(false),
-            Err(e) => Err(format!("reading from the port: {e}")),
+            Err(e) => Err(PortError::Read(e)),
         }
     }
 
@@ -67,7 +90,7 @@ impl Port {
         from: usize,
         needles: &[&[u8]],
         timeout: Duration,
-    ) -> Result<Option<(usize, usize)>, String> {
+    ) -> Result<Option<(usize, usize)>, PortError> {
         let deadline = Instant::now() + timeout;
         loop {
             let hay = self.seen.get(from..).unwrap_or(&[]);
@@ -88,7 +111,7 @@ impl Port {
     }
 
     /// Reads until nothing has come for `quiet` (or `max` has passed); whether anything came.
-    pub fn settle(&mut self, quiet: Duration, max: Duration) -> Result<bool, String> {
+    pub fn settle(&mut self, quiet: Duration, max: Duration) -> Result<bool, PortError> {
         let start = self.seen.len();
         let deadline = Instant::now() + max;
         let mut last = Instant::now();

@@ -10,7 +10,7 @@ use utile_core::editor::text::source as text;
 use utile_core::Program;
 use utile_kit::listing;
 
-use super::port::{find, Port};
+use super::port::{find, Port, PortError};
 
 /// The editor's title, on every full screen.
 pub const TITLE: &[u8] = text::TITLE.as_bytes();
@@ -57,6 +57,81 @@ impl Default for Options {
     }
 }
 
+/// Why a session failed, in words that say what to do.
+#[derive(Debug, thiserror::Error)]
+pub enum LinkError {
+    /// The port itself.
+    #[error(transparent)]
+    Port(#[from] PortError),
+    /// A program runs and `--stop` was not given.
+    #[error(
+        "uTile on {0} is running its program (autostart: D8 fitted); nothing was sent. Stop it \
+         first (`/` in a terminal), or pass --stop"
+    )]
+    Running(String),
+    /// Nothing answered Ctrl-L.
+    #[error(
+        "no answer from uTile on {0}: is it connected and powered? A running program does not \
+         answer the terminal: stop it (`/` in a terminal), or pass --stop"
+    )]
+    NoAnswer(String),
+    /// Another screen than the editor's page.
+    #[error(
+        "uTile on {path} is not at its editor page (it shows: \"{shows}\"): finish that screen \
+         in a terminal first"
+    )]
+    NotAtPage {
+        /// The port.
+        path: String,
+        /// What the screen shows.
+        shows: String,
+    },
+    /// `/` did not stop the program.
+    #[error(
+        "uTile on {0} did not stop its program on `/`: only a program with KEY can be stopped \
+         from the terminal; otherwise remove the D8 jumper and reset"
+    )]
+    DidNotStop(String),
+    /// The editor did not know a command.
+    #[error("uTile did not take {0} (\"Unrecognized Input\"): is this uTile?")]
+    NotTaken(&'static str),
+    /// The editor did not answer a command.
+    #[error("uTile did not answer {cmd} (it shows: \"{shows}\")")]
+    NoAnswerTo {
+        /// The command.
+        cmd: &'static str,
+        /// What the screen shows.
+        shows: String,
+    },
+    /// No page after a transfer.
+    #[error("uTile did not return to its page after the transfer")]
+    NotBackToPage,
+    /// READ showed no result.
+    #[error("uTile did not confirm the transfer (it shows: \"{0}\")")]
+    NotConfirmed(String),
+    /// READ refused the file.
+    #[error("uTile refused the file: {0}; its program is unchanged")]
+    Refused(String),
+    /// READ answered something else.
+    #[error("uTile answered READ with \"{0}\"")]
+    StrangeAnswer(String),
+    /// The program read back is not the one sent.
+    #[error("the program read back through WRITE differs from the file sent")]
+    ReadBackDiffers,
+    /// WRITE's file did not end.
+    #[error("uTile's WRITE sent no end-of-file record (it shows: \"{0}\")")]
+    NoEndOfFile(String),
+    /// WRITE's file does not check.
+    #[error("uTile's WRITE sent a file that does not check")]
+    BadFile(#[source] listing::HexFileError),
+    /// STORE's verify failed.
+    #[error("uTile's STORE failed (EEPROM verify error)")]
+    StoreFailed,
+    /// STORE showed no result.
+    #[error("uTile did not confirm STORE (it shows: \"{0}\")")]
+    StoreUnconfirmed(String),
+}
+
 /// What the session says on the way (progress), for a terminal's standard error.
 pub type Progress<'a> = &'a mut dyn FnMut(&str);
 
@@ -90,7 +165,7 @@ fn shown(seen: &[u8], from: usize) -> String {
 impl Session {
     /// Opens `path`, waits out the boot loader and finds the editor's page. Refuses a
     /// running program unless `opts.stop`, and says so when nothing answers.
-    pub fn connect(path: &str, opts: Options, progress: Progress) -> Result<Session, String> {
+    pub fn connect(path: &str, opts: Options, progress: Progress) -> Result<Session, LinkError> {
         let port = Port::open(path)?;
         progress(&format!(
             "{path}: waiting for uTile (a Nano resets when its port opens)"
@@ -106,10 +181,7 @@ impl Session {
                 .settle(Duration::from_millis(300), Duration::from_secs(3))?;
             if find(&s.port.seen, RUNNING).is_some() {
                 if !opts.stop {
-                    return Err(format!(
-                        "uTile on {path} is running its program (autostart: D8 fitted); nothing \
-                         was sent. Stop it first (`/` in a terminal), or pass --stop"
-                    ));
+                    return Err(LinkError::Running(path.into()));
                 }
                 s.stop(progress)?;
             }
@@ -119,7 +191,7 @@ impl Session {
     }
 
     /// Ctrl-L, and the page must be what it draws.
-    fn find_page(&mut self, opts: Options, progress: Progress) -> Result<(), String> {
+    fn find_page(&mut self, opts: Options, progress: Progress) -> Result<(), LinkError> {
         let from = self.port.seen.len();
         self.port.send(&[REDRAW])?;
         if self
@@ -138,28 +210,22 @@ impl Session {
                     progress,
                 );
             }
-            return Err(format!(
-                "no answer from uTile on {}: is it connected and powered? A running program \
-                 does not answer the terminal: stop it (`/` in a terminal), or pass --stop",
-                self.path
-            ));
+            return Err(LinkError::NoAnswer(self.path.clone()));
         }
         self.port
             .settle(Duration::from_millis(300), Duration::from_secs(3))?;
         let redraw = &self.port.seen[from..];
         if find(redraw, PAGE).is_none() {
-            return Err(format!(
-                "uTile on {} is not at its editor page (it shows: \"{}\"): finish that \
-                 screen in a terminal first",
-                self.path,
-                shown(&self.port.seen, from)
-            ));
+            return Err(LinkError::NotAtPage {
+                path: self.path.clone(),
+                shows: shown(&self.port.seen, from),
+            });
         }
         Ok(())
     }
 
     /// `/` stops the program; a key leaves `Strike any key`. [`Session::find_page`] follows.
-    fn stop(&mut self, progress: Progress) -> Result<(), String> {
+    fn stop(&mut self, progress: Progress) -> Result<(), LinkError> {
         progress("stopping the running program (--stop)");
         let from = self.port.seen.len();
         self.port.send(b"/")?;
@@ -168,11 +234,7 @@ impl Session {
             .wait_for(from, &[STRIKE], Duration::from_secs(2))?
             .is_none()
         {
-            return Err(format!(
-                "uTile on {} did not stop its program on `/`: only a program with KEY can be \
-                 stopped from the terminal; otherwise remove the D8 jumper and reset",
-                self.path
-            ));
+            return Err(LinkError::DidNotStop(self.path.clone()));
         }
         self.port
             .settle(Duration::from_millis(200), Duration::from_secs(2))?;
@@ -184,7 +246,7 @@ impl Session {
     }
 
     /// Types `cmd` and CR on the page; waits for the screen `expect` (or an error).
-    fn command(&mut self, cmd: &str, expect: &[u8]) -> Result<(), String> {
+    fn command(&mut self, cmd: &'static str, expect: &[u8]) -> Result<(), LinkError> {
         let from = self.port.seen.len();
         self.port.send(format!("{cmd}\r").as_bytes())?;
         match self
@@ -192,18 +254,16 @@ impl Session {
             .wait_for(from, &[expect, UNRECOGNIZED], Duration::from_secs(3))?
         {
             Some((0, _)) => Ok(()),
-            Some(_) => Err(format!(
-                "uTile did not take {cmd} (\"Unrecognized Input\"): is this uTile?"
-            )),
-            None => Err(format!(
-                "uTile did not answer {cmd} (it shows: \"{}\")",
-                shown(&self.port.seen, from)
-            )),
+            Some(_) => Err(LinkError::NotTaken(cmd)),
+            None => Err(LinkError::NoAnswerTo {
+                cmd,
+                shows: shown(&self.port.seen, from),
+            }),
         }
     }
 
     /// CR after a transfer: back to the page.
-    fn back_to_page(&mut self) -> Result<(), String> {
+    fn back_to_page(&mut self) -> Result<(), LinkError> {
         let from = self.port.seen.len();
         self.port.send(b"\r")?;
         if self
@@ -211,7 +271,7 @@ impl Session {
             .wait_for(from, &[PAGE], Duration::from_secs(3))?
             .is_none()
         {
-            return Err("uTile did not return to its page after the transfer".into());
+            return Err(LinkError::NotBackToPage);
         }
         self.port
             .settle(Duration::from_millis(300), Duration::from_secs(3))?;
@@ -220,7 +280,7 @@ impl Session {
 
     /// Sends `prog` through READ: only a wholly valid file replaces uTile's program, and
     /// READ's answer is checked; then the program is read back through WRITE and compared.
-    pub fn push(&mut self, prog: &Program, progress: Progress) -> Result<(), String> {
+    pub fn push(&mut self, prog: &Program, progress: Progress) -> Result<(), LinkError> {
         let hex = listing::to_hex(prog);
         let records: Vec<&[u8]> = hex
             .split(|&b| b == b'\n')
@@ -243,36 +303,32 @@ impl Session {
             .port
             .wait_for(from, &[FOR_MENU], Duration::from_secs(6))?
         else {
-            return Err(format!(
-                "uTile did not confirm the transfer (it shows: \"{}\")",
-                shown(&self.port.seen, from)
-            ));
+            return Err(LinkError::NotConfirmed(shown(&self.port.seen, from)));
         };
         let answer = &self.port.seen[from..end];
         let result = if find(answer, READ_DONE).is_some() {
             Ok(())
         } else if let Some(at) = find(answer, READ_ERROR) {
             let why = &answer[at + READ_ERROR.len()..answer.len() - FOR_MENU.len()];
-            Err(format!(
-                "uTile refused the file: {}; its program is unchanged",
-                String::from_utf8_lossy(why)
+            Err(LinkError::Refused(
+                String::from_utf8_lossy(why).into_owned(),
             ))
         } else {
-            Err(format!("uTile answered READ with \"{}\"", shown(answer, 0)))
+            Err(LinkError::StrangeAnswer(shown(answer, 0)))
         };
         self.back_to_page()?;
         result?;
         progress("uTile took the file; reading it back through WRITE");
         let (back, _) = self.pull(progress)?;
         if listing::to_hex(&back) != hex {
-            return Err("the program read back through WRITE differs from the file sent".into());
+            return Err(LinkError::ReadBackDiffers);
         }
         Ok(())
     }
 
     /// The program through WRITE: the program and the records as uTile sent them. A file
     /// that does not check (record checksums, image CRC) is refused.
-    pub fn pull(&mut self, progress: Progress) -> Result<(Program, Vec<u8>), String> {
+    pub fn pull(&mut self, progress: Progress) -> Result<(Program, Vec<u8>), LinkError> {
         self.command("WRITE", WRITE_PROMPT)?;
         self.port
             .settle(Duration::from_millis(150), Duration::from_secs(2))?;
@@ -282,10 +338,7 @@ impl Session {
             .port
             .wait_for(from, &[EOF_RECORD], Duration::from_secs(5))?
         else {
-            return Err(format!(
-                "uTile's WRITE sent no end-of-file record (it shows: \"{}\")",
-                shown(&self.port.seen, from)
-            ));
+            return Err(LinkError::NoEndOfFile(shown(&self.port.seen, from)));
         };
         // The records, from the first ':' on, one per line as WRITE sent them.
         let got = &self.port.seen[from..end];
@@ -302,14 +355,13 @@ impl Session {
             "received {} records",
             hex.split(|&b| b == b'\n').count() - 1
         ));
-        let prog = listing::from_hex(&hex)
-            .map_err(|e| format!("uTile's WRITE sent a file that does not check: {e}"))?;
+        let prog = listing::from_hex(&hex).map_err(LinkError::BadFile)?;
         self.back_to_page()?;
         Ok((prog, hex))
     }
 
     /// STORE: the program into EEPROM, for autostart.
-    pub fn store(&mut self, progress: Progress) -> Result<(), String> {
+    pub fn store(&mut self, progress: Progress) -> Result<(), LinkError> {
         progress("STORE");
         let from = self.port.seen.len();
         self.port.send(b"STORE\r")?;
@@ -319,11 +371,8 @@ impl Session {
             Duration::from_secs(5),
         )? {
             Some((0, _)) => Ok(()),
-            Some((1, _)) => Err("uTile's STORE failed (EEPROM verify error)".into()),
-            _ => Err(format!(
-                "uTile did not confirm STORE (it shows: \"{}\")",
-                shown(&self.port.seen, from)
-            )),
+            Some((1, _)) => Err(LinkError::StoreFailed),
+            _ => Err(LinkError::StoreUnconfirmed(shown(&self.port.seen, from))),
         }
     }
 }

@@ -11,11 +11,15 @@ pub struct Cidr {
     bits: u8,
 }
 
+/// Not a network: the message says what `--tcp-allow` takes.
+#[derive(Debug, PartialEq, Eq, thiserror::Error)]
+#[error("--tcp-allow takes networks as ADDR/BITS or ADDR (e.g. 192.168.1.0/24), not '{0}'")]
+pub struct BadCidr(pub String);
+
 impl Cidr {
     /// `ADDR/BITS` or a bare address (all its bits).
-    pub fn parse(s: &str) -> Result<Cidr, String> {
-        let bad =
-            || format!("--tcp-allow takes networks as ADDR/BITS (e.g. 192.168.1.0/24), not '{s}'");
+    pub fn parse(s: &str) -> Result<Cidr, BadCidr> {
+        let bad = || BadCidr(s.to_string());
         let (a, bits) = match s.trim().split_once('/') {
             Some((a, b)) => (a, Some(b)),
             None => (s.trim(), None),
@@ -57,7 +61,7 @@ impl Cidr {
 }
 
 /// A comma-separated list.
-pub fn parse_list(s: &str) -> Result<Vec<Cidr>, String> {
+pub fn parse_list(s: &str) -> Result<Vec<Cidr>, BadCidr> {
     s.split(',').map(Cidr::parse).collect()
 }
 

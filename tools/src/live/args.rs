@@ -1,25 +1,78 @@
-//! The command line of `utile live`.
+//! The command line of `utile live` (clap): [`LiveArgs`] as typed, then [`Options`], what
+//! the rest of `live` consumes.
 
 use std::net::SocketAddr;
 use std::time::Duration;
 
-/// The usage text.
-pub const USAGE: &str = "\
-  utile live --port PATH [--units 1,2,3 | --scan] [--http ADDR:PORT] [--tcp ADDR:PORT]
-             [--no-tcp] [--read-only] [--program PROG.utl] [--wait SECS] [--mqtt URL …]
-                                       every uTile on the line live in the browser, the
-                                       terminal beside it, a Modbus TCP gateway
-    --units  the slave addresses on the line (default 1); --scan looks for them
-    --http   where the page is served (default 127.0.0.1:8080)
-    --tcp    the Modbus TCP gateway (default 127.0.0.1:1502; unit id = slave address)
-    --read-only  refuse every write (page, terminal keys and TCP)
-    --program    check that the listing is the program that runs (its fingerprint)
-    --mqtt mqtt://HOST[:PORT] | mqtts://HOST[:PORT]  publish every uTile to a broker
-       [--mqtt-ca FILE] [--mqtt-user NAME --mqtt-password-file FILE] [--name LINE]
-       [--mqtt-prefix P] [--mqtt-commands] [--ha-discovery]   (docs/LIVE.md, MQTT)
-    beyond loopback (docs/LIVE.md, Security): --http needs a token (printed, or
-       --token-file FILE) for every write, and for reads unless --public-read;
-       --tcp needs --tcp-allow CIDR[,CIDR...] (the clients' networks)";
+use clap::Parser;
+
+use super::allow::Cidr;
+use super::mqtt::options::Flags;
+use crate::cli::{socket_address, BootWait};
+
+/// The examples under `utile live --help`.
+const EXAMPLES: &str = "\
+Examples:
+  utile live --port /dev/ttyUSB0                   uTile 1 on the page at http://127.0.0.1:8080/
+  utile live --port /dev/ttyUSB0 --units 1,2,3     three uTiles on one RS-485 line
+  utile live --port /dev/ttyUSB0 --scan            look for every uTile on the line
+  utile live --port /tmp/utile-tty --http 8081 --program examples/tank-fill.utl
+  utile live --port /dev/ttyUSB0 --http 0.0.0.0:8080 --read-only --no-tcp
+  utile live --port /dev/ttyUSB0 --http 0.0.0.0:8080 --tcp 0.0.0.0:1502 --tcp-allow 192.168.1.0/24
+  utile live --port /dev/ttyUSB0 --mqtt mqtt://127.0.0.1 --ha-discovery --mqtt-commands
+
+Beyond loopback (docs/LIVE.md, Security): the page needs a token (printed at start, or
+--token-file FILE) for every write, and for reads unless --public-read; the gateway needs
+--tcp-allow with its clients' networks.";
+
+/// `utile live`: every uTile on the line live in the browser, the terminal beside it, a
+/// Modbus TCP gateway.
+#[derive(clap::Args, Clone, Debug, PartialEq)]
+#[command(after_help = EXAMPLES)]
+pub struct LiveArgs {
+    /// The serial port (e.g. /dev/ttyUSB0)
+    #[arg(long, value_name = "PATH")]
+    pub port: String,
+    /// The slave addresses on the line, 1..247 (default 1)
+    #[arg(long, value_name = "1,2,3", value_delimiter = ',', num_args = 1,
+          value_parser = clap::value_parser!(u8).range(1..=247), conflicts_with = "scan")]
+    pub units: Vec<u8>,
+    /// Look for the uTiles on the line
+    #[arg(long)]
+    pub scan: bool,
+    /// Where the page is served: ADDR:PORT, or a port on 127.0.0.1
+    #[arg(long, value_name = "ADDR:PORT", default_value = "127.0.0.1:8080", value_parser = socket_address)]
+    pub http: SocketAddr,
+    /// The Modbus TCP gateway (unit id = slave address): ADDR:PORT, or a port on 127.0.0.1
+    #[arg(long, value_name = "ADDR:PORT", default_value = "127.0.0.1:1502",
+          value_parser = socket_address, conflicts_with = "no_tcp")]
+    pub tcp: SocketAddr,
+    /// No Modbus TCP gateway
+    #[arg(long)]
+    pub no_tcp: bool,
+    /// Refuse every write (page, terminal keys and TCP)
+    #[arg(long)]
+    pub read_only: bool,
+    /// Check that this listing is the program that runs (its fingerprint)
+    #[arg(long, value_name = "PROG.utl")]
+    pub program: Option<String>,
+    /// `--wait SECS`.
+    #[command(flatten)]
+    pub wait: BootWait,
+    /// The MQTT flags (`--mqtt URL` …).
+    #[command(flatten)]
+    pub mqtt: Flags,
+    /// The page's token beyond loopback, read from this file (default: a new one, printed)
+    #[arg(long, value_name = "FILE")]
+    pub token_file: Option<String>,
+    /// Beyond loopback, reads need no token (writes still do)
+    #[arg(long)]
+    pub public_read: bool,
+    /// The networks the gateway takes clients from (needed for --tcp beyond loopback)
+    #[arg(long, value_name = "CIDR,...", value_delimiter = ',', num_args = 1,
+          value_parser = Cidr::parse, conflicts_with = "no_tcp")]
+    pub tcp_allow: Vec<Cidr>,
+}
 
 /// Options of one run.
 #[derive(Clone, Debug, PartialEq)]
@@ -41,109 +94,70 @@ pub struct Options {
     /// The longest wait for uTile after the port opens.
     pub boot_wait: Duration,
     /// The MQTT flags (`--mqtt URL` …).
-    pub mqtt: super::mqtt::options::Flags,
+    pub mqtt: Flags,
     /// `--token-file`: the page's token beyond loopback.
     pub token_file: Option<String>,
     /// `--public-read`: reads need no token.
     pub public_read: bool,
     /// `--tcp-allow`: the networks the gateway takes clients from.
-    pub tcp_allow: Vec<super::allow::Cidr>,
+    pub tcp_allow: Vec<Cidr>,
 }
 
-/// `ADDR:PORT`, or a bare port on 127.0.0.1.
-fn address(flag: &str, v: &str) -> Result<SocketAddr, String> {
-    if let Ok(port) = v.parse::<u16>() {
-        return Ok(SocketAddr::from(([127, 0, 0, 1], port)));
+impl From<LiveArgs> for Options {
+    fn from(a: LiveArgs) -> Options {
+        let mut units = Vec::new();
+        for u in a.units {
+            if !units.contains(&u) {
+                units.push(u);
+            }
+        }
+        if !a.scan && units.is_empty() {
+            units.push(1);
+        }
+        Options {
+            port: a.port,
+            units,
+            scan: a.scan,
+            http: a.http,
+            tcp: (!a.no_tcp).then_some(a.tcp),
+            read_only: a.read_only,
+            program: a.program,
+            boot_wait: a.wait.boot_wait,
+            mqtt: a.mqtt,
+            token_file: a.token_file,
+            public_read: a.public_read,
+            tcp_allow: a.tcp_allow,
+        }
     }
-    v.parse()
-        .map_err(|_| format!("{flag} takes ADDR:PORT (e.g. 127.0.0.1:8080), not '{v}'"))
+}
+
+/// `utile live`'s words alone, as a command of their own (the benchmarks start `live` so).
+#[derive(Parser)]
+#[command(name = "utile live")]
+struct Alone {
+    #[command(flatten)]
+    args: LiveArgs,
 }
 
 /// Parses the words after `live`.
-pub fn parse(words: &[String]) -> Result<Options, String> {
-    let mut o = Options {
-        port: String::new(),
-        units: Vec::new(),
-        scan: false,
-        http: SocketAddr::from(([127, 0, 0, 1], 8080)),
-        tcp: Some(SocketAddr::from(([127, 0, 0, 1], 1502))),
-        read_only: false,
-        program: None,
-        boot_wait: Duration::from_millis(2500),
-        mqtt: Default::default(),
-        token_file: None,
-        public_read: false,
-        tcp_allow: Vec::new(),
-    };
-    let mut it = words.iter();
-    while let Some(w) = it.next() {
-        let mut value = || {
-            it.next()
-                .cloned()
-                .ok_or_else(|| format!("option '{w}' needs a value"))
-        };
-        match w.as_str() {
-            "--port" => o.port = value()?,
-            "--units" => {
-                let list = value()?;
-                for a in list.split(',') {
-                    let n: u8 = a
-                        .trim()
-                        .parse()
-                        .ok()
-                        .filter(|n| (1..=247).contains(n))
-                        .ok_or_else(|| {
-                            format!("--units takes slave addresses 1..247, not '{a}'")
-                        })?;
-                    if !o.units.contains(&n) {
-                        o.units.push(n);
-                    }
-                }
-            }
-            "--scan" => o.scan = true,
-            "--http" => o.http = address(w, &value()?)?,
-            "--tcp" => o.tcp = Some(address(w, &value()?)?),
-            "--no-tcp" => o.tcp = None,
-            "--read-only" => o.read_only = true,
-            "--program" => o.program = Some(value()?),
-            "--wait" => {
-                let v = value()?;
-                let secs: f64 = v
-                    .trim_end_matches('s')
-                    .parse()
-                    .ok()
-                    .filter(|s: &f64| (0.0..=60.0).contains(s))
-                    .ok_or_else(|| format!("--wait takes seconds (0..60), not '{v}'"))?;
-                o.boot_wait = Duration::from_secs_f64(secs);
-            }
-            "--token-file" => o.token_file = Some(value()?),
-            "--public-read" => o.public_read = true,
-            "--tcp-allow" => o.tcp_allow = super::allow::parse_list(&value()?)?,
-            other if o.mqtt.take(other, &mut value)? => {}
-            other => return Err(format!("unknown option '{other}'\nusage:\n{USAGE}")),
-        }
-    }
-    if o.port.is_empty() {
-        return Err(format!(
-            "--port PATH is needed (e.g. /dev/ttyUSB0)\nusage:\n{USAGE}"
-        ));
-    }
-    if o.scan && !o.units.is_empty() {
-        return Err("--units and --scan exclude each other".into());
-    }
-    if !o.scan && o.units.is_empty() {
-        o.units.push(1);
-    }
-    Ok(o)
+pub fn parse(words: &[String]) -> Result<Options, clap::Error> {
+    let alone =
+        Alone::try_parse_from(std::iter::once("live").chain(words.iter().map(String::as_str)))?;
+    Ok(alone.args.into())
 }
 
-/// The gateway beyond loopback needs `--tcp-allow`.
-pub fn check_tcp(o: &Options) -> Result<(), String> {
+/// `--tcp` beyond loopback without `--tcp-allow`.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "--tcp {0} listens beyond this computer: give --tcp-allow CIDR[,CIDR…] with the networks \
+     its clients come from (e.g. --tcp-allow 192.168.1.0/24)"
+)]
+pub struct TcpNeedsAllow(pub SocketAddr);
+
+/// The gateway beyond loopback needs `--tcp-allow` (a value clap cannot weigh: the address).
+pub fn check_tcp(o: &Options) -> Result<(), TcpNeedsAllow> {
     match o.tcp {
-        Some(a) if !a.ip().is_loopback() && o.tcp_allow.is_empty() => Err(format!(
-            "--tcp {a} listens beyond this computer: give --tcp-allow CIDR[,CIDR…] with the \
-             networks its clients come from (e.g. --tcp-allow 192.168.1.0/24)"
-        )),
+        Some(a) if !a.ip().is_loopback() && o.tcp_allow.is_empty() => Err(TcpNeedsAllow(a)),
         _ => Ok(()),
     }
 }
@@ -183,16 +197,67 @@ mod tests {
 
     #[test]
     fn mistakes_are_refused() {
-        assert!(parse(&words("--units 1")).unwrap_err().contains("--port"));
+        let e = parse(&words("--units 1")).unwrap_err();
+        assert_eq!(e.kind(), clap::error::ErrorKind::MissingRequiredArgument);
+        assert!(e.to_string().contains("--port"), "{e}");
         assert!(parse(&words("--port p --units 0")).is_err());
         assert!(parse(&words("--port p --units 248")).is_err());
         assert!(parse(&words("--port p --scan --units 2")).is_err());
         assert!(parse(&words("--port p --http nowhere")).is_err());
         assert!(parse(&words("--port p --bogus")).is_err());
+        let e = parse(&words("--port p --port q")).unwrap_err();
+        assert_eq!(e.kind(), clap::error::ErrorKind::ArgumentConflict, "{e}");
+        let e = parse(&words("--port p --scan --scan")).unwrap_err();
+        assert_eq!(e.kind(), clap::error::ErrorKind::ArgumentConflict, "{e}");
+        assert!(parse(&words("--port p --tcp 1 --no-tcp")).is_err());
         let o = parse(&words("--port p --tcp 0.0.0.0:1502")).unwrap();
-        assert!(check_tcp(&o).unwrap_err().contains("--tcp-allow"));
+        assert!(check_tcp(&o)
+            .unwrap_err()
+            .to_string()
+            .contains("--tcp-allow"));
         let o = parse(&words("--port p --tcp 0.0.0.0:1502 --tcp-allow 10.0.0.0/8")).unwrap();
         assert!(check_tcp(&o).is_ok());
         assert!(parse(&words("--port p --tcp-allow 10.0.0.0/40")).is_err());
+        let o = parse(&words("--port p --tcp-allow 10.0.0.0/8,192.168.1.7")).unwrap();
+        assert_eq!(o.tcp_allow.len(), 2);
+        assert!(parse(&words("--port p --no-tcp --tcp-allow 10.0.0.0/8")).is_err());
+        for stray in [
+            "--mqtt-commands",
+            "--ha-discovery",
+            "--mqtt-ca c.pem",
+            "--mqtt-user u",
+            "--mqtt-prefix p",
+            "--name n",
+        ] {
+            let e = parse(&words(&format!("--port p {stray}"))).unwrap_err();
+            assert_eq!(
+                e.kind(),
+                clap::error::ErrorKind::MissingRequiredArgument,
+                "{stray}: {e}"
+            );
+            assert!(e.to_string().contains("--mqtt <URL>"), "{stray}: {e}");
+        }
+        let e = parse(&words("--port p --mqtt mqtt://h --mqtt-password-file f")).unwrap_err();
+        assert!(e.to_string().contains("--mqtt-user"), "{e}");
+        let o = parse(&words(
+            "--port p --mqtt mqtt://h --mqtt-commands --ha-discovery",
+        ))
+        .unwrap();
+        assert!(o.mqtt.commands && o.mqtt.discovery);
+    }
+
+    #[test]
+    fn units_and_wait() {
+        let o = parse(&words(
+            "--port p --units 3,1,3 --wait 1s --no-tcp --read-only",
+        ))
+        .unwrap();
+        assert_eq!(o.units, [3, 1]);
+        assert_eq!(o.boot_wait, Duration::from_secs(1));
+        assert_eq!(o.tcp, None);
+        assert!(o.read_only);
+        let o = parse(&words("--port p --scan")).unwrap();
+        assert!(o.scan && o.units.is_empty());
+        assert!(parse(&words("--port p --wait 61")).is_err());
     }
 }

@@ -84,8 +84,8 @@ impl Drop for Running {
 /// `say` gets the lines a console shows.
 pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Running, String> {
     assets::check()?;
-    let mqtt = mqtt::options::Settings::new(&opts.mqtt, &opts.port)?;
-    args::check_tcp(opts)?;
+    let mqtt = mqtt::options::Settings::new(&opts.mqtt, &opts.port).map_err(|e| e.to_string())?;
+    args::check_tcp(opts).map_err(|e| e.to_string())?;
     let file = match &opts.program {
         Some(path) => {
             let text =
@@ -191,8 +191,7 @@ pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Ru
 }
 
 /// `utile live ...`: runs until Ctrl-C or SIGTERM.
-pub fn main(words: &[String]) -> Result<(), String> {
-    let opts = args::parse(words)?;
+pub fn main(opts: &args::Options) -> Result<(), String> {
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
@@ -200,7 +199,7 @@ pub fn main(words: &[String]) -> Result<(), String> {
         .map_err(|e| format!("cannot start the runtime: {e}"))?;
     rt.block_on(async {
         let mut say = |line: &str| eprintln!("utile live: {line}");
-        let mut running = start(&opts, &mut say).await?;
+        let mut running = start(opts, &mut say).await?;
         let mut term = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate())
             .map_err(|e| e.to_string())?;
         tokio::select! {

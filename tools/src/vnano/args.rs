@@ -1,16 +1,16 @@
-//! Command line of `cargo nano` (the `vnano` binary).
+//! Command line of `cargo nano` (the `vnano` binary), clap's: [`Args`] as typed, then
+//! [`Options`], what the session consumes. A new flag: a field in `Args`, its place in
+//! `Options` and one line in [`Args::options`].
 
 use std::path::PathBuf;
+
+use clap::Parser;
 use utile_kit::simavr::ArduinoBoot;
 
-/// The usage text.
-pub const USAGE: &str = "\
-usage: cargo nano [OPTIONS]       (the vnano binary)
+use crate::cli::{positive_seconds, volts};
 
-Runs the uTile firmware image in simavr: a virtual Arduino Nano at 16 MHz, paced to the
-wall clock, its UART (19200 8N1; any baud the code programs) on this terminal, with a
-virtual test rig.
-
+/// What `--help` says after the options: the rig's keys and examples.
+const AFTER_HELP: &str = "\
 Rig keys: press Ctrl-] then
   0..5  press/release switch A0..A5      8  fit/remove the D8 jumper (autostart, read at reset)
   r     reset the chip (warm reset)      9  fit/remove the D9 jumper (out_sense)
@@ -19,45 +19,135 @@ Rig keys: press Ctrl-] then
 The line below the uTile screen shows the switches, jumpers and the LEDs Y0..Y7, and the
 levels on A6 and A7 once either is above 0 V.
 
-options:
-  --elf PATH          firmware ELF, or Intel HEX if PATH ends in .hex (default: $UTILE_ELF,
-                      else out/m328-nano-utile.elf)
-  --bootloader NAME   a Nano's boot loader beside the firmware (Debian's arduino-core-avr):
-                        old       ATmegaBOOT, 2 KB at 0x7800 (hfuse 0xDA), 57600 baud,
-                                  waits about 1 s after every reset
-                        optiboot  Optiboot, 115200 baud, waits only after an external
-                                  reset; Debian's build is 532 bytes, so it runs in the
-                                  1 KB section at 0x7C00 (hfuse 0xDC), not 512 B at 0x7E00
-                      every reset starts in it; with --pty a client opening the port resets
-                      the chip as a Nano's DTR does, so avrdude -c arduino can flash it
-  --blank             no firmware in flash (a new chip; with --bootloader, a blank Nano)
-  --bus N             N Nanos (2..8) on one RS-485 line on the pty (implies --pty): the
-                      client is the Modbus master; slave addresses 1..N, D8 fitted, each
-                      running the --eeprom program (default: PU. .PY KEY END, outputs =
-                      coils 8..15); two drivers (D10) at once are reported;
-                      --a6/--a7/--press set every Nano; the rig keys work the
-                      Nano that @N picked last (Nano 1 at first)
-  --dtr-reset         with --pty: reset the chip when a client opens the port (the default
-                      with --bootloader)
-  --pty               put the UART on a pseudo-terminal (connect minicom, picocom or
-                      C-Kermit to the printed /dev/pts/N); rig keys without Ctrl-]
-  --link PATH         with --pty: also make PATH a symlink to it (e.g. /tmp/utile-tty)
-  --fast              do not pace to the wall clock (run as fast as the host can)
-  --for SECONDS       stop after this much simulated time
-  --press LIST        switches held pressed from the start, e.g. --press 0,3
-  --d8-low            start with the D8 jumper fitted (autostart)
-  --d9-low            start with the D9 jumper fitted (inverted outputs)
-  --a6 VOLTS          level on the analog pin A6 at start, 0..5 (e.g. 2.5 or 2.5V)
-  --a7 VOLTS          level on the analog pin A7 at start, 0..5
-  --eeprom FILE       load the EEPROM from a binary file (up to 1024 bytes) at power-up
-  --save-eeprom FILE  write the EEPROM to a binary file on exit
-  --persist           same as --eeprom out/vnano.eeprom (if it exists)
-                      --save-eeprom out/vnano.eeprom: STORE survives between runs
-  --load FILE         start with the .utl program FILE loaded: after boot it is sent to
-                      the firmware through READ (hidden, about 2 s of simulated time),
-                      then the editor shows it; STORE keeps it in the EEPROM
-  -h, --help          this text
-";
+Examples:
+  cargo nano                                         the uTile screen on this terminal
+  cargo nano --pty --link /tmp/utile-tty             connect minicom or `utile live` to it
+  cargo nano --load examples/tank-fill.utl --a6 2.0 --a7 2.0 --persist
+  cargo nano --bus 3                                 three Nanos on one RS-485 line
+  cargo nano --pty --link /tmp/nano --bootloader old --blank   avrdude -c arduino flashes it
+
+RUST_LOG selects what the log on standard error shows (e.g. RUST_LOG=debug).";
+
+/// Runs the uTile firmware image in simavr: a virtual Arduino Nano at 16 MHz, paced to the
+/// wall clock, its UART (19200 8N1; any baud the code programs) on this terminal, with a
+/// virtual test rig.
+#[derive(Parser, Clone, Debug, Default, PartialEq)]
+#[command(name = "vnano", bin_name = "cargo nano", version, after_help = AFTER_HELP)]
+pub struct Args {
+    /// Firmware ELF, or Intel HEX if PATH ends in .hex (default: $UTILE_ELF, else
+    /// out/m328-nano-utile.elf)
+    #[arg(long, value_name = "PATH")]
+    pub elf: Option<PathBuf>,
+    /// A Nano's boot loader beside the firmware (Debian's arduino-core-avr): old
+    /// (ATmegaBOOT, 2 KB at 0x7800, 57600 baud, waits about 1 s after every reset) or
+    /// optiboot (115200 baud, waits only after an external reset; 1 KB at 0x7C00). Every
+    /// reset starts in it; with --pty a client opening the port resets the chip as a Nano's
+    /// DTR does, so avrdude -c arduino can flash it
+    #[arg(long, value_name = "NAME", value_parser = boot_loader)]
+    pub bootloader: Option<ArduinoBoot>,
+    /// No firmware in flash (a new chip; with --bootloader, a blank Nano)
+    #[arg(long)]
+    pub blank: bool,
+    /// N Nanos (2..8) on one RS-485 line on the pty (implies --pty): the client is the
+    /// Modbus master; slave addresses 1..N, D8 fitted, each running the --eeprom program
+    /// (default: PU. .PY KEY END, outputs = coils 8..15); --a6/--a7/--press set every Nano;
+    /// the rig keys work the Nano that @N picked last (Nano 1 at first)
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8).range(2..=8))]
+    pub bus: Option<u8>,
+    /// With --pty: reset the chip when a client opens the port (the default with
+    /// --bootloader)
+    #[arg(long)]
+    pub dtr_reset: bool,
+    /// Put the UART on a pseudo-terminal (connect minicom, picocom or C-Kermit to the
+    /// printed /dev/pts/N); rig keys without Ctrl-]
+    #[arg(long)]
+    pub pty: bool,
+    /// Also make PATH a symlink to the pty, e.g. /tmp/utile-tty (implies --pty)
+    #[arg(long, value_name = "PATH")]
+    pub link: Option<PathBuf>,
+    /// Do not pace to the wall clock (run as fast as the host can)
+    #[arg(long)]
+    pub fast: bool,
+    /// Stop after this much simulated time
+    #[arg(long = "for", value_name = "SECONDS", value_parser = positive_seconds)]
+    pub run_for: Option<f64>,
+    /// Switches held pressed from the start, 0..5 or A0..A5, e.g. --press 0,3
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = switch)]
+    pub press: Vec<u8>,
+    /// Start with the D8 jumper fitted (autostart)
+    #[arg(long)]
+    pub d8_low: bool,
+    /// Start with the D9 jumper fitted (inverted outputs)
+    #[arg(long)]
+    pub d9_low: bool,
+    /// Level on the analog pin A6 at start, 0..5 volts (e.g. 2.5 or 2.5V)
+    #[arg(long, value_name = "VOLTS", value_parser = volts, allow_hyphen_values = true)]
+    pub a6: Option<u32>,
+    /// Level on the analog pin A7 at start, 0..5 volts
+    #[arg(long, value_name = "VOLTS", value_parser = volts, allow_hyphen_values = true)]
+    pub a7: Option<u32>,
+    /// Load the EEPROM from a binary file (up to 1024 bytes) at power-up
+    #[arg(long, value_name = "FILE")]
+    pub eeprom: Option<PathBuf>,
+    /// Write the EEPROM to a binary file on exit
+    #[arg(long, value_name = "FILE", conflicts_with = "persist")]
+    pub save_eeprom: Option<PathBuf>,
+    /// Keep the EEPROM in out/vnano.eeprom: loaded if it exists, saved on exit, so STORE
+    /// survives between runs
+    #[arg(long)]
+    pub persist: bool,
+    /// Start with the .utl program FILE loaded: after boot it is sent to the firmware
+    /// through READ (hidden, about 2 s of simulated time), then the editor shows it; STORE
+    /// keeps it in the EEPROM
+    #[arg(long, value_name = "FILE")]
+    pub load: Option<PathBuf>,
+}
+
+/// `old` or `optiboot`.
+fn boot_loader(name: &str) -> Result<ArduinoBoot, crate::cli::BadValue> {
+    ArduinoBoot::from_name(name)
+        .ok_or_else(|| crate::cli::BadValue(format!("old or optiboot, not {name}")))
+}
+
+/// A switch 0..5 (or A0..A5).
+fn switch(word: &str) -> Result<u8, crate::cli::BadValue> {
+    let n = word.trim().trim_start_matches(['A', 'a']);
+    match n.parse::<u8>() {
+        Ok(n) if n <= 5 => Ok(n),
+        _ => Err(crate::cli::BadValue(format!(
+            "switches are 0..5 (A0..A5), not {word}"
+        ))),
+    }
+}
+
+impl Args {
+    /// The options of the run. `persist_file` is the file `--persist` uses.
+    pub fn options(self, persist_file: PathBuf) -> Options {
+        Options {
+            elf: self.elf,
+            pty: self.pty || self.link.is_some() || self.bus.is_some(),
+            link: self.link,
+            fast: self.fast,
+            run_for: self.run_for,
+            pressed: self.press.iter().fold(0, |bits, n| bits | 1 << n),
+            d8_low: self.d8_low,
+            d9_low: self.d9_low,
+            analog_mv: [self.a6.unwrap_or(0), self.a7.unwrap_or(0)],
+            eeprom: self.eeprom,
+            eeprom_if_exists: self.persist.then(|| persist_file.clone()),
+            save_eeprom: if self.persist {
+                Some(persist_file)
+            } else {
+                self.save_eeprom
+            },
+            load: self.load,
+            dtr_reset: self.dtr_reset || self.bootloader.is_some(),
+            bootloader: self.bootloader,
+            blank: self.blank,
+            bus: self.bus.map(usize::from),
+        }
+    }
+}
 
 /// Options of one run.
 #[derive(Clone, Debug, PartialEq, Default)]
@@ -96,97 +186,6 @@ pub struct Options {
     pub dtr_reset: bool,
     /// Nanos on one line (`--bus N`).
     pub bus: Option<usize>,
-    /// `-h`/`--help`.
-    pub help: bool,
-}
-
-/// Parses the arguments (without the program name). `persist_file` is the file `--persist`
-/// uses.
-pub fn parse<I: IntoIterator<Item = String>>(
-    args: I,
-    persist_file: PathBuf,
-) -> Result<Options, String> {
-    let mut o = Options::default();
-    let mut it = args.into_iter();
-    while let Some(arg) = it.next() {
-        let mut value = |name: &str| it.next().ok_or_else(|| format!("{name} needs a value"));
-        match arg.as_str() {
-            "-h" | "--help" => o.help = true,
-            "--elf" => o.elf = Some(PathBuf::from(value("--elf")?)),
-            "--pty" => o.pty = true,
-            "--link" => {
-                o.link = Some(PathBuf::from(value("--link")?));
-                o.pty = true;
-            }
-            "--fast" => o.fast = true,
-            "--bus" => {
-                let v = value("--bus")?;
-                let n: usize = v.parse().map_err(|_| format!("--bus: not a number: {v}"))?;
-                if !(2..=8).contains(&n) {
-                    return Err(format!("--bus: 2..8 Nanos, not {n}"));
-                }
-                o.bus = Some(n);
-                o.pty = true;
-            }
-            "--for" => {
-                let v = value("--for")?;
-                let secs: f64 = v
-                    .parse()
-                    .map_err(|_| format!("--for: not a number of seconds: {v}"))?;
-                if !(secs > 0.0 && secs.is_finite()) {
-                    return Err(format!("--for: must be more than 0 seconds: {v}"));
-                }
-                o.run_for = Some(secs);
-            }
-            "--press" => {
-                let v = value("--press")?;
-                for part in v
-                    .split(|c: char| c == ',' || c.is_whitespace())
-                    .filter(|p| !p.is_empty())
-                {
-                    let part = part.trim_start_matches(['A', 'a']);
-                    match part.parse::<u8>() {
-                        Ok(n) if n <= 5 => o.pressed |= 1 << n,
-                        _ => {
-                            return Err(format!("--press: switches are 0..5 (A0..A5), not {part}"))
-                        }
-                    }
-                }
-            }
-            "--d8-low" => o.d8_low = true,
-            "--d9-low" => o.d9_low = true,
-            "--a6" => o.analog_mv[0] = parse_volts("--a6", &value("--a6")?)?,
-            "--a7" => o.analog_mv[1] = parse_volts("--a7", &value("--a7")?)?,
-            "--eeprom" => o.eeprom = Some(PathBuf::from(value("--eeprom")?)),
-            "--save-eeprom" => o.save_eeprom = Some(PathBuf::from(value("--save-eeprom")?)),
-            "--persist" => {
-                o.eeprom_if_exists = Some(persist_file.clone());
-                o.save_eeprom = Some(persist_file.clone());
-            }
-            "--load" => o.load = Some(PathBuf::from(value("--load")?)),
-            "--bootloader" => {
-                let v = value("--bootloader")?;
-                o.bootloader = Some(
-                    ArduinoBoot::from_name(&v)
-                        .ok_or_else(|| format!("--bootloader: old or optiboot, not {v}"))?,
-                );
-                o.dtr_reset = true;
-            }
-            "--blank" => o.blank = true,
-            "--dtr-reset" => o.dtr_reset = true,
-            other => return Err(format!("unknown option {other} (see --help)")),
-        }
-    }
-    Ok(o)
-}
-
-/// A level in volts, 0..5 (a trailing `V` is allowed), as whole millivolts.
-fn parse_volts(option: &str, text: &str) -> Result<u32, String> {
-    let number = text.trim_end_matches(['V', 'v']);
-    match number.parse::<f64>() {
-        Ok(v) if (0.0..=5.0).contains(&v) => Ok((v * 1000.0).round() as u32),
-        _ => Err(format!("{option}: a level is 0..5 volts, not {text}")),
-    }
 }
 
 #[cfg(test)]
@@ -194,10 +193,9 @@ mod tests {
     use super::*;
 
     fn p(args: &[&str]) -> Result<Options, String> {
-        parse(
-            args.iter().map(|s| s.to_string()),
-            PathBuf::from("out/vnano.eeprom"),
-        )
+        Args::try_parse_from(std::iter::once("vnano").chain(args.iter().copied()))
+            .map(|a| a.options(PathBuf::from("out/vnano.eeprom")))
+            .map_err(|e| e.to_string())
     }
 
     #[test]
@@ -256,23 +254,34 @@ mod tests {
 
     #[test]
     fn errors_are_explained() {
-        assert!(p(&["--press", "6"]).unwrap_err().contains("0..5"));
-        assert!(p(&["--for", "abc"]).unwrap_err().contains("--for"));
-        assert!(p(&["--for", "0"]).unwrap_err().contains("more than 0"));
-        assert!(p(&["--elf"]).unwrap_err().contains("needs a value"));
-        assert!(p(&["--load"]).unwrap_err().contains("needs a value"));
-        assert!(p(&["--bogus"]).unwrap_err().contains("unknown option"));
-        assert!(p(&["--a6", "5.1"])
-            .unwrap_err()
-            .contains("--a6: a level is 0..5 volts"));
-        assert!(p(&["--a7", "-1"])
-            .unwrap_err()
-            .contains("--a7: a level is 0..5 volts"));
-        assert!(p(&["--a7", "x"]).unwrap_err().contains("not x"));
-        assert!(p(&["--a6"]).unwrap_err().contains("needs a value"));
-        assert!(p(&["--bootloader", "new"])
-            .unwrap_err()
-            .contains("old or optiboot"));
+        let says = |args: &[&str], what: &str| {
+            let e = p(args).unwrap_err();
+            assert!(e.contains(what), "{args:?}: {e}");
+        };
+        says(&["--press", "6"], "switches are 0..5 (A0..A5), not 6");
+        says(
+            &["--for", "abc"],
+            "'--for <SECONDS>': not a number of seconds",
+        );
+        says(&["--for", "0"], "more than 0");
+        says(&["--elf"], "a value is required for '--elf <PATH>'");
+        says(&["--load"], "a value is required for '--load <FILE>'");
+        says(&["--bogus"], "unexpected argument '--bogus'");
+        says(&["--a6", "5.1"], "'--a6 <VOLTS>': a level is 0..5 volts");
+        says(&["--a7", "-1"], "'--a7 <VOLTS>': a level is 0..5 volts");
+        says(&["--a7", "x"], "not x");
+        says(&["--a6"], "a value is required");
+        says(&["--bootloader", "new"], "old or optiboot");
+        says(&["--bus", "1"], "'--bus <N>'");
+        says(&["--a6", "1", "--a6", "2"], "cannot be used multiple times");
+        says(&["--persist", "--save-eeprom", "x"], "cannot be used with");
+    }
+
+    #[test]
+    fn the_bus_implies_a_pty() {
+        let o = p(&["--bus", "3"]).unwrap();
+        assert_eq!(o.bus, Some(3));
+        assert!(o.pty);
     }
 
     #[test]

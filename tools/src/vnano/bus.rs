@@ -16,6 +16,7 @@ use utile_kit::simavr::{Bus, Chip, RigPin, F_CPU};
 
 use super::args::Options;
 use super::arrivals::Arrivals;
+use super::error::VnanoError;
 use super::io::{self, STDIN};
 use super::pty::Pty;
 use super::rig::{self, RigAction, RigView};
@@ -25,12 +26,12 @@ use super::term;
 const STEP: u64 = F_CPU / 1000;
 
 /// The EEPROM of Nano `i`: the program of `--eeprom` (or the default one), address i + 1.
-fn eeprom(o: &Options, i: usize) -> Result<Vec<u8>, String> {
+fn eeprom(o: &Options, i: usize) -> Result<Vec<u8>, VnanoError> {
     let mut ee = match &o.eeprom {
-        Some(f) => std::fs::read(f).map_err(|e| format!("--eeprom {}: {e}", f.display()))?,
+        Some(f) => std::fs::read(f).map_err(VnanoError::file("--eeprom", f))?,
         None => {
             let prog = listing::commands(&["PU.", ".PY", "KEY", "END"]);
-            stored_eeprom(&prog, 1).map_err(|e| format!("default program: {e:?}"))?
+            stored_eeprom(&prog, 1).map_err(VnanoError::DefaultProgram)?
         }
     };
     ee.resize(1024, 0xFF);
@@ -42,10 +43,10 @@ fn eeprom(o: &Options, i: usize) -> Result<Vec<u8>, String> {
 }
 
 /// Runs the bus until a signal or `--for`.
-pub fn run(o: &Options, n: usize, elf: &Path) -> Result<(), String> {
+pub fn run(o: &Options, n: usize, elf: &Path) -> Result<(), VnanoError> {
     let mut chips = Vec::new();
     for i in 0..n {
-        let mut c = Chip::load(elf).map_err(|e| e.to_string())?;
+        let mut c = Chip::load(elf)?;
         c.set_eeprom(0, &eeprom(o, i)?);
         c.hold_low(RigPin::D8, true);
         for n in 0..6u8 {
@@ -57,7 +58,7 @@ pub fn run(o: &Options, n: usize, elf: &Path) -> Result<(), String> {
         chips.push(c);
     }
     let mut bus = Bus::new(chips, 19_200).with_driver_enable();
-    let mut pty = Pty::open(o.link.as_deref()).map_err(|e| format!("cannot open a pty: {e}"))?;
+    let mut pty = Pty::open(o.link.as_deref()).map_err(VnanoError::Pty)?;
     let mut out = std::io::stdout();
     let _ = writeln!(
         out,
@@ -97,7 +98,7 @@ pub fn run(o: &Options, n: usize, elf: &Path) -> Result<(), String> {
             _ => STEP,
         };
         if let Some((i, state)) = bus.run_for(step) {
-            return Err(format!("Nano {} stopped: {state:?}", i + 1));
+            return Err(VnanoError::BusNanoStopped { nano: i + 1, state });
         }
         let sent = bus.take_master();
         if let Some(last) = sent.last() {

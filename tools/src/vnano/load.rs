@@ -7,6 +7,8 @@ use utile_core::engine::Program;
 
 use utile_kit::listing;
 
+use super::error::VnanoError;
+
 /// The editor's page is drawn (boot, and back from READ).
 const PAGE: &[u8] = b"*** User File 0 ***";
 /// READ has started and waits for the file.
@@ -73,10 +75,10 @@ impl Loader {
     }
 
     /// Parses the listing file `path` and makes a loader for it; errors are `file:line: …`.
-    pub fn from_file(path: &std::path::Path) -> Result<Loader, String> {
+    pub fn from_file(path: &std::path::Path) -> Result<Loader, VnanoError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| format!("--load {name}: {e}"))?;
-        let prog = listing::parse(&name, &text).map_err(|e| e.to_string())?;
+        let text = std::fs::read_to_string(path).map_err(VnanoError::file("--load", path))?;
+        let prog = listing::parse(&name, &text)?;
         Ok(Loader::new(&prog))
     }
 
@@ -172,9 +174,11 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let f = dir.join("bad.utl");
         std::fs::write(&f, "A0.\nFROB\n").unwrap();
-        let e = Loader::from_file(&f).unwrap_err();
+        let e = Loader::from_file(&f).unwrap_err().to_string();
         assert!(e.contains("bad.utl:2:") && e.contains("FROB"), "{e}");
-        let e = Loader::from_file(&dir.join("none.utl")).unwrap_err();
+        let e = Loader::from_file(&dir.join("none.utl"))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("--load") && e.contains("none.utl"), "{e}");
         let _ = std::fs::remove_dir_all(&dir);
     }

@@ -7,11 +7,12 @@
 //! bytes at the simulated time they came), [`status`] (the line below the
 //! screen), [`rig`] (the rig's keys and its view), [`load`] (`--load` through READ),
 //! [`term`] (the user's terminal), [`pty`] (the pseudo-terminal), [`io`] (waiting and
-//! reading on descriptors) and [`bus`] (`--bus N`).
+//! reading on descriptors), [`bus`] (`--bus N`) and [`error`] (why a run failed).
 
 pub mod args;
 pub mod arrivals;
 pub mod bus;
+pub mod error;
 pub mod io;
 pub mod load;
 pub mod pty;

@@ -9,6 +9,7 @@ use utile_kit::simavr::{self as nano, Chip, CpuState, Reset, RxPacing};
 
 use super::args::Options;
 use super::arrivals::Arrivals;
+use super::error::VnanoError;
 use super::io::{self, STDIN, STDOUT};
 use super::load::{Loader, Step};
 use super::pty::Pty;
@@ -60,7 +61,7 @@ pub(super) struct Session {
 
 /// Runs the virtual Nano of `o` on the image `elf` until `q`, a quit signal, `--for` or a
 /// crash; `--bus N` runs [`bus::run`] instead.
-pub fn run(o: &Options, elf: &Path) -> Result<(), String> {
+pub fn run(o: &Options, elf: &Path) -> Result<(), VnanoError> {
     if let Some(n) = o.bus {
         return bus::run(o, n, elf);
     }
@@ -84,7 +85,7 @@ pub fn run(o: &Options, elf: &Path) -> Result<(), String> {
     };
     // Raw mode for keys: uTile sees every key at once; ^C goes to uTile in terminal mode.
     let raw = if stdin_tty && own_keys {
-        Some(RawMode::enable(STDIN).map_err(|e| format!("raw mode: {e}"))?)
+        Some(RawMode::enable(STDIN).map_err(VnanoError::RawMode)?)
     } else {
         None
     };
@@ -112,18 +113,11 @@ pub fn run(o: &Options, elf: &Path) -> Result<(), String> {
     s.finish(&nano);
     drop(raw);
     if let Some(file) = &o.save_eeprom {
-        std::fs::write(file, nano.eeprom())
-            .map_err(|e| format!("--save-eeprom {}: {e}", file.display()))?;
+        std::fs::write(file, nano.eeprom()).map_err(VnanoError::file("--save-eeprom", file))?;
     }
     match crash {
-        Some(CpuState::Crashed) => Err(format!(
-            "the firmware crashed after {:.3} s (simavr stopped: bad instruction or jump)",
-            nano.seconds()
-        )),
-        Some(_) => Err(format!(
-            "the firmware stopped after {:.3} s (sleep with interrupts off)",
-            nano.seconds()
-        )),
+        Some(CpuState::Crashed) => Err(VnanoError::Crashed(nano.seconds())),
+        Some(_) => Err(VnanoError::Stopped(nano.seconds())),
         None => Ok(()),
     }
 }
@@ -164,7 +158,7 @@ impl Session {
         o: &Options,
         nano: &mut Chip,
         loader: &mut Option<Loader>,
-    ) -> Result<Option<CpuState>, String> {
+    ) -> Result<Option<CpuState>, VnanoError> {
         let limit_cycles = o.run_for.map(|secs| (secs * nano::F_CPU as f64) as u64);
         let mut pacer = Pacer::new(nano.cycle());
         loop {
@@ -203,14 +197,14 @@ impl Session {
                         nano.send(&bytes);
                         out.clear();
                         if nano.cycle() > LOAD_LIMIT_CYCLES {
-                            return Err("--load: the firmware did not take the program".into());
+                            return Err(VnanoError::NotTaken);
                         }
                     }
                     Step::Show(shown) => {
                         out = shown;
                         *loader = None;
                     }
-                    Step::Failed(why) => return Err(format!("--load: {why}")),
+                    Step::Failed(why) => return Err(VnanoError::Refused(why)),
                 }
             }
             self.emit(&out);

@@ -8,12 +8,13 @@ use std::path::Path;
 use utile_kit::simavr::{Chip, RigPin};
 
 use super::args::Options;
+use super::error::VnanoError;
 use super::pty::Pty;
 use super::rig;
 
 /// The chip of `o`: `elf` (Intel HEX if its name ends in `.hex`) or a blank flash, with the
 /// boot loader, the EEPROM and the rig's start levels.
-pub fn chip(o: &Options, elf: &Path) -> Result<Chip, String> {
+pub fn chip(o: &Options, elf: &Path) -> Result<Chip, VnanoError> {
     let mut nano = if o.blank {
         Chip::blank()
     } else if elf
@@ -23,13 +24,12 @@ pub fn chip(o: &Options, elf: &Path) -> Result<Chip, String> {
         Chip::load_hex(elf)
     } else {
         Chip::load(elf)
-    }
-    .map_err(|e| e.to_string())?;
+    }?;
     if let Some(boot) = o.bootloader {
-        boot.load_into(&mut nano).map_err(|e| e.to_string())?;
+        boot.load_into(&mut nano)?;
     }
     if let Some(file) = &o.eeprom {
-        let bytes = std::fs::read(file).map_err(|e| format!("--eeprom {}: {e}", file.display()))?;
+        let bytes = std::fs::read(file).map_err(VnanoError::file("--eeprom", file))?;
         nano.set_eeprom(0, &bytes);
     } else if let Some(file) = &o.eeprom_if_exists {
         if let Ok(bytes) = std::fs::read(file) {
@@ -51,11 +51,10 @@ pub fn chip(o: &Options, elf: &Path) -> Result<Chip, String> {
 
 /// The pty of `--pty` (watched for opens with `--dtr-reset`), announced on the console:
 /// its path, the baud, the firmware, whether this console drives the rig (`own_keys`).
-pub fn pty(o: &Options, elf: &Path, own_keys: bool) -> Result<Pty, String> {
-    let mut pty = Pty::open(o.link.as_deref()).map_err(|e| format!("cannot open a pty: {e}"))?;
+pub fn pty(o: &Options, elf: &Path, own_keys: bool) -> Result<Pty, VnanoError> {
+    let mut pty = Pty::open(o.link.as_deref()).map_err(VnanoError::Pty)?;
     if o.dtr_reset {
-        pty.watch_opens()
-            .map_err(|e| format!("cannot watch the pty for opens: {e}"))?;
+        pty.watch_opens().map_err(VnanoError::WatchPty)?;
     }
     let mut line = match o.bootloader {
         Some(b) => format!(

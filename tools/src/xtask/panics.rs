@@ -27,7 +27,7 @@ pub fn is_panic_symbol(name: &str) -> bool {
 }
 
 /// `Err` listing the panic paths when `elf` links any.
-pub fn guard(elf: &Path, root: &Path) -> Result<(), String> {
+pub fn guard(elf: &Path, root: &Path) -> anyhow::Result<()> {
     let panics: Vec<String> = utile_tools::elf::symbols(elf)?
         .into_iter()
         .filter(|s| is_panic_symbol(&s.name))
@@ -48,7 +48,7 @@ pub fn guard(elf: &Path, root: &Path) -> Result<(), String> {
         }
     }
     msg.push_str("remove the panic (checked access, `get`, a range the compiler can prove)");
-    Err(msg)
+    Err(anyhow::Error::msg(msg))
 }
 
 /// The source lines (with their inlining chain) of calls and jumps into a panic symbol from

@@ -10,6 +10,7 @@
 //! word goes to the room of the innermost source file of this repository that made it
 //! (`editor::page`, `hal::serial`, `main.rs` …), marked "inlined".
 
+use anyhow::Context;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::process::Command;
@@ -167,7 +168,7 @@ fn by_source(
     elf: &Path,
     root: &Path,
     ranges: &[(u64, u64, String)],
-) -> Result<BTreeMap<String, (u64, u64)>, String> {
+) -> anyhow::Result<BTreeMap<String, (u64, u64)>> {
     let mut rooms = BTreeMap::new();
     let words: Vec<(u64, &str)> = ranges
         .iter()
@@ -183,19 +184,17 @@ fn by_source(
         .stdin(std::process::Stdio::piped())
         .stdout(std::process::Stdio::piped())
         .spawn()
-        .map_err(|e| format!("cannot run avr-addr2line (binutils-avr): {e}"))?;
+        .context("cannot run avr-addr2line (binutils-avr)")?;
     {
         use std::io::Write;
-        let mut stdin = child.stdin.take().ok_or("avr-addr2line: no stdin")?;
+        let mut stdin = child.stdin.take().context("avr-addr2line: no stdin")?;
         // A writer thread: addr2line's output would fill the pipe before all input is read.
         let writer = std::thread::spawn(move || stdin.write_all(input.as_bytes()));
-        let out = child
-            .wait_with_output()
-            .map_err(|e| format!("avr-addr2line: {e}"))?;
+        let out = child.wait_with_output().context("avr-addr2line")?;
         writer
             .join()
-            .map_err(|_| "avr-addr2line: writer failed".to_string())?
-            .map_err(|e| format!("avr-addr2line: {e}"))?;
+            .map_err(|_| anyhow::anyhow!("avr-addr2line: writer failed"))?
+            .context("avr-addr2line")?;
         let text = String::from_utf8_lossy(&out.stdout);
         let root = root.display().to_string();
         // `-a` starts each address's chain with the address itself (0x0000…).
@@ -237,7 +236,7 @@ pub fn rooms(
     root: &Path,
     text: u64,
     data: u64,
-) -> Result<Vec<(String, u64, u64)>, String> {
+) -> anyhow::Result<Vec<(String, u64, u64)>> {
     let syms = elf::symbols(elf)?;
     // room -> (bytes, of which inlined into the main loop, autostart or an ISR)
     let mut rooms: BTreeMap<String, (u64, u64)> = BTreeMap::new();

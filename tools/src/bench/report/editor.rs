@@ -24,7 +24,7 @@ pub fn size_rows(rows: &mut Report, elf: &Path) {
                 "—",
             );
         }
-        Err(e) => rows.row("flash / RAM", e, "15,378 bytes", "≤ 15.4 KB"),
+        Err(e) => rows.row("flash / RAM", e.to_string(), "15,378 bytes", "≤ 15.4 KB"),
     }
 }
 

@@ -50,7 +50,7 @@ impl Report {
     pub fn measured(
         &mut self,
         what: impl Into<String>,
-        figure: Result<String, String>,
+        figure: Result<String, impl std::fmt::Display>,
         original: &str,
         goal: &str,
     ) {

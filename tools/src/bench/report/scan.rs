@@ -12,7 +12,7 @@ use crate::bench::{
 pub fn scan_rows(rows: &mut Report, elf: &Path, scans: usize) {
     let cases: Vec<(
         &str,
-        Result<utile_core::engine::Program, String>,
+        Result<utile_core::engine::Program, crate::bench::BenchError>,
         &str,
         &str,
     )> = vec![

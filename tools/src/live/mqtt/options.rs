@@ -11,47 +11,76 @@ use super::topics::Topics;
 /// The CA bundle used for `mqtts://` without `--mqtt-ca` (Debian's ca-certificates).
 const SYSTEM_CAS: &str = "/etc/ssl/certs/ca-certificates.crt";
 
-/// The MQTT flags as given.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// The MQTT flags as given (clap; flattened into `utile live`'s arguments). Every one but
+/// `--mqtt` needs `--mqtt`.
+#[derive(clap::Args, Clone, Debug, Default, PartialEq)]
+#[command(next_help_heading = "MQTT (docs/LIVE.md)")]
 pub struct Flags {
-    /// `--mqtt URL`.
+    /// Publish every uTile to this broker: mqtt://HOST[:PORT] or mqtts://HOST[:PORT]
+    #[arg(long = "mqtt", value_name = "URL")]
     pub url: Option<String>,
-    /// `--mqtt-ca FILE`.
+    /// The CA that signed the broker's certificate (mqtts://; default: the system's)
+    #[arg(long = "mqtt-ca", value_name = "FILE", requires = "url")]
     pub ca: Option<String>,
-    /// `--mqtt-user NAME`.
+    /// The broker's login name
+    #[arg(long = "mqtt-user", value_name = "NAME", requires = "url")]
     pub user: Option<String>,
-    /// `--mqtt-password-file FILE`.
+    /// The broker's password, read from this file
+    #[arg(long = "mqtt-password-file", value_name = "FILE", requires = "user")]
     pub password_file: Option<String>,
-    /// `--name LINE`.
+    /// The line's name, one topic level (default: host name and port, e.g. pi-ttyUSB0)
+    #[arg(long = "name", value_name = "LINE", requires = "url")]
     pub name: Option<String>,
-    /// `--mqtt-prefix P`.
+    /// The topics' prefix (default utile)
+    #[arg(long = "mqtt-prefix", value_name = "P", requires = "url")]
     pub prefix: Option<String>,
-    /// `--mqtt-commands`.
+    /// Take `set` commands from the broker (writes, as the page's)
+    #[arg(long = "mqtt-commands", requires = "url")]
     pub commands: bool,
-    /// `--ha-discovery`.
+    /// Publish Home Assistant's discovery messages
+    #[arg(long = "ha-discovery", requires = "url")]
     pub discovery: bool,
 }
 
-impl Flags {
-    /// Takes `flag` if it is one of these (with its value from `value`); `Ok(false)`: not ours.
-    pub fn take(
-        &mut self,
-        flag: &str,
-        value: &mut dyn FnMut() -> Result<String, String>,
-    ) -> Result<bool, String> {
-        match flag {
-            "--mqtt" => self.url = Some(value()?),
-            "--mqtt-ca" => self.ca = Some(value()?),
-            "--mqtt-user" => self.user = Some(value()?),
-            "--mqtt-password-file" => self.password_file = Some(value()?),
-            "--name" => self.name = Some(value()?),
-            "--mqtt-prefix" => self.prefix = Some(value()?),
-            "--mqtt-commands" => self.commands = true,
-            "--ha-discovery" => self.discovery = true,
-            _ => return Ok(false),
-        }
-        Ok(true)
-    }
+/// A MQTT flag's value that cannot be used: the message says what the flag takes.
+#[derive(Debug, thiserror::Error)]
+pub enum MqttFlagError {
+    /// `--mqtt`'s URL.
+    #[error(
+        "--mqtt takes mqtt://HOST[:PORT] or mqtts://HOST[:PORT] (e.g. mqtt://127.0.0.1:1883), \
+         not '{0}'"
+    )]
+    Url(String),
+    /// `--name`.
+    #[error("--name takes letters, digits, '-' and '_' (one topic level), not '{0}'")]
+    Name(String),
+    /// `--mqtt-prefix`.
+    #[error("--mqtt-prefix takes topic levels without '+', '#' or a leading '/', not '{0}'")]
+    Prefix(String),
+    /// `--mqtt-password-file` cannot be read.
+    #[error("--mqtt-password-file {file}: {source}")]
+    PasswordFile {
+        /// The path given.
+        file: String,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// `--mqtt-ca` (or the system's bundle) cannot be read.
+    #[error(
+        "--mqtt-ca {file}: {source} (mqtts:// needs the CA that signed the broker's certificate)"
+    )]
+    CaFile {
+        /// The path.
+        file: String,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// `--mqtt-ca` holds no certificate.
+    #[error("--mqtt-ca {0}: no PEM certificate in it")]
+    NoPem(String),
+    /// `--mqtt-ca` with `mqtt://`.
+    #[error("--mqtt-ca is for mqtts:// (TLS); the URL says mqtt://")]
+    CaWithoutTls,
 }
 
 /// Where the broker is.
@@ -66,10 +95,8 @@ pub struct Broker {
 }
 
 /// `mqtt://HOST[:PORT]` (1883) or `mqtts://HOST[:PORT]` (8883).
-pub fn broker(url: &str) -> Result<Broker, String> {
-    let bad = || {
-        format!("--mqtt takes mqtt://HOST[:PORT] or mqtts://HOST[:PORT] (e.g. mqtt://127.0.0.1:1883), not '{url}'")
-    };
+pub fn broker(url: &str) -> Result<Broker, MqttFlagError> {
+    let bad = || MqttFlagError::Url(url.to_string());
     let (tls, rest) = if let Some(r) = url.strip_prefix("mqtts://") {
         (true, r)
     } else if let Some(r) = url.strip_prefix("mqtt://") {
@@ -154,57 +181,48 @@ pub struct Settings {
 
 impl Settings {
     /// From the flags (`None` without `--mqtt`); `port` is the serial port (the default name).
-    pub fn new(f: &Flags, port: &str) -> Result<Option<Settings>, String> {
+    /// (Clap has refused the other flags without `--mqtt`.)
+    pub fn new(f: &Flags, port: &str) -> Result<Option<Settings>, MqttFlagError> {
         let Some(url) = &f.url else {
-            let stray = f.ca.is_some()
-                || f.user.is_some()
-                || f.password_file.is_some()
-                || f.commands
-                || f.discovery
-                || f.prefix.is_some();
-            if stray {
-                return Err("the --mqtt-… and --ha-discovery flags need --mqtt URL".into());
-            }
             return Ok(None);
         };
         let broker = broker(url)?;
         let name = match &f.name {
             Some(n) if !n.is_empty() && level(n) == *n => n.clone(),
-            Some(n) => {
-                return Err(format!(
-                    "--name takes letters, digits, '-' and '_' (one topic level), not '{n}'"
-                ))
-            }
+            Some(n) => return Err(MqttFlagError::Name(n.clone())),
             None => default_name(port),
         };
         let prefix = f.prefix.clone().unwrap_or_else(|| "utile".into());
         if prefix.is_empty() || prefix.contains(['+', '#']) || prefix.starts_with('/') {
-            return Err(format!(
-                "--mqtt-prefix takes topic levels without '+', '#' or a leading '/', not '{prefix}'"
-            ));
+            return Err(MqttFlagError::Prefix(prefix));
         }
         let login = match (&f.user, &f.password_file) {
             (Some(u), Some(file)) => {
-                let text = std::fs::read_to_string(file)
-                    .map_err(|e| format!("--mqtt-password-file {file}: {e}"))?;
+                let text = std::fs::read_to_string(file).map_err(|source| {
+                    MqttFlagError::PasswordFile {
+                        file: file.clone(),
+                        source,
+                    }
+                })?;
                 Some((u.clone(), text.trim_end_matches(['\r', '\n']).to_string()))
             }
             (Some(u), None) => Some((u.clone(), String::new())),
-            (None, Some(_)) => return Err("--mqtt-password-file needs --mqtt-user NAME".into()),
-            (None, None) => None,
+            // Clap has refused --mqtt-password-file without --mqtt-user.
+            (None, _) => None,
         };
         let ca = if broker.tls {
             let file = f.ca.clone().unwrap_or_else(|| SYSTEM_CAS.into());
-            let pem = std::fs::read(&file).map_err(|e| {
-                format!("--mqtt-ca {file}: {e} (mqtts:// needs the CA that signed the broker's certificate)")
-            })?;
+            let pem = match std::fs::read(&file) {
+                Ok(pem) => pem,
+                Err(source) => return Err(MqttFlagError::CaFile { file, source }),
+            };
             if !String::from_utf8_lossy(&pem).contains("BEGIN CERTIFICATE") {
-                return Err(format!("--mqtt-ca {file}: no PEM certificate in it"));
+                return Err(MqttFlagError::NoPem(file));
             }
             Some(pem)
         } else {
             if f.ca.is_some() {
-                return Err("--mqtt-ca is for mqtts:// (TLS); the URL says mqtt://".into());
+                return Err(MqttFlagError::CaWithoutTls);
             }
             None
         };
@@ -279,11 +297,8 @@ mod tests {
             name: Some("a/b".into()),
             ..Flags::default()
         };
-        assert!(Settings::new(&f, "p").unwrap_err().contains("--name"));
-        let f = Flags {
-            commands: true,
-            ..Flags::default()
-        };
-        assert!(Settings::new(&f, "p").unwrap_err().contains("--mqtt URL"));
+        let e = Settings::new(&f, "p").unwrap_err();
+        assert!(matches!(e, MqttFlagError::Name(_)), "{e}");
+        assert!(Settings::new(&Flags::default(), "p").unwrap().is_none());
     }
 }
