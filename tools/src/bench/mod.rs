@@ -7,7 +7,7 @@
 //! One job a file: [`chip`] (the harness as the benchmarks run it), [`programs`] (what they
 //! run), [`stats`] (the spread of a sample), [`isr`] (interrupt handlers' cycles), then the
 //! measurements — [`scan`], [`timing`], [`editor`], [`modbus`], [`live`] (`utile live` on
-//! the virtual Nano) — and [`report`], the rows
+//! the virtual Nano), [`live_pages`] (with twenty pages open) — and [`report`], the rows
 //! of the `bench` binary's table with the original's figures beside them. Section sizes and
 //! symbols come from [`crate::elf`].
 
@@ -15,6 +15,7 @@ pub mod chip;
 pub mod editor;
 pub mod isr;
 pub mod live;
+pub mod live_pages;
 pub mod modbus;
 pub mod programs;
 pub mod report;
