@@ -15,7 +15,7 @@ use axum::http::{header, HeaderValue, Method, StatusCode};
 use axum::middleware::Next;
 use axum::response::{IntoResponse, Response};
 use axum::{Json, Router};
-use serde_json::json;
+use serde::Serialize;
 
 /// The cookie that keeps the token.
 pub const COOKIE: &str = "utile_token";
@@ -29,13 +29,45 @@ pub struct Guard {
     pub public_read: bool,
 }
 
+/// Why the page's token cannot be had.
+#[derive(Debug, thiserror::Error)]
+pub enum GuardError {
+    /// The system's generator cannot be read.
+    #[error("cannot make a token (/dev/urandom: {source}): give --token-file")]
+    Random {
+        /// Why.
+        source: std::io::Error,
+    },
+    /// `--token-file` cannot be read.
+    #[error("--token-file {file}: {source}")]
+    File {
+        /// The path given.
+        file: String,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// `--token-file`'s token is too short or has characters a cookie cannot carry.
+    #[error(
+        "--token-file {0}: the token must be at least 16 printable characters without spaces \
+         or ';'"
+    )]
+    Unfit(String),
+}
+
+/// The 401's body: the API's `{"error": …}` and a mark the page asks for the token on.
+#[derive(Debug, Serialize)]
+struct TokenNeeded {
+    error: String,
+    token_needed: bool,
+}
+
 /// A new random token: 128 bits from the system's generator, in hex.
-fn new_token() -> Result<String, String> {
+fn new_token() -> Result<String, GuardError> {
     use std::io::Read;
     let mut b = [0u8; 16];
     std::fs::File::open("/dev/urandom")
         .and_then(|mut f| f.read_exact(&mut b))
-        .map_err(|e| format!("cannot make a token (/dev/urandom: {e}): give --token-file"))?;
+        .map_err(|source| GuardError::Random { source })?;
     Ok(b.iter().map(|x| format!("{x:02x}")).collect())
 }
 
@@ -46,7 +78,7 @@ impl Guard {
         http: &SocketAddr,
         token_file: Option<&str>,
         public_read: bool,
-    ) -> Result<Guard, String> {
+    ) -> Result<Guard, GuardError> {
         if http.ip().is_loopback() {
             return Ok(Guard {
                 token: None,
@@ -55,14 +87,14 @@ impl Guard {
         }
         let token = match token_file {
             Some(f) => {
-                let t = std::fs::read_to_string(f).map_err(|e| format!("--token-file {f}: {e}"))?;
+                let t = std::fs::read_to_string(f).map_err(|source| GuardError::File {
+                    file: f.to_string(),
+                    source,
+                })?;
                 let t = t.trim().to_string();
                 let fits = t.len() >= 16 && t.bytes().all(|b| b.is_ascii_graphic() && b != b';');
                 if !fits {
-                    return Err(format!(
-                        "--token-file {f}: the token must be at least 16 printable characters \
-                         without spaces or ';'"
-                    ));
+                    return Err(GuardError::Unfit(f.to_string()));
                 }
                 t
             }
@@ -147,13 +179,13 @@ async fn check(State(guard): State<Arc<Guard>>, req: Request, next: Next) -> Res
         };
         let mut res = (
             StatusCode::UNAUTHORIZED,
-            Json(json!({
-                "error": format!(
+            Json(TokenNeeded {
+                error: format!(
                     "{why} (the URL printed at its start has it as ?token=…; scripts send \
                      'Authorization: Bearer TOKEN')"
                 ),
-                "token_needed": true,
-            })),
+                token_needed: true,
+            }),
         )
             .into_response();
         res.headers_mut()

@@ -51,7 +51,7 @@ enum Command {
     Pull(board::Pull),
     /// Every uTile on the line live in the browser, the terminal beside it, a Modbus TCP
     /// gateway
-    Live(live::args::LiveArgs),
+    Live(Box<live::args::LiveArgs>),
     /// Print shell completions (bash, zsh, fish ...) for utile
     Completions(Completions),
 }
@@ -78,7 +78,7 @@ fn main() -> ExitCode {
         Command::Sim(a) => a.run(),
         Command::Push(a) => a.run(),
         Command::Pull(a) => a.run(),
-        Command::Live(a) => live::main(&a.into()).map_err(anyhow::Error::msg),
+        Command::Live(a) => live::run(&(*a).into()).map_err(anyhow::Error::from),
         Command::Completions(c) => {
             clap_complete::generate(
                 c.shell,

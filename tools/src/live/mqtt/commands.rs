@@ -113,8 +113,10 @@ async fn write(
         .send(req)
         .await
         .map_err(|_| "the live view has stopped".to_string())?;
-    rx.await
-        .unwrap_or_else(|_| Err("the live view has stopped".into()))
+    match rx.await {
+        Ok(outcome) => outcome.map_err(|e| e.to_string()),
+        Err(_) => Err("the live view has stopped".into()),
+    }
 }
 
 #[cfg(test)]

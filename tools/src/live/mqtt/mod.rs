@@ -2,7 +2,7 @@
 //! Assistant discovery, and (with `--mqtt-commands`) writes taken from `set` topics
 //! (docs/LIVE.md, "MQTT"). The room takes a narrow input, a stream of [`Report`]s (one per
 //! uTile, the API's names for values), and gives a narrow output, [`WriteRequest`]s that the
-//! live view checks as it checks the page's writes; `adapter.rs` joins both to the live state.
+//! live view carries out by the page's own write path; `adapter.rs` joins both to the view.
 //! Nothing here can slow the line: reports come through a bounded channel that drops when
 //! full (the next report carries the same values), and the client's own queue is never
 //! waited on.
@@ -16,7 +16,7 @@
 //! | `outbox.rs` | what should be retained on the broker vs what was sent this connection |
 //! | `client.rs` | the connection: backoff, errors in words, republishing after a reconnect |
 //! | `commands.rs` | `set` topics: payloads checked, writes requested, refusals published |
-//! | `adapter.rs` | reports from the live state, write requests into the line's queue |
+//! | `adapter.rs` | reports from the published view, write requests by the page's write path |
 
 pub mod adapter;
 pub mod client;
@@ -55,8 +55,8 @@ pub struct WriteRequest {
     pub signal: String,
     /// The value.
     pub value: i64,
-    /// The outcome: `Err(why)` when refused (nothing was written).
-    pub done: oneshot::Sender<Result<(), String>>,
+    /// The outcome: the API's error when refused (nothing was written).
+    pub done: oneshot::Sender<Result<(), crate::live::api::ApiError>>,
 }
 
 /// The MQTT side's counters, published on `<prefix>/<line>/counters`.
