@@ -18,16 +18,27 @@ use super::{Counters, WriteRequest};
 /// The longest payload a `set` takes (a number is a few bytes).
 pub const MAX_PAYLOAD: usize = 32;
 
+/// A `set` payload that is no value.
+#[derive(Debug, PartialEq, Eq, thiserror::Error)]
+pub enum BadPayload {
+    /// Longer than [`MAX_PAYLOAD`].
+    #[error("payload too long ({0} bytes): a set takes a number")]
+    TooLong(usize),
+    /// Not UTF-8.
+    #[error("payload is not text: a set takes a number")]
+    NotText,
+    /// Text, but no whole number (nor ON/OFF, true/false).
+    #[error("'{0}' is not a whole number")]
+    NotANumber(String),
+}
+
 /// The value of a `set` payload: a whole number, or `ON`/`OFF`, `true`/`false`.
-pub fn value(payload: &[u8]) -> Result<i64, String> {
+pub fn value(payload: &[u8]) -> Result<i64, BadPayload> {
     if payload.len() > MAX_PAYLOAD {
-        return Err(format!(
-            "payload too long ({} bytes): a set takes a number",
-            payload.len()
-        ));
+        return Err(BadPayload::TooLong(payload.len()));
     }
     let text = std::str::from_utf8(payload)
-        .map_err(|_| "payload is not text: a set takes a number".to_string())?
+        .map_err(|_| BadPayload::NotText)?
         .trim();
     match text.to_ascii_lowercase().as_str() {
         "on" | "true" => return Ok(1),
@@ -35,7 +46,7 @@ pub fn value(payload: &[u8]) -> Result<i64, String> {
         _ => {}
     }
     text.parse()
-        .map_err(|_| format!("'{text}' is not a whole number"))
+        .map_err(|_| BadPayload::NotANumber(text.to_string()))
 }
 
 /// A payload as shown in an error: text, cut short.
@@ -130,9 +141,13 @@ mod tests {
         assert_eq!(value(b"ON"), Ok(1));
         assert_eq!(value(b"false"), Ok(0));
         assert_eq!(value(b"-3"), Ok(-3));
-        assert!(value(b"abc").unwrap_err().contains("not a whole number"));
-        assert!(value(&[0xFF, 0xFE]).unwrap_err().contains("not text"));
-        assert!(value(&[b'1'; 100]).unwrap_err().contains("too long"));
+        assert_eq!(value(b"abc"), Err(BadPayload::NotANumber("abc".into())));
+        assert!(value(b"abc")
+            .unwrap_err()
+            .to_string()
+            .contains("not a whole number"));
+        assert_eq!(value(&[0xFF, 0xFE]), Err(BadPayload::NotText));
+        assert_eq!(value(&[b'1'; 100]), Err(BadPayload::TooLong(100)));
         assert_eq!(shown(&[b'x'; 40]).chars().count(), MAX_PAYLOAD + 1);
     }
 }
