@@ -25,6 +25,9 @@ Beyond loopback (docs/LIVE.md, Security): the page needs a token (printed at sta
 --token-file FILE) for every write, and for reads unless --public-read; the gateway needs
 --tcp-allow with its clients' networks.";
 
+/// The help's heading for the flags beyond loopback.
+const SECURITY: &str = "Beyond loopback (docs/LIVE.md, Security)";
+
 /// `utile live`: every uTile on the line live in the browser, the terminal beside it, a
 /// Modbus TCP gateway.
 #[derive(clap::Args, Clone, Debug, PartialEq)]
@@ -63,14 +66,14 @@ pub struct LiveArgs {
     #[command(flatten)]
     pub mqtt: Flags,
     /// The page's token beyond loopback, read from this file (default: a new one, printed)
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", help_heading = SECURITY)]
     pub token_file: Option<String>,
     /// Beyond loopback, reads need no token (writes still do)
-    #[arg(long)]
+    #[arg(long, help_heading = SECURITY)]
     pub public_read: bool,
     /// The networks the gateway takes clients from (needed for --tcp beyond loopback)
     #[arg(long, value_name = "CIDR,...", value_delimiter = ',', num_args = 1,
-          value_parser = Cidr::parse, conflicts_with = "no_tcp")]
+          value_parser = Cidr::parse, conflicts_with = "no_tcp", help_heading = SECURITY)]
     pub tcp_allow: Vec<Cidr>,
 }
 
