@@ -194,6 +194,40 @@ def gateway(p, tcp, unit):
     p.newer_than(unit, scans, T, "the page stopped refreshing while the gateway was used")
 
 
+def api_failures(p, unit):
+    """The API's failures, axum's own rejections included, shown on the page in the server's
+    words: a write whose body is not JSON, a program asked for at an address that is none."""
+    step(f"uTile {unit}: a write with a broken body: the card shows the server's words")
+    pattern = f"**/api/units/{unit}/write"
+
+    def broken(route):
+        route.continue_(post_data='{"signal": "S7", "value":')
+
+    p.page.route(pattern, broken)
+    p.set(unit, "S7", 310)
+    p.wait_text(f'.card[data-unit="{unit}"] .refusal', "S7 not written: the body must be JSON")
+    p.page.unroute(pattern, broken)
+    p.fresh(unit)
+    p.wait(unit, "S7", 500)
+    step("the program asked for at address 300: the program view shows the server's words")
+    other = p.page.context.browser.new_page()
+    other.route(
+        f"**/api/units/{unit}/program",
+        lambda route: route.continue_(url=f"{p.url}/api/units/300/program"),
+    )
+    other.goto(p.url)
+    hint = f'.program[data-unit="{unit}"] .hint'
+    try:
+        other.wait_for_function(
+            "([s, t]) => { const e = document.querySelector(s); return e && e.textContent.includes(t); }",
+            arg=[hint, '"300" is no uTile\'s address'],
+            timeout=T,
+        )
+    except Exception:
+        fail(f"the program view does not show the server's words: {other.text_content(hint)!r}")
+    other.close()
+
+
 def single(p, a):
     step("the page: one card, the program running")
     p.wait(1, "online", 1)
@@ -215,6 +249,7 @@ def single(p, a):
     ask("rig 0")
     p.wait(1, "A0", 1)
     gateway(p, a.tcp, 1)
+    api_failures(p, 1)
 
     step("D8 removed and reset: uTile starts in EDIT mode and the page says so")
     ask("rig 8r")

@@ -17,7 +17,7 @@ use std::time::{Duration, Instant};
 use utile_kit::listing;
 use utile_kit::sim::stored_eeprom;
 
-use crate::live::{self, args, queue::Job, queue::Origin, state::Input, Running};
+use crate::live::{self, args, hub::Input, queue::Job, queue::Origin, Running};
 
 use super::Spread;
 
@@ -49,7 +49,7 @@ fn program() -> utile_core::engine::Program {
 }
 
 /// The virtual Nano (`units` of them on a bus when more than one), autostarting the program.
-fn start_nano(dir: &Path, link: &Path, units: usize) -> Result<Child, String> {
+pub(crate) fn start_nano(dir: &Path, link: &Path, units: usize) -> Result<Child, String> {
     let vnano = std::env::current_exe()
         .map_err(|e| e.to_string())?
         .with_file_name("vnano");
@@ -78,16 +78,9 @@ fn start_nano(dir: &Path, link: &Path, units: usize) -> Result<Child, String> {
         .map_err(|e| format!("vnano: {e}"))
 }
 
-/// Unit `addr`'s value `signal` in the state, if it has a picture.
+/// Unit `addr`'s value `signal` in the latest view, if it has a snapshot.
 fn value(r: &Running, addr: u8, signal: &str) -> Option<u32> {
-    let mut live = r.shared.lock();
-    let u = live.unit_mut(addr)?;
-    let (s, _) = u.snap.as_ref()?;
-    let h = u.holdings;
-    live::signals::values(s, h.as_ref())
-        .into_iter()
-        .find(|(k, _)| k == signal)
-        .map(|(_, v)| v)
+    r.hub.view().unit(addr)?.values.get(signal)
 }
 
 /// Waits until `ok` holds (checked every millisecond); the wall time it took.
@@ -144,10 +137,12 @@ fn run(nano: &mut Child, link: &Path, units: usize, secs: u32) -> Result<LiveFig
     .collect();
     let opts = args::parse(&words).map_err(|e| e.to_string())?;
     std::thread::sleep(Duration::from_millis(500));
-    let running = rt.block_on(live::start(&opts, &mut |_| {}))?;
+    let running = rt
+        .block_on(live::start(&opts, &mut |_| {}))
+        .map_err(|e| e.to_string())?;
     let all_online = || {
-        let live = running.shared.lock();
-        live.units.iter().all(|u| u.online && u.snap.is_some())
+        let view = running.hub.view();
+        !view.units.is_empty() && view.units.iter().all(|u| u.online && u.snapshots > 0)
     };
     until(Duration::from_secs(60), all_online)
         .ok_or("the uTiles did not come online within 60 s")?;
@@ -156,11 +151,11 @@ fn run(nano: &mut Child, link: &Path, units: usize, secs: u32) -> Result<LiveFig
 
     // Refreshes and the line's use over `secs` of simulated time.
     let tl0 = value(&running, 1, "TL0").ok_or("no clock")?;
-    let pictures =
-        |r: &Running| -> Vec<u64> { r.shared.lock().units.iter().map(|u| u.pictures).collect() };
+    let snapshots =
+        |r: &Running| -> Vec<u64> { r.hub.view().units.iter().map(|u| u.snapshots).collect() };
     let (p0, b0, w0) = (
-        pictures(&running),
-        running.shared.lock().line_bytes,
+        snapshots(&running),
+        running.hub.view().line.bytes,
         Instant::now(),
     );
     until(Duration::from_secs(u64::from(secs) * 20), || {
@@ -169,8 +164,8 @@ fn run(nano: &mut Child, link: &Path, units: usize, secs: u32) -> Result<LiveFig
     .ok_or("the simulated clock did not move")?;
     let sim = f64::from(sim_tenths(&running, tl0).unwrap_or(secs * 10)) / 10.0;
     let wall = w0.elapsed().as_secs_f64();
-    let p1 = pictures(&running);
-    let b1 = running.shared.lock().line_bytes;
+    let p1 = snapshots(&running);
+    let b1 = running.hub.view().line.bytes;
     let refresh_per_s = p0
         .iter()
         .zip(&p1)
@@ -187,7 +182,7 @@ fn run(nano: &mut Child, link: &Path, units: usize, secs: u32) -> Result<LiveFig
         let (job, _rx) = Job::new(1, vec![5, 0, 8, if on { 0xFF } else { 0 }, 0], Origin::Page);
         let t0 = Instant::now();
         running
-            .shared
+            .hub
             .inputs
             .send(Input::Job(job))
             .map_err(|e| e.to_string())?;
@@ -234,7 +229,8 @@ fn run(nano: &mut Child, link: &Path, units: usize, secs: u32) -> Result<LiveFig
             rtts.push(t0.elapsed().as_secs_f64() * 1e3);
         }
     }
-    let gateway_ms = running.shared.tcp.overhead_ms();
+    let o = running.hub.tcp.overhead_ms();
+    let gateway_ms = (o.mean, o.max);
     drop(running);
     Ok(LiveFigures {
         refresh_per_s,

@@ -6,6 +6,8 @@ use std::time::Duration;
 
 use clap::Parser;
 
+use super::allow::Cidr;
+use super::mqtt::options::Flags;
 use crate::cli::{socket_address, BootWait};
 
 /// The examples under `utile live --help`.
@@ -15,7 +17,16 @@ Examples:
   utile live --port /dev/ttyUSB0 --units 1,2,3     three uTiles on one RS-485 line
   utile live --port /dev/ttyUSB0 --scan            look for every uTile on the line
   utile live --port /tmp/utile-tty --http 8081 --program examples/tank-fill.utl
-  utile live --port /dev/ttyUSB0 --http 0.0.0.0:8080 --read-only --no-tcp";
+  utile live --port /dev/ttyUSB0 --http 0.0.0.0:8080 --read-only --no-tcp
+  utile live --port /dev/ttyUSB0 --http 0.0.0.0:8080 --tcp 0.0.0.0:1502 --tcp-allow 192.168.1.0/24
+  utile live --port /dev/ttyUSB0 --mqtt mqtt://127.0.0.1 --ha-discovery --mqtt-commands
+
+Beyond loopback (docs/LIVE.md, Security): the page needs a token (printed at start, or
+--token-file FILE) for every write, and for reads unless --public-read; the gateway needs
+--tcp-allow with its clients' networks.";
+
+/// The help's heading for the flags beyond loopback.
+const SECURITY: &str = "Beyond loopback (docs/LIVE.md, Security)";
 
 /// `utile live`: every uTile on the line live in the browser, the terminal beside it, a
 /// Modbus TCP gateway.
@@ -51,6 +62,19 @@ pub struct LiveArgs {
     /// `--wait SECS`.
     #[command(flatten)]
     pub wait: BootWait,
+    /// The MQTT flags (`--mqtt URL` …).
+    #[command(flatten)]
+    pub mqtt: Flags,
+    /// The page's token beyond loopback, read from this file (default: a new one, printed)
+    #[arg(long, value_name = "FILE", help_heading = SECURITY)]
+    pub token_file: Option<String>,
+    /// Beyond loopback, reads need no token (writes still do)
+    #[arg(long, help_heading = SECURITY)]
+    pub public_read: bool,
+    /// The networks the gateway takes clients from (needed for --tcp beyond loopback)
+    #[arg(long, value_name = "CIDR,...", value_delimiter = ',', num_args = 1,
+          value_parser = Cidr::parse, conflicts_with = "no_tcp", help_heading = SECURITY)]
+    pub tcp_allow: Vec<Cidr>,
 }
 
 /// Options of one run.
@@ -72,6 +96,14 @@ pub struct Options {
     pub program: Option<String>,
     /// The longest wait for uTile after the port opens.
     pub boot_wait: Duration,
+    /// The MQTT flags (`--mqtt URL` …).
+    pub mqtt: Flags,
+    /// `--token-file`: the page's token beyond loopback.
+    pub token_file: Option<String>,
+    /// `--public-read`: reads need no token.
+    pub public_read: bool,
+    /// `--tcp-allow`: the networks the gateway takes clients from.
+    pub tcp_allow: Vec<Cidr>,
 }
 
 impl From<LiveArgs> for Options {
@@ -94,6 +126,10 @@ impl From<LiveArgs> for Options {
             read_only: a.read_only,
             program: a.program,
             boot_wait: a.wait.boot_wait,
+            mqtt: a.mqtt,
+            token_file: a.token_file,
+            public_read: a.public_read,
+            tcp_allow: a.tcp_allow,
         }
     }
 }
@@ -111,6 +147,22 @@ pub fn parse(words: &[String]) -> Result<Options, clap::Error> {
     let alone =
         Alone::try_parse_from(std::iter::once("live").chain(words.iter().map(String::as_str)))?;
     Ok(alone.args.into())
+}
+
+/// `--tcp` beyond loopback without `--tcp-allow`.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "--tcp {0} listens beyond this computer: give --tcp-allow CIDR[,CIDR…] with the networks \
+     its clients come from (e.g. --tcp-allow 192.168.1.0/24)"
+)]
+pub struct TcpNeedsAllow(pub SocketAddr);
+
+/// The gateway beyond loopback needs `--tcp-allow` (a value clap cannot weigh: the address).
+pub fn check_tcp(o: &Options) -> Result<(), TcpNeedsAllow> {
+    match o.tcp {
+        Some(a) if !a.ip().is_loopback() && o.tcp_allow.is_empty() => Err(TcpNeedsAllow(a)),
+        _ => Ok(()),
+    }
 }
 
 /// The warning for an address other than loopback, or `None`.
@@ -161,6 +213,40 @@ mod tests {
         let e = parse(&words("--port p --scan --scan")).unwrap_err();
         assert_eq!(e.kind(), clap::error::ErrorKind::ArgumentConflict, "{e}");
         assert!(parse(&words("--port p --tcp 1 --no-tcp")).is_err());
+        let o = parse(&words("--port p --tcp 0.0.0.0:1502")).unwrap();
+        assert!(check_tcp(&o)
+            .unwrap_err()
+            .to_string()
+            .contains("--tcp-allow"));
+        let o = parse(&words("--port p --tcp 0.0.0.0:1502 --tcp-allow 10.0.0.0/8")).unwrap();
+        assert!(check_tcp(&o).is_ok());
+        assert!(parse(&words("--port p --tcp-allow 10.0.0.0/40")).is_err());
+        let o = parse(&words("--port p --tcp-allow 10.0.0.0/8,192.168.1.7")).unwrap();
+        assert_eq!(o.tcp_allow.len(), 2);
+        assert!(parse(&words("--port p --no-tcp --tcp-allow 10.0.0.0/8")).is_err());
+        for stray in [
+            "--mqtt-commands",
+            "--ha-discovery",
+            "--mqtt-ca c.pem",
+            "--mqtt-user u",
+            "--mqtt-prefix p",
+            "--name n",
+        ] {
+            let e = parse(&words(&format!("--port p {stray}"))).unwrap_err();
+            assert_eq!(
+                e.kind(),
+                clap::error::ErrorKind::MissingRequiredArgument,
+                "{stray}: {e}"
+            );
+            assert!(e.to_string().contains("--mqtt <URL>"), "{stray}: {e}");
+        }
+        let e = parse(&words("--port p --mqtt mqtt://h --mqtt-password-file f")).unwrap_err();
+        assert!(e.to_string().contains("--mqtt-user"), "{e}");
+        let o = parse(&words(
+            "--port p --mqtt mqtt://h --mqtt-commands --ha-discovery",
+        ))
+        .unwrap();
+        assert!(o.mqtt.commands && o.mqtt.discovery);
     }
 
     #[test]

@@ -11,14 +11,19 @@ pub fn get(path: &str) -> Option<(&'static str, &'static [u8])> {
         .map(|(_, t, b)| (*t, *b))
 }
 
+/// The page's libraries were missing when this binary was built.
+#[derive(Debug, thiserror::Error)]
+#[error(
+    "this utile was built without the page's libraries ({}): run ./x setup (it runs npm ci \
+     in tools/src/live/page), then build again",
+    .0.join(", ")
+)]
+pub struct LibrariesMissing(pub Vec<&'static str>);
+
 /// Why the page cannot be served, when the libraries were missing at build time.
-pub fn check() -> Result<(), String> {
+pub fn check() -> Result<(), LibrariesMissing> {
     if MISSING.is_empty() {
         return Ok(());
     }
-    Err(format!(
-        "this utile was built without the page's libraries ({}): run ./x setup (it runs \
-         npm ci in tools/src/live/page), then build again",
-        MISSING.join(", ")
-    ))
+    Err(LibrariesMissing(MISSING.to_vec()))
 }

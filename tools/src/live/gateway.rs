@@ -7,7 +7,6 @@
 use std::future::Future;
 use std::net::SocketAddr;
 use std::pin::Pin;
-use std::sync::atomic::Ordering;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -15,9 +14,12 @@ use tokio::net::TcpListener;
 use tokio_modbus::bytes::Bytes;
 use tokio_modbus::server::tcp::Server;
 use tokio_modbus::{ExceptionCode, Request, Response, SlaveRequest};
+use utile_core::modbus::{BROADCAST, MAX_ADDRESS};
 
+use super::allow::{self, Cidr};
+use super::hub::{Hub, Input};
 use super::queue::{Failure, Job, Origin};
-use super::state::{Input, Shared};
+use super::rtu;
 
 /// The RTU PDU of a request as the TCP client sent it.
 pub fn request_pdu(req: &Request<'_>) -> Vec<u8> {
@@ -81,19 +83,17 @@ pub fn request_pdu(req: &Request<'_>) -> Vec<u8> {
     pdu
 }
 
-/// Whether a function code changes something in the slave.
-fn writes(function: u8) -> bool {
-    matches!(function, 5 | 6 | 15 | 16 | 22 | 23)
-}
-
 /// One TCP connection's service.
 struct Gateway {
-    shared: Arc<Shared>,
+    hub: Arc<Hub>,
+    peer: SocketAddr,
 }
 
 impl Drop for Gateway {
     fn drop(&mut self) {
-        self.shared.tcp.clients.fetch_sub(1, Ordering::Relaxed);
+        let tcp = &self.hub.tcp;
+        tcp.count(&tcp.clients, -1);
+        tracing::debug!(peer = %self.peer, "a gateway client left");
     }
 }
 
@@ -106,29 +106,31 @@ impl tokio_modbus::server::Service for Gateway {
     type Future = Pin<Box<dyn Future<Output = Reply> + Send>>;
 
     fn call(&self, req: Self::Request) -> Self::Future {
-        let shared = self.shared.clone();
-        Box::pin(async move { forward(&shared, req).await })
+        let hub = self.hub.clone();
+        Box::pin(async move { forward(&hub, req).await })
     }
 }
 
 /// Carries one request through the line's queue.
-async fn forward(shared: &Shared, req: SlaveRequest<'static>) -> Reply {
+async fn forward(hub: &Hub, req: SlaveRequest<'static>) -> Reply {
     let t0 = Instant::now();
     let pdu = request_pdu(&req.request);
     let function = pdu[0];
+    let tcp = &hub.tcp;
     let refuse = |code| {
-        shared.tcp.refused.fetch_add(1, Ordering::Relaxed);
+        tcp.count(&tcp.refused, 1);
         Err(code)
     };
-    if !(1..=247).contains(&req.slave) {
+    if req.slave == BROADCAST || req.slave > MAX_ADDRESS {
         // Unit id 0 (a broadcast has no reply) and 248..255 reach no uTile.
         return refuse(ExceptionCode::GatewayPathUnavailable);
     }
-    if shared.read_only && writes(function) {
+    if hub.read_only && rtu::is_write(function) {
         return refuse(ExceptionCode::IllegalFunction);
     }
     let (job, rx) = Job::new(req.slave, pdu, Origin::Gateway);
-    if shared.inputs.send(Input::Job(job)).is_err() {
+    if hub.inputs.send(Input::Job(job)).is_err() {
+        tracing::warn!("a gateway request found the line stopped");
         return refuse(ExceptionCode::GatewayPathUnavailable);
     }
     let done = match rx.await {
@@ -136,30 +138,43 @@ async fn forward(shared: &Shared, req: SlaveRequest<'static>) -> Reply {
         Ok(Err(Failure::Busy)) => return refuse(ExceptionCode::ServerDeviceBusy),
         Ok(Err(_)) | Err(_) => return refuse(ExceptionCode::GatewayTargetDevice),
     };
-    shared.tcp.requests.fetch_add(1, Ordering::Relaxed);
     // What the gateway itself adds: all but the wait for the line and the time on it.
     let overhead = t0.elapsed().saturating_sub(done.waited + done.on_line);
-    shared.tcp.overhead(overhead);
-    let (&f, data) = done.pdu.split_first().unwrap_or((&0x80, &[4]));
-    if f & 0x80 != 0 {
-        return Err(ExceptionCode::new(data.first().copied().unwrap_or(4)));
+    tcp.overhead(overhead);
+    tcp.count(&tcp.requests, 1);
+    let Some((&f, data)) = done.pdu.split_first() else {
+        return Err(ExceptionCode::ServerDeviceFailure);
+    };
+    if let Some(code) = rtu::exception(&done.pdu) {
+        return Err(ExceptionCode::new(code));
     }
     Ok(Response::Custom(f, Bytes::copy_from_slice(data)))
 }
 
-/// Serves Modbus TCP on `listener` until the program ends.
-pub async fn serve(listener: TcpListener, shared: Arc<Shared>) -> std::io::Result<()> {
+/// Serves Modbus TCP on `listener` until the program ends; a client from outside `allow`
+/// (when given) has its connection closed at once and is counted.
+pub async fn serve(listener: TcpListener, hub: Arc<Hub>, allow: Vec<Cidr>) -> std::io::Result<()> {
     let server = Server::new(listener);
-    let on_connected = |stream, _addr: SocketAddr| {
-        let shared = shared.clone();
+    let on_connected = |stream, peer: SocketAddr| {
+        let hub = hub.clone();
+        let allowed = allow::allowed(&allow, peer.ip());
         async move {
-            shared.tcp.clients.fetch_add(1, Ordering::Relaxed);
-            let _ = tokio::net::TcpStream::set_nodelay(&stream, true);
-            Ok(Some((Gateway { shared }, stream)))
+            if !allowed {
+                hub.tcp.count(&hub.tcp.refused_clients, 1);
+                tracing::info!(%peer, "a gateway client outside --tcp-allow refused");
+                return Ok(None);
+            }
+            hub.tcp.count(&hub.tcp.clients, 1);
+            tracing::debug!(%peer, "a gateway client connected");
+            if let Err(e) = tokio::net::TcpStream::set_nodelay(&stream, true) {
+                tracing::debug!(%peer, error = %e, "no TCP_NODELAY: replies may wait");
+            }
+            Ok(Some((Gateway { hub, peer }, stream)))
         }
     };
     // A client that sends garbage loses its connection; the others go on.
-    server.serve(&on_connected, |_err| {}).await
+    let on_error = |e| tracing::info!(error = %e, "a gateway connection ended with an error");
+    server.serve(&on_connected, on_error).await
 }
 
 #[cfg(test)]

@@ -2,36 +2,45 @@
 //! line live in the browser, with the terminal beside it on the same cable and a Modbus TCP
 //! gateway (docs/LIVE.md). The rooms:
 //!
-//! | file | job |
+//! | file | what it holds |
 //! |---|---|
 //! | `args.rs` | the command line |
 //! | `port.rs` | opening the port, an adapter's latency timer |
-//! | `line/` | the line's owner: open/reopen, the boot wait, EDIT or RUN, one transaction at a time |
+//! | `line/` | the line's owner: the port and everything about the line (open/reopen, the boot wait, EDIT or RUN, one transaction at a time, every uTile's poller); it publishes the view |
 //! | `line_use.rs` | line time over a sliding window (the line's busy figure, a uTile's share) |
-//! | `rtu.rs` | the RTU master's side of a transaction: reply lengths, finding a reply, timing |
+//! | `rtu.rs` | the RTU master's side of a transaction and the Modbus vocabulary: reply lengths, finding a reply, a missed one's bytes, timing |
 //! | `queue.rs` | the queue in front of the line: writes first, reads and polls in turn |
 //! | `screen.rs` | EDIT or RUN, told from the terminal's output |
-//! | `unit.rs` | one uTile: its picture, presets, program, back-off, link health, trend |
-//! | `signals.rs` | the listing's names for values and writes, with their ranges |
-//! | `view.rs` | the program, live: listing and each line's value from the core's engine |
+//! | `unit.rs` | one uTile as the line's owner keeps it: snapshot, presets, program, back-off, link health, trend |
+//! | `signals.rs` | the signal table: each name, where it is read, how it is written, its range and unit |
+//! | `program.rs` | the program, live: listing and each line's value from the core's engine |
+//! | `view.rs` | the immutable view the line publishes after each transaction (the API's state) |
+//! | `hub.rs` | where the parts meet: the line's inputs, the published view, the state's JSON, the terminal, the gateway's counters |
+//! | `api.rs` | the API's documents and its one error type (JSON `{"error": …}`) |
 //! | `terminal.rs` | the terminal's output for the pages (xterm.js) |
-//! | `state.rs` | what the threads share; the API's JSON |
-//! | `http.rs` | the web server: page, API, events, writes, terminal WebSocket |
+//! | `http.rs` | the web server: its routes, the events, the terminal WebSocket |
 //! | `gateway.rs` | the Modbus TCP gateway |
+//! | `guard.rs`, `allow.rs` | beyond loopback: the page's token; the gateway's networks |
+//! | `mqtt/` | the MQTT publisher, Home Assistant discovery, `set` commands |
 //! | `assets.rs`, `page/` | the page's files, built into the binary |
 
+pub mod allow;
+pub mod api;
 pub mod args;
 pub mod assets;
 pub mod gateway;
+pub mod guard;
 pub mod http;
+pub mod hub;
 pub mod line;
 pub mod line_use;
+pub mod mqtt;
 pub mod port;
+pub mod program;
 pub mod queue;
 pub mod rtu;
 pub mod screen;
 pub mod signals;
-pub mod state;
 pub mod terminal;
 pub mod unit;
 pub mod view;
@@ -39,19 +48,68 @@ pub mod view;
 use std::net::SocketAddr;
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
-use std::time::Instant;
 
 use utile_core::modbus::snapshot;
 use utile_kit::listing;
 
-use screen::Mode;
-use state::{Live, ProgramFile, Shared};
-use unit::Unit;
+use hub::{Hub, ProgramFile};
+use view::View;
 
-/// A running live view: its shared state and where it listens.
+/// Why `utile live` cannot start or go on.
+#[derive(Debug, thiserror::Error)]
+pub enum LiveError {
+    /// The page's files are missing from the build.
+    #[error(transparent)]
+    Assets(#[from] assets::LibrariesMissing),
+    /// `--program`'s file cannot be read.
+    #[error("--program {path}: {source}")]
+    ProgramFile {
+        /// The path given.
+        path: String,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// `--program`'s listing does not parse.
+    #[error("--program {path}: {why}")]
+    Listing {
+        /// The path given.
+        path: String,
+        /// The parser's words.
+        why: String,
+    },
+    /// An address cannot be listened on.
+    #[error("{flag} {addr}: {source} (is another program listening there? pick another port)")]
+    Listen {
+        /// `--http` or `--tcp`.
+        flag: &'static str,
+        /// The address.
+        addr: SocketAddr,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// A MQTT flag's value cannot be used.
+    #[error(transparent)]
+    Mqtt(#[from] mqtt::options::MqttFlagError),
+    /// `--tcp` beyond loopback without `--tcp-allow`.
+    #[error(transparent)]
+    TcpAllow(#[from] args::TcpNeedsAllow),
+    /// The page's token beyond loopback.
+    #[error(transparent)]
+    Token(#[from] guard::GuardError),
+    /// The line's thread or the runtime cannot start.
+    #[error("cannot start {what}: {source}")]
+    Start {
+        /// What.
+        what: &'static str,
+        /// Why.
+        source: std::io::Error,
+    },
+}
+
+/// A running live view: its hub and where it listens.
 pub struct Running {
-    /// The shared state (the API's source).
-    pub shared: Arc<Shared>,
+    /// Where the parts meet (the published view, the line's inputs).
+    pub hub: Arc<Hub>,
     /// The page's address.
     pub http: SocketAddr,
     /// The gateway's address.
@@ -62,9 +120,11 @@ pub struct Running {
 impl Running {
     /// Ends the line's owner (the port is closed).
     pub fn stop(&mut self) {
-        self.shared.stop.store(true, Ordering::Relaxed);
+        self.hub.stop.store(true, Ordering::Relaxed);
         if let Some(h) = self.line.take() {
-            let _ = h.join();
+            if h.join().is_err() {
+                tracing::error!("the line's owner panicked");
+            }
         }
     }
 }
@@ -75,15 +135,33 @@ impl Drop for Running {
     }
 }
 
+/// Binds `addr` for `flag`.
+async fn listen(
+    flag: &'static str,
+    addr: SocketAddr,
+) -> Result<(tokio::net::TcpListener, SocketAddr), LiveError> {
+    let err = |source| LiveError::Listen { flag, addr, source };
+    let l = tokio::net::TcpListener::bind(addr).await.map_err(err)?;
+    let bound = l.local_addr().map_err(err)?;
+    Ok((l, bound))
+}
+
 /// Starts the line's owner, the web server and the gateway on the current tokio runtime.
 /// `say` gets the lines a console shows.
-pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Running, String> {
+pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Running, LiveError> {
     assets::check()?;
+    let mqtt = mqtt::options::Settings::new(&opts.mqtt, &opts.port)?;
+    args::check_tcp(opts)?;
     let file = match &opts.program {
         Some(path) => {
-            let text =
-                std::fs::read_to_string(path).map_err(|e| format!("--program {path}: {e}"))?;
-            let prog = listing::parse(path, &text).map_err(|e| e.to_string())?;
+            let text = std::fs::read_to_string(path).map_err(|source| LiveError::ProgramFile {
+                path: path.clone(),
+                source,
+            })?;
+            let prog = listing::parse(path, &text).map_err(|e| LiveError::Listing {
+                path: path.clone(),
+                why: e.to_string(),
+            })?;
             Some(ProgramFile {
                 name: path.clone(),
                 fingerprint: snapshot::fingerprint(&prog.uf),
@@ -91,59 +169,60 @@ pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Ru
         }
         None => None,
     };
-    let now = Instant::now();
     let mut notes = Vec::new();
     if let Some(note) = port::low_latency(&opts.port) {
         say(&note);
         notes.push(note);
     }
-    let live = Live {
-        port: opts.port.clone(),
-        open: false,
-        mode: Mode::Unknown,
-        message: "opening the port".into(),
-        notes,
-        units: opts.units.iter().map(|&a| Unit::new(a, now)).collect(),
-        busy: 0.0,
-        stray: 0,
-        line_bytes: 0,
-        file,
-        slack: rtu::ANSWER_SLACK,
-    };
-    let (shared, inputs) = Shared::new(live, opts.read_only);
-    let http = tokio::net::TcpListener::bind(opts.http)
-        .await
-        .map_err(|e| format!("--http {}: {e}", opts.http))?;
-    let http_addr = http.local_addr().map_err(|e| e.to_string())?;
+    let (hub, ends) = Hub::new(View::starting(&opts.port, opts.read_only, notes.clone()));
+    let (http, http_addr) = listen("--http", opts.http).await?;
+    let guard = guard::Guard::new(&http_addr, opts.token_file.as_deref(), opts.public_read)?;
     let tcp_addr = match opts.tcp {
         Some(a) => {
-            let l = tokio::net::TcpListener::bind(a)
-                .await
-                .map_err(|e| format!("--tcp {a}: {e}"))?;
-            let bound = l.local_addr().map_err(|e| e.to_string())?;
-            tokio::spawn(gateway::serve(l, shared.clone()));
+            let (l, bound) = listen("--tcp", a).await?;
+            let hub = hub.clone();
+            let allow = opts.tcp_allow.clone();
+            tokio::spawn(async move {
+                if let Err(e) = gateway::serve(l, hub, allow).await {
+                    tracing::error!(error = %e, "the Modbus TCP gateway stopped");
+                }
+            });
             Some(bound)
         }
         None => None,
     };
-    let router = http::router(shared.clone());
+    tokio::spawn(http::serialize_views(hub.clone()));
+    let token_url = guard.url(&http_addr, &mqtt::options::host_name());
+    let router = guard::layer(http::router(hub.clone()), guard);
     tokio::spawn(async move {
-        let _ = axum::serve(http, router).await;
+        if let Err(e) = axum::serve(http, router).await {
+            tracing::error!(error = %e, "the web server stopped");
+        }
     });
     let line = line::spawn(
         line::Options {
             path: opts.port.clone(),
             boot_wait: opts.boot_wait,
             scan: opts.scan,
+            units: opts.units.clone(),
+            file,
+            notes,
         },
-        shared.clone(),
-        inputs,
+        hub.clone(),
+        ends,
     )
-    .map_err(|e| format!("cannot start the line's thread: {e}"))?;
+    .map_err(|source| LiveError::Start {
+        what: "the line's thread",
+        source,
+    })?;
+    tracing::info!(
+        port = %opts.port,
+        page = %format!("http://{http_addr}/"),
+        gateway = ?tcp_addr,
+        read_only = opts.read_only,
+        "utile live listens"
+    );
     say(&format!("the page is at http://{http_addr}/"));
-    if let Some(w) = args::exposed("the page", &http_addr) {
-        say(&w);
-    }
     if let Some(t) = tcp_addr {
         say(&format!(
             "Modbus TCP gateway on {t} (unit id = slave address)"
@@ -152,11 +231,32 @@ pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Ru
             say(&w);
         }
     }
+    if let Some(url) = token_url {
+        let reads = if opts.public_read {
+            "every write"
+        } else {
+            "every read and write"
+        };
+        say(&format!(
+            "the page listens beyond this computer: {reads} needs its token; open {url}"
+        ));
+    }
     if opts.read_only {
         say("read-only: every write is refused");
     }
+    if let Some(m) = mqtt {
+        say(&format!(
+            "MQTT: line '{}' to {}:{} (topics {})",
+            m.topics.line(),
+            m.broker.host,
+            m.broker.port,
+            m.topics.status().trim_end_matches("/status")
+        ));
+        let (reports, writes) = mqtt::adapter::start(hub.clone());
+        mqtt::start(m, reports, writes);
+    }
     Ok(Running {
-        shared,
+        hub,
         http: http_addr,
         tcp: tcp_addr,
         line: Some(line),
@@ -164,21 +264,29 @@ pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Ru
 }
 
 /// `utile live ...`: runs until Ctrl-C or SIGTERM.
-pub fn main(opts: &args::Options) -> Result<(), String> {
+/// Runs the live view of `opts` until Ctrl-C or SIGTERM.
+pub fn run(opts: &args::Options) -> Result<(), LiveError> {
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
         .build()
-        .map_err(|e| format!("cannot start the runtime: {e}"))?;
+        .map_err(|source| LiveError::Start {
+            what: "the runtime",
+            source,
+        })?;
     rt.block_on(async {
         let mut say = |line: &str| eprintln!("utile live: {line}");
         let mut running = start(opts, &mut say).await?;
         let mut term = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate())
-            .map_err(|e| e.to_string())?;
+            .map_err(|source| LiveError::Start {
+                what: "the SIGTERM handler",
+                source,
+            })?;
         tokio::select! {
             _ = tokio::signal::ctrl_c() => {}
             _ = term.recv() => {}
         }
+        tracing::info!("stopping");
         running.stop();
         Ok(())
     })

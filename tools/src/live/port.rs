@@ -11,9 +11,20 @@ use serialport::TTYPort;
 
 use super::rtu::BAUD;
 
+/// The port cannot be opened.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot open {path}: {source} (is the cable in? is another program using the port?)")]
+pub struct OpenError {
+    /// The port's path.
+    pub path: String,
+    /// The serial driver's reason.
+    #[source]
+    pub source: serialport::Error,
+}
+
 /// Opens `path` at 19200 baud, 8N1, no flow control. On a Nano the open resets the chip
 /// (DTR): its boot loader runs first, then uTile starts.
-pub fn open(path: &str) -> Result<TTYPort, String> {
+pub fn open(path: &str) -> Result<TTYPort, OpenError> {
     serialport::new(path, BAUD)
         .data_bits(serialport::DataBits::Eight)
         .parity(serialport::Parity::None)
@@ -21,7 +32,10 @@ pub fn open(path: &str) -> Result<TTYPort, String> {
         .flow_control(serialport::FlowControl::None)
         .timeout(Duration::from_millis(1))
         .open_native()
-        .map_err(|e| format!("cannot open {path}: {e}"))
+        .map_err(|source| OpenError {
+            path: path.to_string(),
+            source,
+        })
 }
 
 /// The sysfs file of a USB serial adapter's latency timer for the device `path` (following

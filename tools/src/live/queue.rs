@@ -89,12 +89,14 @@ impl Job {
 
     /// Whether the request changes something (it goes first).
     pub fn writes(&self) -> bool {
-        matches!(self.pdu.first(), Some(5 | 6 | 15 | 16 | 22 | 23))
+        self.pdu.first().copied().is_some_and(super::rtu::is_write)
     }
 
     /// Gives the outcome to whoever asked (who may have gone).
     pub fn finish(self, outcome: Result<Done, Failure>) {
-        let _ = self.done.send(outcome);
+        if self.done.send(outcome).is_err() {
+            tracing::debug!(addr = self.addr, "a request's asker left before its answer");
+        }
     }
 }
 

@@ -6,7 +6,79 @@
 
 use std::time::Duration;
 
+use tokio_modbus::ExceptionCode;
+use utile_core::modbus::{
+    Exception, DIAGNOSTICS, READ_COILS, READ_DISCRETE_INPUTS, READ_HOLDING_REGISTERS,
+    READ_INPUT_REGISTERS, REPORT_SERVER_ID, WRITE_MULTIPLE_COILS, WRITE_MULTIPLE_REGISTERS,
+    WRITE_SINGLE_COIL, WRITE_SINGLE_REGISTER,
+};
 use utile_kit::modbus;
+
+/// The bit of a reply's function code that makes it an exception (Modbus application
+/// protocol, section 7).
+pub const EXCEPTION_BIT: u8 = 0x80;
+/// Function code 20: read file record (a reply with a byte count).
+const READ_FILE_RECORD: u8 = 0x14;
+/// Function code 21: write file record.
+const WRITE_FILE_RECORD: u8 = 0x15;
+/// Function code 22: mask write register.
+const MASK_WRITE_REGISTER: u8 = 0x16;
+/// Function code 23: read/write multiple registers.
+const READ_WRITE_MULTIPLE_REGISTERS: u8 = 0x17;
+
+/// Whether a reply's function code is an exception's.
+pub fn is_exception(function: u8) -> bool {
+    function & EXCEPTION_BIT != 0
+}
+
+/// The function a reply answers (its exception bit cleared).
+pub fn answers(function: u8) -> u8 {
+    function & !EXCEPTION_BIT
+}
+
+/// The exception code of a reply's PDU, if it is an exception.
+pub fn exception(pdu: &[u8]) -> Option<u8> {
+    let (&f, rest) = pdu.split_first()?;
+    is_exception(f).then(|| {
+        rest.first()
+            .copied()
+            .unwrap_or(u8::from(ExceptionCode::ServerDeviceFailure))
+    })
+}
+
+/// Whether a request of this function changes something in the slave.
+pub fn is_write(function: u8) -> bool {
+    matches!(
+        function,
+        WRITE_SINGLE_COIL
+            | WRITE_SINGLE_REGISTER
+            | WRITE_MULTIPLE_COILS
+            | WRITE_MULTIPLE_REGISTERS
+            | MASK_WRITE_REGISTER
+            | READ_WRITE_MULTIPLE_REGISTERS
+    )
+}
+
+/// Whether a write of this function only writes bits (the presets need no new read).
+pub fn writes_coils(function: u8) -> bool {
+    matches!(function, WRITE_SINGLE_COIL | WRITE_MULTIPLE_COILS)
+}
+
+/// Whether a request of this function can be sent again when it got no answer: reads, and
+/// writes that set a value (sending one twice leaves what sending it once does).
+pub fn repeatable(function: u8) -> bool {
+    matches!(
+        function,
+        READ_COILS
+            | READ_DISCRETE_INPUTS
+            | READ_HOLDING_REGISTERS
+            | READ_INPUT_REGISTERS
+            | WRITE_SINGLE_COIL
+            | WRITE_SINGLE_REGISTER
+            | WRITE_MULTIPLE_COILS
+            | WRITE_MULTIPLE_REGISTERS
+    )
+}
 
 /// The line's speed (SPEC §13): 19200 baud, 8N1, so 10 bits a byte.
 pub const BAUD: u32 = 19_200;
@@ -41,13 +113,19 @@ pub fn longest_reply(request: &[u8]) -> usize {
             .get(4..6)
             .map_or(0, |q| usize::from(u16::from_be_bytes([q[0], q[1]])))
     };
-    match request.get(1) {
-        Some(1) | Some(2) => 5 + quantity().div_ceil(8).min(250),
-        Some(3) | Some(4) => 5 + 2 * quantity().min(125),
-        Some(5) | Some(6) | Some(15) | Some(16) => 8,
-        Some(8) => request.len(),
+    let Some(&function) = request.get(1) else {
+        return MAX_FRAME;
+    };
+    match function {
+        READ_COILS | READ_DISCRETE_INPUTS => 5 + quantity().div_ceil(8).min(250),
+        READ_HOLDING_REGISTERS | READ_INPUT_REGISTERS => 5 + 2 * quantity().min(125),
+        WRITE_SINGLE_COIL
+        | WRITE_SINGLE_REGISTER
+        | WRITE_MULTIPLE_COILS
+        | WRITE_MULTIPLE_REGISTERS => 8,
+        DIAGNOSTICS => request.len(),
         // Report server ID: uTile's text and version are a few bytes.
-        Some(17) => 5 + 32,
+        REPORT_SERVER_ID => 5 + 32,
         _ => MAX_FRAME,
     }
 }
@@ -57,14 +135,24 @@ pub fn longest_reply(request: &[u8]) -> usize {
 /// `request_len` is the request's length (an echo is as long).
 pub fn reply_len(head: &[u8], request_len: usize) -> Option<usize> {
     let function = *head.get(1)?;
-    if function & 0x80 != 0 {
+    if is_exception(function) {
         return Some(5);
     }
     match function {
-        1 | 2 | 3 | 4 | 17 | 20 | 21 | 23 => Some(5 + usize::from(*head.get(2)?)),
-        5 | 6 | 15 | 16 => Some(8),
-        8 => Some(request_len),
-        22 => Some(10),
+        READ_COILS
+        | READ_DISCRETE_INPUTS
+        | READ_HOLDING_REGISTERS
+        | READ_INPUT_REGISTERS
+        | REPORT_SERVER_ID
+        | READ_FILE_RECORD
+        | WRITE_FILE_RECORD
+        | READ_WRITE_MULTIPLE_REGISTERS => Some(5 + usize::from(*head.get(2)?)),
+        WRITE_SINGLE_COIL
+        | WRITE_SINGLE_REGISTER
+        | WRITE_MULTIPLE_COILS
+        | WRITE_MULTIPLE_REGISTERS => Some(8),
+        DIAGNOSTICS => Some(request_len),
+        MASK_WRITE_REGISTER => Some(10),
         _ => None,
     }
 }
@@ -99,7 +187,7 @@ pub fn find_reply(got: &[u8], address: u8, request: &[u8]) -> Scan {
         let end = start + len;
         if end <= got.len() && modbus::reply_pdu(address, &got[start..end]).is_ok() {
             // An echo or a write's reply must name the request's function (or its exception).
-            let f = got[start + 1] & 0x7F;
+            let f = answers(got[start + 1]);
             if request.get(1) == Some(&f) {
                 return Scan::Reply { start, end };
             }
@@ -117,7 +205,7 @@ pub fn bad_crc(got: &[u8], address: u8, request: &[u8]) -> bool {
         let head = &got[start..];
         head.len() >= 2
             && head[0] == address
-            && head[1] & 0x7F == f
+            && answers(head[1]) == f
             && reply_len(head, request.len())
                 .is_some_and(|len| head.len() >= len && !modbus::crc_ok(&head[..len]))
     })
@@ -125,17 +213,39 @@ pub fn bad_crc(got: &[u8], address: u8, request: &[u8]) -> bool {
 
 /// A Modbus exception code in words, as the page shows a refusal.
 pub fn exception_text(code: u8) -> String {
+    const FUNCTION: u8 = Exception::IllegalFunction as u8;
+    const ADDRESS: u8 = Exception::IllegalDataAddress as u8;
+    const VALUE: u8 = Exception::IllegalDataValue as u8;
     let what = match code {
-        1 => "illegal function",
-        2 => "illegal data address: outside uTile's map",
-        3 => "illegal data value: out of range",
-        4 => "server device failure",
-        6 => "server busy",
-        0x0A => "gateway path unavailable",
-        0x0B => "the uTile did not answer",
-        _ => "unknown exception",
+        FUNCTION => "illegal function",
+        ADDRESS => "illegal data address: outside uTile's map",
+        VALUE => "illegal data value: out of range",
+        _ => match ExceptionCode::new(code) {
+            ExceptionCode::ServerDeviceFailure => "server device failure",
+            ExceptionCode::ServerDeviceBusy => "server busy",
+            ExceptionCode::GatewayPathUnavailable => "gateway path unavailable",
+            ExceptionCode::GatewayTargetDevice => "the uTile did not answer",
+            _ => "unknown exception",
+        },
     };
     format!("exception {code:02X} ({what})")
+}
+
+/// What came after a request that got no whole reply in time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MissedReply {
+    /// A frame from the address, for the request's function, came whole with a wrong CRC.
+    pub bad_crc: bool,
+    /// Bytes that were no reply (noise, the terminal's text, a reply cut short).
+    pub not_reply: usize,
+}
+
+/// Tells what `got` (all that came after `request`, no reply found in it) holds.
+pub fn missed_reply(got: &[u8], address: u8, request: &[u8]) -> MissedReply {
+    MissedReply {
+        bad_crc: bad_crc(got, address, request),
+        not_reply: got.len(),
+    }
 }
 
 #[cfg(test)]
@@ -169,6 +279,45 @@ mod tests {
         // Another function's frame from that address is not this request's reply.
         let other = modbus::frame(1, &[3, 2, 0, 9]);
         assert_eq!(find_reply(&other, 1, &request), Scan::Incomplete);
+    }
+
+    #[test]
+    fn only_a_whole_frame_with_a_wrong_crc_counts_as_a_crc_error() {
+        let request = modbus::frame(1, &[4, 0, 64, 0, 40]);
+        // Text that holds the address and the function code side by side ("\x01\x04") is
+        // no reply, and no damaged one either.
+        let noise = b"AB\x01\x04CD".to_vec();
+        let m = missed_reply(&noise, 1, &request);
+        assert!(!m.bad_crc);
+        assert_eq!(m.not_reply, 6);
+        // A reply cut short is none either.
+        let reply = modbus::frame(1, &[4, 2, 0, 7]);
+        assert!(!missed_reply(&reply[..4], 1, &request).bad_crc);
+        let mut bad = reply.clone();
+        bad[4] ^= 1;
+        assert!(missed_reply(&bad, 1, &request).bad_crc);
+        // An exception with a wrong CRC is a damaged reply too.
+        let mut ex = modbus::frame(1, &[0x84, 2]);
+        ex[3] ^= 0xFF;
+        assert!(missed_reply(&ex, 1, &request).bad_crc);
+    }
+
+    #[test]
+    fn the_vocabulary_names_the_functions() {
+        assert!(is_exception(0x86) && !is_exception(6));
+        assert_eq!(exception(&[0x86, 3]), Some(3));
+        assert_eq!(exception(&[6, 0, 24, 0, 1]), None);
+        assert!(is_write(WRITE_SINGLE_COIL) && is_write(WRITE_MULTIPLE_REGISTERS));
+        assert!(!is_write(READ_INPUT_REGISTERS) && !is_write(REPORT_SERVER_ID));
+        assert!(repeatable(READ_HOLDING_REGISTERS) && !repeatable(DIAGNOSTICS));
+        assert_eq!(
+            exception_text(2),
+            "exception 02 (illegal data address: outside uTile's map)"
+        );
+        assert_eq!(
+            exception_text(0x0B),
+            "exception 0B (the uTile did not answer)"
+        );
     }
 
     #[test]

@@ -1,16 +1,27 @@
-//! One uTile on the line: what was last read from it (the snapshot, the presets, the
-//! program), whether it answers, when it is next polled (a dead address backs off to one poll
-//! a second), and the link's health as the page shows it.
+//! One uTile on the line, owned by the line's owner: what was last read from it (the
+//! snapshot, the presets, the program), whether it answers, when it is next polled (a dead
+//! address backs off to one poll a second), the link's health, the trend; and its part of
+//! the published view.
 
 use std::collections::VecDeque;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use utile_core::engine::LINES;
+use utile_core::modbus::plc::STATUS_RUNNING;
 use utile_core::modbus::snapshot::{self, Snapshot, PROGRAM, PROGRAM_LEN, SNAPSHOT, SNAPSHOT_LEN};
+use utile_core::modbus::{
+    Exception, READ_COILS, READ_DISCRETE_INPUTS, READ_HOLDING_REGISTERS, READ_INPUT_REGISTERS,
+};
 use utile_kit::modbus::registers;
 
+use super::hub::ProgramFile;
 use super::line_use::LineUse;
-use super::signals::{Holdings, HOLDINGS};
+use super::program;
+use super::rtu;
+use super::screen::Mode;
+use super::signals::{self, Holdings, HOLDINGS};
+use super::view::{CardState, FileMatch, Listing, ProgramView, Trend, UnitView, EDIT_ADVICE};
 
 /// Misses in a row after which a uTile is shown offline.
 const OFFLINE_AFTER: u32 = 3;
@@ -48,14 +59,14 @@ impl Read {
         };
         let half = PROGRAM_LEN / 2;
         match self {
-            Read::Snapshot => read(4, SNAPSHOT, SNAPSHOT_LEN),
-            Read::Legacy(0) => read(4, 0, 18),
-            Read::Legacy(1) => read(4, 32, 16),
-            Read::Legacy(2) => read(1, 0, 24),
-            Read::Legacy(3) => read(2, 0, 6),
-            Read::Legacy(_) => read(2, 8, 42),
-            Read::Holdings => read(3, 0, HOLDINGS as u16),
-            Read::Program(h) => read(4, PROGRAM + u16::from(h) * half, half),
+            Read::Snapshot => read(READ_INPUT_REGISTERS, SNAPSHOT, SNAPSHOT_LEN),
+            Read::Legacy(0) => read(READ_INPUT_REGISTERS, 0, 18),
+            Read::Legacy(1) => read(READ_INPUT_REGISTERS, 32, 16),
+            Read::Legacy(2) => read(READ_COILS, 0, 24),
+            Read::Legacy(3) => read(READ_DISCRETE_INPUTS, 0, 6),
+            Read::Legacy(_) => read(READ_DISCRETE_INPUTS, 8, 42),
+            Read::Holdings => read(READ_HOLDING_REGISTERS, 0, HOLDINGS as u16),
+            Read::Program(h) => read(READ_INPUT_REGISTERS, PROGRAM + u16::from(h) * half, half),
         }
     }
 }
@@ -67,8 +78,12 @@ pub struct Link {
     pub requests: u64,
     /// Requests that got no (whole, right) reply in time.
     pub timeouts: u64,
-    /// Replies from this address with a wrong CRC (among the time-outs).
+    /// Replies from this address whose CRC was wrong (among the time-outs): whole frames
+    /// for the request's function, nothing else.
     pub crc_errors: u64,
+    /// Bytes that came after a request to this address and were no reply (noise, a reply
+    /// cut short, the terminal's text).
+    pub not_reply_bytes: u64,
     /// Exceptions answered.
     pub exceptions: u64,
     /// Round trip of the last answered request, ms (request out to the reply's last byte).
@@ -95,6 +110,10 @@ pub struct Unit {
     /// The running program: the snapshot's fingerprint it was read for, the lines, and
     /// whether the lines give that fingerprint.
     pub program: Option<(u16, [u8; LINES], bool)>,
+    /// Its listing, as the view gives it.
+    listing: Option<Arc<Listing>>,
+    /// Each line's value in the latest snapshot (the core's engine, once per snapshot).
+    program_values: Arc<str>,
     /// Half the program window read so far.
     program_half: Option<Vec<u16>>,
     /// The firmware has no §17 window (exception 02 to the snapshot read).
@@ -110,12 +129,13 @@ pub struct Unit {
     line_use: LineUse,
     /// Scans per second, from two snapshots.
     pub scans_per_s: f64,
-    /// Trend points (time, A6, A7, C0..C7).
-    pub trend: VecDeque<(Instant, [u16; 10])>,
+    /// Trend points (time, A6, A7, C0..C7), shared with the views published since the last
+    /// point.
+    pub trend: Arc<Trend>,
     /// What went wrong last, for the card.
     pub reason: Option<String>,
-    /// Pictures taken since the start.
-    pub pictures: u64,
+    /// Snapshots taken since the start.
+    pub snapshots: u64,
 }
 
 impl Unit {
@@ -130,6 +150,8 @@ impl Unit {
             holdings: None,
             holdings_at: None,
             program: None,
+            listing: None,
+            program_values: Arc::from(""),
             program_half: None,
             legacy: false,
             legacy_step: 0,
@@ -138,9 +160,9 @@ impl Unit {
             refreshes: VecDeque::new(),
             line_use: LineUse::new(WINDOW),
             scans_per_s: 0.0,
-            trend: VecDeque::new(),
+            trend: Arc::default(),
             reason: None,
-            pictures: 0,
+            snapshots: 0,
         }
     }
 
@@ -198,14 +220,13 @@ impl Unit {
     }
 
     /// An answer to `read`: its reply PDU (which may be an exception). `rtt` is the round
-    /// trip. Returns whether a new picture came.
+    /// trip. Returns whether a new snapshot came.
     pub fn answered(&mut self, read: Read, pdu: &[u8], rtt: Duration, now: Instant) -> bool {
         self.link.rtt_ms = rtt.as_secs_f64() * 1e3;
         self.misses = 0;
-        if pdu.first().is_some_and(|f| f & 0x80 != 0) {
+        if let Some(code) = rtu::exception(pdu) {
             self.link.exceptions += 1;
-            let code = pdu.get(1).copied().unwrap_or(0);
-            if read == Read::Snapshot && code == 2 {
+            if read == Read::Snapshot && code == Exception::IllegalDataAddress as u8 {
                 // Version-2 firmware: no §17 window; read §13's map instead.
                 self.legacy = true;
                 self.reason = Some(
@@ -218,7 +239,7 @@ impl Unit {
             }
             self.reason = Some(format!(
                 "uTile refused a read: {}",
-                super::rtu::exception_text(code)
+                rtu::exception_text(code)
             ));
             self.due = now;
             return false;
@@ -230,13 +251,14 @@ impl Unit {
                 let Ok(r) = <[u16; SNAPSHOT_LEN as usize]>::try_from(regs.as_slice()) else {
                     return false;
                 };
-                self.picture(Snapshot::from_registers(&r), now);
+                self.took_snapshot(Snapshot::from_registers(&r), now);
                 true
             }
             Read::Legacy(step) => self.legacy_step(step, pdu, &regs, now),
             Read::Holdings => {
                 self.holdings = Holdings::from_registers(&regs);
                 self.holdings_at = Some(now);
+                self.run_program();
                 false
             }
             Read::Program(0) => {
@@ -255,13 +277,19 @@ impl Unit {
                     let uf = snapshot::program_from_registers(&r);
                     let same = snapshot::fingerprint(&uf) == s.fingerprint;
                     self.program = Some((s.fingerprint, uf, same));
+                    self.listing = Some(Arc::new(Listing {
+                        fingerprint: s.fingerprint,
+                        consistent: same,
+                        lines: program::listing(&uf),
+                    }));
+                    self.run_program();
                 }
                 false
             }
         }
     }
 
-    /// One of the five legacy reads; the last completes a picture.
+    /// One of the five legacy reads; the last completes a snapshot.
     fn legacy_step(&mut self, step: u8, pdu: &[u8], regs: &[u16], now: Instant) -> bool {
         use snapshot::at;
         self.legacy_step = (step + 1) % 5;
@@ -298,7 +326,7 @@ impl Unit {
                 r[usize::from(at::TIMER_OUTPUTS)] = byte(2) | byte(3) << 8;
                 r[usize::from(at::COUNTER_OUTPUTS)] = byte(4);
                 let s = Snapshot::from_registers(r);
-                self.picture(s, now);
+                self.took_snapshot(s, now);
                 return true;
             }
             _ => {}
@@ -306,8 +334,16 @@ impl Unit {
         false
     }
 
-    /// A new picture.
-    fn picture(&mut self, s: Snapshot, now: Instant) {
+    /// Each program line's value in the latest snapshot (the core's engine: once per
+    /// snapshot, presets or program, never per page).
+    fn run_program(&mut self) {
+        if let (Some((_, uf, _)), Some((s, _))) = (&self.program, &self.snap) {
+            self.program_values = Arc::from(program::values(uf, self.holdings.as_ref(), s));
+        }
+    }
+
+    /// A new snapshot.
+    fn took_snapshot(&mut self, s: Snapshot, now: Instant) {
         if let Some((old, at)) = &self.snap {
             let dt = now.duration_since(*at).as_secs_f64();
             if dt > 0.0 && s.scans >= old.scans {
@@ -322,19 +358,23 @@ impl Unit {
         }
         let keep = self
             .trend
+            .points
             .back()
             .is_none_or(|(t, _)| now.duration_since(*t) >= TREND_STEP);
         if keep {
             let mut p = [0u16; 10];
             p[..2].copy_from_slice(&s.readings);
             p[2..].copy_from_slice(&s.counts);
-            self.trend.push_back((now, p));
-            if self.trend.len() > TREND_POINTS {
-                self.trend.pop_front();
+            // Copied when a published view still holds the old points (once a step).
+            let trend = Arc::make_mut(&mut self.trend);
+            trend.points.push_back((now, p));
+            if trend.points.len() > TREND_POINTS {
+                trend.points.pop_front();
             }
         }
         self.snap = Some((s, now));
-        self.pictures += 1;
+        self.snapshots += 1;
+        self.run_program();
         self.online = true;
         self.reason = None;
         self.refreshes.push_back(now);
@@ -347,13 +387,15 @@ impl Unit {
         }
     }
 
-    /// No whole reply in time (`crc`: one came with a wrong CRC). After a few in a row the
+    /// No whole reply in time (`crc`: one came with a wrong CRC; `not_reply`: bytes that
+    /// came and were no reply). After a few in a row the
     /// uTile is offline and polled at most once a second, so it never slows the others.
-    pub fn missed(&mut self, crc: bool, now: Instant) {
+    pub fn missed(&mut self, crc: bool, not_reply: usize, now: Instant) {
         self.link.timeouts += 1;
         if crc {
             self.link.crc_errors += 1;
         }
+        self.link.not_reply_bytes += not_reply as u64;
         self.misses += 1;
         self.program_half = None;
         self.legacy_step = 0;
@@ -372,5 +414,81 @@ impl Unit {
     /// Counts a request sent.
     pub fn sent(&mut self) {
         self.link.requests += 1;
+    }
+
+    /// A card's state: offline, edit (the editor has the line), stopped (answers, but its
+    /// status says the program is not running) or online.
+    pub fn card_state(&self, open: bool, mode: Mode) -> CardState {
+        if !open || !self.online && mode != Mode::Edit {
+            return CardState::Offline;
+        }
+        if mode == Mode::Edit {
+            return CardState::Edit;
+        }
+        match &self.snap {
+            Some((s, _)) if s.status & STATUS_RUNNING == 0 => CardState::Stopped,
+            _ => CardState::Online,
+        }
+    }
+
+    /// Its part of the view published at `now`.
+    pub fn view(
+        &self,
+        open: bool,
+        mode: Mode,
+        file: Option<&ProgramFile>,
+        now: Instant,
+    ) -> UnitView {
+        let state = self.card_state(open, mode);
+        let advice = match state {
+            CardState::Offline => format!(
+                "No answer{}: check the cable, the power and the uTile's address (ADDR {}). \
+                 The values shown are the last ones read.",
+                self.reason
+                    .as_ref()
+                    .map(|r| format!(" ({r})"))
+                    .unwrap_or_default(),
+                self.addr
+            ),
+            CardState::Edit => format!("{EDIT_ADVICE}."),
+            CardState::Stopped => {
+                "uTile answers, but its program is not running: start it with RUN or EX0."
+                    .to_string()
+            }
+            CardState::Online => self.reason.clone().unwrap_or_default(),
+        };
+        let snap = self.snap.as_ref();
+        let program = match (&self.program, snap) {
+            (Some((fp, _, same)), Some((s, _))) => Some(ProgramView {
+                fingerprint: *fp,
+                consistent: *same,
+                values: self.program_values.clone(),
+                file: file.map(|f| FileMatch {
+                    name: f.name.clone(),
+                    fingerprint: f.fingerprint,
+                    matches: f.fingerprint == s.fingerprint,
+                }),
+            }),
+            _ => None,
+        };
+        UnitView {
+            addr: self.addr,
+            state,
+            online: state != CardState::Offline,
+            advice,
+            reason: self.reason.clone(),
+            legacy: self.legacy,
+            age_ms: snap.map(|(_, t)| now.duration_since(*t).as_millis() as u64),
+            values: snap
+                .map(|(s, _)| signals::values(s, self.holdings.as_ref()))
+                .unwrap_or_default(),
+            refresh_per_s: self.refresh_rate(now),
+            scans_per_s: self.scans_per_s.round(),
+            link: self.link.clone(),
+            program,
+            snapshots: self.snapshots,
+            listing: self.listing.clone(),
+            trend: self.trend.clone(),
+        }
     }
 }

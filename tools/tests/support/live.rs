@@ -105,14 +105,21 @@ pub struct Live {
 }
 
 impl Live {
-    /// `utile live --port LINK --http 127.0.0.1:0 --tcp 127.0.0.1:0` plus `extra`; waits for
-    /// the addresses it prints.
+    /// `utile live --port LINK --http 127.0.0.1:0 --tcp 127.0.0.1:0` plus `extra` (whose own
+    /// `--http` or `--tcp` replaces the default: a flag is given once); waits for the
+    /// addresses it prints.
     pub fn start(link: &Path, extra: &[&str]) -> Live {
+        let mut defaults = Vec::new();
+        for flag in ["--http", "--tcp"] {
+            if !extra.contains(&flag) {
+                defaults.extend([flag, "127.0.0.1:0"]);
+            }
+        }
         let mut child = Command::new(UTILE)
             .arg("live")
             .arg("--port")
             .arg(link)
-            .args(["--http", "127.0.0.1:0", "--tcp", "127.0.0.1:0"])
+            .args(defaults)
             .args(extra)
             .stdin(Stdio::null())
             .stdout(Stdio::null())

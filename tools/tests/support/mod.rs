@@ -9,12 +9,15 @@
 //! - [`ladder`]: random timelines, runs sampled every ms and a ladder SVG's elements
 //!   (`ladder_*`);
 //! - [`live`]: `utile live` on the virtual Nano, an HTTP client for its API, a raw Modbus
-//!   TCP client (`live_*`).
+//!   TCP client (`live_*`);
+//! - [`mqtt`]: mosquitto on loopback (password file, TLS listener, certificates), an MQTT
+//!   client that subscribes and publishes (`live_mqtt`).
 //!
 //! Each test binary uses only part of it.
 #![allow(dead_code, unused_imports)]
 
 pub mod ladder;
 pub mod live;
+pub mod mqtt;
 pub mod utile;
 pub mod vnano;

@@ -59,7 +59,7 @@ enum Command {
     Export(ladder::Export),
     /// Every uTile on the line live in the browser, the terminal beside it, a Modbus TCP
     /// gateway
-    Live(live::args::LiveArgs),
+    Live(Box<live::args::LiveArgs>),
     /// Print shell completions (bash, zsh, fish ...) for utile
     Completions(Completions),
 }
@@ -89,7 +89,7 @@ fn main() -> ExitCode {
         Command::Ladder(a) => a.run(),
         Command::Import(a) => a.run(),
         Command::Export(a) => a.run(),
-        Command::Live(a) => live::main(&a.into()).map_err(anyhow::Error::msg),
+        Command::Live(a) => live::run(&(*a).into()).map_err(anyhow::Error::from),
         Command::Completions(c) => {
             clap_complete::generate(
                 c.shell,

@@ -3,13 +3,16 @@
 
 use std::time::{Duration, Instant};
 
+use utile_core::modbus::{MAX_ADDRESS, REPORT_SERVER_ID};
+
 use super::super::port;
 use super::super::queue::Failure;
 use super::super::screen::{Mode, Screen};
 use super::super::unit::Unit;
-use super::{Line, Phase, ASK_WAIT, REDRAW, REOPEN, SCAN_SLACK, SLACK_MAX};
+use super::super::view::EDIT_ADVICE;
+use super::{Owner, Phase, ASK_WAIT, REDRAW, REOPEN, SCAN_SLACK, SLACK_MAX};
 
-impl Line {
+impl Owner {
     /// Tries to open the port.
     pub(super) fn open(&mut self, now: Instant) {
         match port::open(&self.opts.path) {
@@ -21,24 +24,20 @@ impl Line {
                     until: now + self.opts.boot_wait,
                     asked: false,
                 };
-                let mut live = self.shared.lock();
-                live.open = true;
-                live.mode = Mode::Unknown;
-                live.message = "port open: waiting for uTile (opening a Nano's port resets it; \
-                                its boot loader waits about 1.4 s)"
-                    .into();
-                drop(live);
-                self.shared.touch();
+                self.open = true;
+                tracing::info!(port = %self.opts.path, "the port is open");
+                self.say(
+                    "port open: waiting for uTile (opening a Nano's port resets it; its boot \
+                     loader waits about 1.4 s)",
+                );
             }
             Err(e) => {
                 self.phase = Phase::Closed(now + REOPEN);
-                let mut live = self.shared.lock();
                 let msg = format!("{e}; trying again");
-                if live.message != msg {
-                    live.message = msg;
-                    drop(live);
-                    self.shared.touch();
+                if msg != self.message {
+                    tracing::warn!(port = %self.opts.path, error = %e, "cannot open the port");
                 }
+                self.say(msg);
             }
         }
     }
@@ -48,15 +47,14 @@ impl Line {
         self.port = None;
         self.phase = Phase::Closed(Instant::now() + REOPEN);
         self.queue.fail_all(&Failure::PortClosed);
-        let mut live = self.shared.lock();
-        live.open = false;
-        live.mode = Mode::Unknown;
-        live.message = format!("{}: {why}; trying again", self.opts.path);
-        for u in &mut live.units {
+        tracing::warn!(port = %self.opts.path, why, "the port closed; trying again");
+        self.open = false;
+        self.mode = Mode::Unknown;
+        for u in &mut self.units {
             u.went_offline("the serial port closed");
         }
-        drop(live);
-        self.shared.touch();
+        self.message = format!("{}: {why}; trying again", self.opts.path);
+        self.publish();
     }
 
     /// Waits for uTile's first screen; without one, asks with Ctrl-L; without an answer,
@@ -93,7 +91,7 @@ impl Line {
         if self.port.is_none() {
             return;
         }
-        if self.opts.scan && self.scan.is_none() && self.shared.lock().units.is_empty() {
+        if self.opts.scan && self.scan.is_none() && self.units.is_empty() {
             self.scan = Some((1, SCAN_SLACK));
         }
         self.phase = Phase::Open;
@@ -103,40 +101,33 @@ impl Line {
     /// One address of `--scan`: report server ID with a short time-out (doubled after a
     /// pass that found nothing: a simulated line may run behind the clock).
     pub(super) fn scan_step(&mut self, addr: u8, slack: Duration) {
-        {
-            let mut live = self.shared.lock();
-            live.message = format!("looking for uTiles: address {addr} of 1..247");
-        }
-        self.shared.touch();
+        self.say(format!(
+            "looking for uTiles: address {addr} of 1..{MAX_ADDRESS}"
+        ));
         self.scan = None;
         // After the first answer, what the line has shown of its lateness.
         let slack = slack.max(self.late * 3 + Duration::from_millis(10));
-        if let Ok((pdu, _)) = self.transact(addr, &[17], slack) {
-            if pdu.first() == Some(&17) {
-                let mut live = self.shared.lock();
-                if live.unit_mut(addr).is_none() {
-                    live.units.push(Unit::new(addr, Instant::now()));
-                    live.units.sort_by_key(|u| u.addr);
-                }
+        if let Ok((pdu, _)) = self.transact(addr, &[REPORT_SERVER_ID], slack) {
+            if pdu.first() == Some(&REPORT_SERVER_ID) && self.unit_mut(addr).is_none() {
+                tracing::info!(addr, "found a uTile");
+                self.units.push(Unit::new(addr, Instant::now()));
+                self.units.sort_by_key(|u| u.addr);
             }
         }
         if self.port.is_none() {
             return;
         }
-        if addr < 247 {
+        if addr < MAX_ADDRESS {
             self.scan = Some((addr + 1, slack));
             return;
         }
-        let found = !self.shared.lock().units.is_empty();
-        if found {
+        if !self.units.is_empty() {
             self.status_message();
         } else {
-            let mut live = self.shared.lock();
-            live.message = "no uTile answered on addresses 1..247 (is a program running? \
-                            19200 8N1?); looking again"
-                .into();
-            drop(live);
-            self.shared.touch();
+            self.say(format!(
+                "no uTile answered on addresses 1..{MAX_ADDRESS} (is a program running? 19200 \
+                 8N1?); looking again"
+            ));
             self.scan = Some((1, (slack * 2).min(SLACK_MAX)));
         }
     }
@@ -144,17 +135,12 @@ impl Line {
     /// The line's message for the mode.
     pub(super) fn status_message(&mut self) {
         let msg = match self.mode {
-            Mode::Edit => "EDIT mode: the program is not running. Start it in the terminal \
-                           (RUN or EX0), or STORE it and fit D8 for autostart"
-                .to_string(),
-            Mode::Run => "polling".to_string(),
-            Mode::Unknown => "waiting for uTile".to_string(),
+            Mode::Edit => EDIT_ADVICE,
+            Mode::Run => "polling",
+            Mode::Unknown => "waiting for uTile",
         };
-        let mut live = self.shared.lock();
-        live.mode = self.mode;
-        live.message = msg;
-        drop(live);
-        self.shared.touch();
+        self.message = msg.to_string();
+        self.publish();
     }
 
     /// The screen told who has the line.
@@ -163,11 +149,12 @@ impl Line {
             return;
         }
         self.mode = m;
+        tracing::info!(mode = ?m, "who has the line");
         if m == Mode::Edit {
             self.queue.fail_all(&Failure::Editing);
         } else if m == Mode::Run {
             let now = Instant::now();
-            for u in &mut self.shared.lock().units {
+            for u in &mut self.units {
                 u.due = now;
             }
         }

@@ -4,11 +4,18 @@
 //! 3.5-character gaps. Polling pauses while the editor has the line and resumes when a
 //! program runs; an address that does not answer is polled once a second.
 //!
+//! The owner has everything about the line: the port, the mode, the reply slack, the busy
+//! figure, every uTile's poller (due times, misses, legacy steps, program halves). Nobody
+//! else reads or writes it: after each transaction it publishes an immutable
+//! [`View`](super::view::View) (a `watch` of `Arc<View>`), and takes requests and keys from a
+//! channel.
+//!
 //! Here the line's state and its loop; the port's life and who has the line in [`life`],
 //! the bytes on the wire (the gap, one transaction, what replies teach) in [`wire`], the
-//! polls and the queued requests in [`serve`].
+//! polls and the queued requests in [`serve`], the published view in [`publish`].
 
 mod life;
+mod publish;
 mod serve;
 mod wire;
 
@@ -18,13 +25,15 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use serialport::TTYPort;
-use tokio::sync::mpsc;
+use tokio::sync::{mpsc, watch};
 
+use super::hub::{Hub, Input, LineEnds, ProgramFile};
 use super::line_use::LineUse;
 use super::queue::{Failure, Next, Queue};
 use super::rtu;
 use super::screen::{Mode, Screen};
-use super::state::{Input, Shared};
+use super::unit::Unit;
+use super::view::View;
 
 /// Ctrl-L: the editor redraws its screen (how a silent line is asked which mode it is in).
 const REDRAW: u8 = 0x0C;
@@ -55,6 +64,12 @@ pub struct Options {
     pub boot_wait: Duration,
     /// Look for uTiles on 1..247 (report server ID) before polling.
     pub scan: bool,
+    /// The uTiles to poll from the start.
+    pub units: Vec<u8>,
+    /// `--program`.
+    pub file: Option<ProgramFile>,
+    /// Notes from start-up (the adapter's latency timer).
+    pub notes: Vec<String>,
 }
 
 /// Where the port is in its life.
@@ -70,25 +85,47 @@ enum Phase {
 
 /// Why a transaction failed.
 enum Miss {
-    /// No whole reply in time (`crc`: a frame from the address came with a wrong CRC).
-    Timeout { crc: bool },
+    /// No whole reply in time (`crc`: a frame from the address came whole with a wrong CRC;
+    /// `not_reply`: bytes that came and were no reply).
+    Timeout { crc: bool, not_reply: usize },
     /// The port failed: it is closed.
     Port,
 }
 
 /// The line's owner.
-struct Line {
+struct Owner {
     opts: Options,
-    shared: Arc<Shared>,
+    hub: Arc<Hub>,
     inputs: mpsc::UnboundedReceiver<Input>,
+    /// Where each new view goes.
+    publish: watch::Sender<Arc<View>>,
+    /// Views published so far.
+    published: u64,
+    /// The gateway's counters' changes as last published.
+    gateway_seen: u64,
     queue: Queue,
     keys: Vec<u8>,
     port: Option<TTYPort>,
+    /// The port is open (what the view says; `port` may be gone a moment earlier).
+    open: bool,
     phase: Phase,
     mode: Mode,
+    /// What the line is doing, in words.
+    message: String,
     screen: Screen,
+    /// The uTiles, by address.
+    units: Vec<Unit>,
+    /// Bytes on the line that were neither a reply nor the editor's screen.
+    stray: u64,
+    /// Bytes of requests and replies on the line since the start.
+    line_bytes: u64,
+    /// Requests sent, and of them writes.
+    requests: u64,
+    writes: u64,
+    /// The share of the last two seconds the line was busy.
+    busy_share: f64,
     /// When the line last fell quiet (the next frame waits 3.5 characters after it).
-    quiet: Instant,
+    quiet_since: Instant,
     /// Addresses that missed lately (gateway requests to them answered at once).
     dead: HashMap<u8, Instant>,
     /// Line time used, by when.
@@ -108,26 +145,33 @@ struct Line {
 }
 
 /// Starts the line's owner on its own thread.
-pub fn spawn(
-    opts: Options,
-    shared: Arc<Shared>,
-    inputs: mpsc::UnboundedReceiver<Input>,
-) -> std::io::Result<JoinHandle<()>> {
+pub fn spawn(opts: Options, hub: Arc<Hub>, ends: LineEnds) -> std::io::Result<JoinHandle<()>> {
     std::thread::Builder::new()
         .name("utile-line".into())
         .spawn(move || {
             let now = Instant::now();
-            Line {
+            Owner {
+                units: opts.units.iter().map(|&a| Unit::new(a, now)).collect(),
                 opts,
-                shared,
-                inputs,
+                hub,
+                inputs: ends.inputs,
+                publish: ends.publish,
+                published: 0,
+                gateway_seen: 0,
                 queue: Queue::default(),
                 keys: Vec::new(),
                 port: None,
+                open: false,
                 phase: Phase::Closed(now),
                 mode: Mode::Unknown,
+                message: "opening the port".into(),
                 screen: Screen::new(),
-                quiet: now,
+                stray: 0,
+                line_bytes: 0,
+                requests: 0,
+                writes: 0,
+                busy_share: 0.0,
+                quiet_since: now,
                 dead: HashMap::new(),
                 busy: LineUse::new(BUSY_WINDOW),
                 slack: rtu::ANSWER_SLACK,
@@ -140,10 +184,15 @@ pub fn spawn(
         })
 }
 
-impl Line {
+impl Owner {
     fn run(mut self) {
-        while !self.shared.stopping() {
+        tracing::debug!(port = %self.opts.path, "the line's owner starts");
+        self.publish();
+        while !self.hub.stopping() {
             self.take_inputs();
+            if self.hub.tcp.changes() != self.gateway_seen {
+                self.publish();
+            }
             let now = Instant::now();
             match self.phase {
                 Phase::Closed(at) => {

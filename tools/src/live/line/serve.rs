@@ -3,13 +3,13 @@
 use std::time::{Duration, Instant};
 
 use super::super::queue::{Done, Failure, Job, Origin};
-use super::{Line, Miss, BUSY_WINDOW, DEAD_FOR, SLACK_MAX};
+use super::super::rtu;
+use super::{Miss, Owner, BUSY_WINDOW, DEAD_FOR, SLACK_MAX};
 
-impl Line {
+impl Owner {
     /// The unit whose poll is due first, if any is due.
     pub(super) fn due_unit(&self, now: Instant) -> Option<u8> {
-        let live = self.shared.lock();
-        live.units
+        self.units
             .iter()
             .filter(|u| u.due <= now)
             .min_by_key(|u| u.due)
@@ -18,50 +18,53 @@ impl Line {
 
     /// When the next poll is due.
     pub(super) fn next_due(&self) -> Option<Instant> {
-        self.shared.lock().units.iter().map(|u| u.due).min()
+        self.units.iter().map(|u| u.due).min()
+    }
+
+    /// Whether the uTile at `addr` answers its polls.
+    fn answers_polls(&self, addr: u8) -> bool {
+        self.units.iter().any(|u| u.addr == addr && u.online)
     }
 
     /// A poll of the uTile at `addr`.
     pub(super) fn poll(&mut self, addr: u8) {
         let now = Instant::now();
-        let read = {
-            let mut live = self.shared.lock();
-            let Some(u) = live.unit_mut(addr) else {
-                return;
-            };
-            u.sent();
-            u.next_read(now)
+        let Some(u) = self.unit_mut(addr) else {
+            return;
         };
-        let pdu = read.pdu();
-        let result = self.transact(addr, &pdu, self.slack);
+        u.sent();
+        let read = u.next_read(now);
+        let result = self.transact(addr, &read.pdu(), self.slack);
         let now = Instant::now();
-        let mut live = self.shared.lock();
         let busy = self.busy.last();
-        if let Some(u) = live.unit_mut(addr) {
-            u.used_line(now, busy);
-            match result {
-                Ok((reply, rtt)) => {
-                    u.answered(read, &reply, rtt, now);
-                }
-                Err(Miss::Timeout { crc }) => {
-                    u.missed(crc, now);
-                    if !u.online {
-                        self.dead.insert(addr, now);
-                    }
-                    if self
-                        .answered
-                        .is_none_or(|t| now.duration_since(t) > BUSY_WINDOW)
-                    {
-                        // Nothing answers at all: perhaps everything is slower than thought.
-                        self.slack = (self.slack * 2).min(SLACK_MAX);
-                        live.slack = self.slack;
-                    }
-                }
-                Err(Miss::Port) => {}
+        let nothing_answers = self
+            .answered
+            .is_none_or(|t| now.duration_since(t) > BUSY_WINDOW);
+        let Some(u) = self.units.iter_mut().find(|u| u.addr == addr) else {
+            return;
+        };
+        u.used_line(now, busy);
+        match result {
+            Ok((reply, rtt)) => {
+                u.answered(read, &reply, rtt, now);
             }
+            Err(Miss::Timeout { crc, not_reply }) => {
+                let was_online = u.online;
+                u.missed(crc, not_reply, now);
+                if !u.online {
+                    if was_online {
+                        tracing::warn!(addr, "a uTile stopped answering");
+                    }
+                    self.dead.insert(addr, now);
+                }
+                if nothing_answers {
+                    // Nothing answers at all: perhaps everything is slower than thought.
+                    self.slack = (self.slack * 2).min(SLACK_MAX);
+                }
+            }
+            Err(Miss::Port) => {}
         }
-        drop(live);
-        self.shared.touch();
+        self.publish();
     }
 
     /// Whether a request that got no answer is sent once more: the page's writes (they set
@@ -69,18 +72,11 @@ impl Line {
     /// outcome instead of a lost click), and the gateway's reads and writes of values to a
     /// uTile that answers its polls (it missed this once; a dead address is not waited for
     /// twice).
-    fn once_more(&self, job: &Job) -> bool {
+    fn worth_repeating(&self, job: &Job) -> bool {
         if job.origin == Origin::Page {
             return true;
         }
-        let repeatable = matches!(job.pdu.first(), Some(1 | 2 | 3 | 4 | 5 | 6 | 15 | 16));
-        repeatable
-            && self
-                .shared
-                .lock()
-                .units
-                .iter()
-                .any(|u| u.addr == job.addr && u.online)
+        job.pdu.first().copied().is_some_and(rtu::repeatable) && self.answers_polls(job.addr)
     }
 
     /// A queued request (the page's write, the gateway's request).
@@ -96,26 +92,25 @@ impl Line {
             return;
         }
         let mut result = self.transact(job.addr, &job.pdu, self.slack);
-        if matches!(result, Err(Miss::Timeout { .. })) && self.once_more(&job) {
+        if matches!(result, Err(Miss::Timeout { .. })) && self.worth_repeating(&job) {
             result = self.transact(job.addr, &job.pdu, self.slack);
         }
         let now = Instant::now();
+        let function = job.pdu.first().copied().unwrap_or_default();
         let outcome = match result {
             Ok((pdu, _)) => {
                 self.dead.remove(&job.addr);
-                let wrote = job.writes() && pdu.first().is_some_and(|f| f & 0x80 == 0);
-                let mut live = self.shared.lock();
+                let wrote = job.writes() && pdu.first().is_some_and(|&f| !rtu::is_exception(f));
                 // After a write the next poll is this uTile's, ahead of the others on a bus,
                 // so the page shows the write one poll later.
-                let first = live.units.iter().map(|u| u.due).min().unwrap_or(now);
+                let first = self.next_due().unwrap_or(now);
                 let first = first.checked_sub(Duration::from_micros(1)).unwrap_or(first);
-                if let Some(u) = live.unit_mut(job.addr) {
+                if let Some(u) = self.unit_mut(job.addr) {
                     u.due = if wrote { first } else { job.queued.min(u.due) };
-                    if wrote && job.pdu.first() != Some(&5) && job.pdu.first() != Some(&15) {
+                    if wrote && !rtu::writes_coils(function) {
                         u.holdings_stale();
                     }
                 }
-                drop(live);
                 // Its time on the line: the silence before the request, the request, the
                 // uTile's turnaround and the reply.
                 Ok(Done {
@@ -127,20 +122,15 @@ impl Line {
             Err(Miss::Timeout { .. }) => {
                 // An address no card shows as online is dead for a while; one that answers
                 // its polls only missed this once (a client's retry is carried out).
-                let online = self
-                    .shared
-                    .lock()
-                    .units
-                    .iter()
-                    .any(|u| u.addr == job.addr && u.online);
-                if !online {
+                if !self.answers_polls(job.addr) {
                     self.dead.insert(job.addr, now);
                 }
+                tracing::debug!(addr = job.addr, function, origin = ?job.origin, "no answer");
                 Err(Failure::NoAnswer)
             }
             Err(Miss::Port) => Err(Failure::PortClosed),
         };
         job.finish(outcome);
-        self.shared.touch();
+        self.publish();
     }
 }

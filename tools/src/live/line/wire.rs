@@ -8,20 +8,23 @@ use serialport::SerialPort;
 use utile_kit::modbus;
 
 use super::super::rtu::{self, Scan};
-use super::{Line, Miss, INTER_BYTE, SLACK_MAX};
+use super::{Miss, Owner, INTER_BYTE, SLACK_MAX};
 
-impl Line {
+impl Owner {
     /// Reads whatever comes within `wait`: the editor's screen.
     pub(super) fn listen(&mut self, wait: Duration) {
         let mut buf = [0u8; 1024];
         let Some(p) = self.port.as_mut() else {
             return;
         };
-        let _ = p.set_timeout(wait);
+        if let Err(e) = p.set_timeout(wait) {
+            self.close(&format!("setting its time-out: {e}"));
+            return;
+        }
         match p.read(&mut buf) {
             Ok(0) => {}
             Ok(n) => {
-                self.quiet = Instant::now();
+                self.quiet_since = Instant::now();
                 self.terminal(&buf[..n]);
             }
             Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {}
@@ -35,7 +38,7 @@ impl Line {
         if bytes.is_empty() {
             return;
         }
-        self.shared.terminal.output(bytes);
+        self.hub.terminal.output(bytes);
         if let Some(m) = self.screen.feed(bytes, Instant::now()) {
             self.set_mode(m);
         }
@@ -44,7 +47,7 @@ impl Line {
     /// Writes `bytes` after the 3.5-character gap.
     pub(super) fn write(&mut self, bytes: &[u8]) -> bool {
         let gap = rtu::frame_gap();
-        let since = self.quiet.elapsed();
+        let since = self.quiet_since.elapsed();
         if since < gap {
             std::thread::sleep(gap - since);
         }
@@ -53,7 +56,7 @@ impl Line {
         };
         match p.write_all(bytes) {
             Ok(()) => {
-                self.quiet = Instant::now() + rtu::line_time(bytes.len());
+                self.quiet_since = Instant::now() + rtu::line_time(bytes.len());
                 true
             }
             Err(e) => {
@@ -72,13 +75,11 @@ impl Line {
         self.write(&keys);
     }
 
-    /// Counts line time for the busy figure.
-    pub(super) fn used(&mut self, bytes: usize) -> Duration {
+    /// Counts `bytes` of a transaction on the line (the busy figure); their line time.
+    pub(super) fn count_line_time(&mut self, bytes: usize) -> Duration {
         let t = rtu::line_time(bytes);
-        let busy = self.busy.add(Instant::now(), t);
-        let mut live = self.shared.lock();
-        live.busy = busy;
-        live.line_bytes += bytes as u64;
+        self.busy_share = self.busy.add(Instant::now(), t);
+        self.line_bytes += bytes as u64;
         t
     }
 
@@ -102,6 +103,10 @@ impl Line {
         if !self.write(&frame) {
             return Err(Miss::Port);
         }
+        self.requests += 1;
+        if pdu.first().copied().is_some_and(rtu::is_write) {
+            self.writes += 1;
+        }
         let t0 = Instant::now();
         let mut deadline = t0 + rtu::reply_timeout(&frame, slack);
         // A reply on its way is waited for while its bytes keep coming (a slow adapter or
@@ -112,12 +117,12 @@ impl Line {
         loop {
             let now = Instant::now();
             if let Scan::Reply { start, end } = rtu::find_reply(&got, addr, &frame) {
-                self.quiet = now;
+                self.quiet_since = now;
                 let reply = got[start + 1..end - 2].to_vec();
                 self.stray(&got[..start]);
                 self.stray(&got[end..]);
-                let on_line = self.used(frame.len() + end - start);
-                self.learn(now - t0, on_line, now);
+                let on_line = self.count_line_time(frame.len() + end - start);
+                self.learn_slack(now - t0, on_line, now);
                 return Ok((reply, now - t0));
             }
             if now >= deadline {
@@ -126,7 +131,10 @@ impl Line {
             let Some(p) = self.port.as_mut() else {
                 return Err(Miss::Port);
             };
-            let _ = p.set_timeout((deadline - now).min(Duration::from_millis(20)));
+            if let Err(e) = p.set_timeout((deadline - now).min(Duration::from_millis(20))) {
+                self.close(&format!("setting its time-out: {e}"));
+                return Err(Miss::Port);
+            }
             match p.read(&mut buf) {
                 Ok(n) => {
                     got.extend_from_slice(&buf[..n]);
@@ -148,26 +156,27 @@ impl Line {
                 break;
             }
         }
-        self.used(frame.len());
-        let f = pdu.first().copied().unwrap_or(0);
-        let crc = got.windows(2).any(|w| w[0] == addr && (w[1] & 0x7F) == f);
+        self.count_line_time(frame.len());
+        let missed = rtu::missed_reply(&got, addr, &frame);
         self.stray(&got);
         if !got.is_empty() {
-            self.quiet = Instant::now();
+            self.quiet_since = Instant::now();
         }
-        Err(Miss::Timeout { crc })
+        Err(Miss::Timeout {
+            crc: missed.bad_crc,
+            not_reply: missed.not_reply,
+        })
     }
 
     /// A reply came `rtt` after the request went out, for `on_line` of bytes on the line:
     /// the slack follows the latest replies' lateness (three times the recent worst, at least
     /// [`rtu::ANSWER_SLACK`]).
-    pub(super) fn learn(&mut self, rtt: Duration, on_line: Duration, now: Instant) {
+    pub(super) fn learn_slack(&mut self, rtt: Duration, on_line: Duration, now: Instant) {
         self.answered = Some(now);
         let late = rtt.saturating_sub(on_line);
         self.late = late.max(self.late.mul_f64(0.98));
         self.slack =
             (self.late * 3 + Duration::from_millis(30)).clamp(rtu::ANSWER_SLACK, SLACK_MAX);
-        self.shared.lock().slack = self.slack;
     }
 
     /// Bytes that were not a reply: the editor's screen when they carry its text, else
@@ -176,7 +185,7 @@ impl Line {
         if bytes.is_empty() {
             return;
         }
-        self.shared.lock().stray += bytes.len() as u64;
+        self.stray += bytes.len() as u64;
         self.terminal(bytes);
     }
 }

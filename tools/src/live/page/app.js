@@ -7,6 +7,8 @@ import { ProgramView } from "/program.js";
 import { openTerminal } from "/terminal.js";
 
 const cards = new Map();
+// The signal table (/api/signals) by name.
+const table = new Map();
 const programs = new Map();
 let terminalOpen = false;
 
@@ -37,10 +39,8 @@ function banner(state) {
   if (!state.open) {
     text = `The serial port is not open: ${state.message}`;
     bad = true;
-  } else if (state.mode === "edit") {
-    text = "uTile is in EDIT mode: the program is not running: start it here (the Terminal tab: " +
-      "RUN or EX0), or fit D8 for autostart (STORE the program first).";
-  } else if (state.mode === "unknown") {
+  } else if (state.mode === "edit" || state.mode === "unknown") {
+    // The server's words (the EDIT-mode advice is written once, there).
     text = state.message;
   }
   if (state.read_only) {
@@ -72,7 +72,7 @@ function update(state) {
   for (const u of state.units) {
     let card = cards.get(u.addr);
     if (!card) {
-      card = new Card(u.addr, state.read_only, state.timer_unit_ms);
+      card = new Card(u.addr, state.read_only, state.timer_unit_ms, table);
       cards.set(u.addr, card);
       $("plant").append(card.root);
       const view = new ProgramView(u.addr);
@@ -84,7 +84,13 @@ function update(state) {
   }
 }
 
-function connect() {
+async function connect() {
+  try {
+    const res = await fetch("/api/signals");
+    for (const s of await res.json()) table.set(s.name, s);
+  } catch (e) {
+    // The cards then show no ranges; the events still come.
+  }
   const events = new EventSource("/api/events");
   events.addEventListener("state", (e) => update(JSON.parse(e.data)));
   events.onerror = () => {
@@ -94,4 +100,33 @@ function connect() {
   };
 }
 
-connect();
+// Beyond loopback utile live wants its token (docs/LIVE.md, "Security beyond loopback"):
+// the URL printed at its start brings it once (the server keeps it in a cookie), else the
+// page asks for it when a read or a write gets 401.
+function askToken() {
+  const given = prompt(
+    "This utile live listens beyond its computer and needs its token " +
+    "(the URL it printed at its start ends in ?token=…):");
+  if (given) {
+    const token = given.trim().replace(/^.*[?&]token=/, "");
+    location.href = "/?token=" + encodeURIComponent(token);
+  }
+}
+window.addEventListener("utile-token", askToken);
+
+async function start() {
+  const url = new URL(location.href);
+  if (url.searchParams.has("token")) {
+    url.searchParams.delete("token");
+    history.replaceState(null, "", url);
+  }
+  const res = await fetch("/api/state").catch(() => null);
+  if (res && res.status === 401) {
+    $("mode").textContent = "this utile live needs its token";
+    askToken();
+    return;
+  }
+  connect();
+}
+
+start();

@@ -5,7 +5,7 @@
 // a trend. Every value carries data-unit, data-signal (the listing's name) and data-value
 // (the number it shows, 0/1 for bits); what a user must do is said in words.
 
-import { el } from "/dom.js";
+import { el, errorText } from "/dom.js";
 import { Trend } from "/trend.js";
 
 const HEX = "0123456789ABCDEF";
@@ -27,27 +27,14 @@ export function clock(tenths) {
   return h ? `${h}:${String(m).padStart(2, "0")}:${s}` : `${m}:${s}`;
 }
 
-// What a card's state asks of the user, in words.
+// A card's state in a word (what the user can do about it comes from the server: `advice`).
 const STATE_WORDS = { online: "running", offline: "offline", edit: "EDIT mode", stopped: "not running" };
 
-function advice(u) {
-  switch (u.state) {
-    case "offline":
-      return `No answer${u.reason ? ` (${u.reason})` : ""}: check the cable, the power and ` +
-        `the uTile's address (ADDR ${u.addr}). The values shown are the last ones read.`;
-    case "edit":
-      return "The editor has the line, so the program is not running: start it in the " +
-        "Terminal tab (RUN or EX0), or fit D8 for autostart (STORE the program first).";
-    case "stopped":
-      return "uTile answers, but its program is not running: start it with RUN or EX0.";
-    default:
-      return u.reason || "";
-  }
-}
-
 export class Card {
-  // `unitMs`: each timer's unit in ms, as the core defines it (/api/state's timer_unit_ms).
-  constructor(addr, readOnly, unitMs) {
+  // `unitMs`: each timer's unit in ms, as the core defines it (/api/state's timer_unit_ms);
+  // `table`: the signal table (/api/signals) by name, for the ranges the card shows.
+  constructor(addr, readOnly, unitMs, table) {
+    this.table = table || new Map();
     this.addr = addr;
     this.readOnly = readOnly;
     this.unitMs = unitMs || [];
@@ -94,6 +81,12 @@ export class Card {
     i.addEventListener("change", send);
     i.addEventListener("keydown", (e) => { if (e.key === "Enter") { send(); i.blur(); } });
     return i;
+  }
+
+  // A signal's range as the table gives it: "0..1023".
+  range(name) {
+    const s = this.table.get(name);
+    return s ? `0..${s.max}` : "";
   }
 
   // A titled group of the panel.
@@ -150,7 +143,7 @@ export class Card {
       bar.timer = m;
       const tile = el("div", { class: "tile" },
         el("div", { class: "tile-head" }, this.lamp(`TQ${d}`, `T${d}`, `T${d}'s output (TQ${d})`),
-          this.setting(`T${d}`, `timer preset T${d}: 0..255 × ${unit}`, "short"),
+          this.setting(`T${d}`, `timer preset T${d}: ${this.range(`T${d}`)} × ${unit}`, "short"),
           el("span", { class: "unit", text: `× ${unit}` })),
         el("div", { class: "tile-foot" }, bar, left));
       this.timerTiles.push(tile);
@@ -168,7 +161,7 @@ export class Card {
         el("div", { class: "tile-head" }, this.lamp(`CQ${m}`, `C${m}`, `C${m}'s output (CQ${m})`),
           this.bind(el("span", { class: "num", text: "0", title: `count of C${m}` }), `C${m}`),
           el("span", { class: "unit", text: "/" }),
-          this.setting(`CP${m}`, `counter preset C${m}: 0..65535 (0: output off)`)),
+          this.setting(`CP${m}`, `counter preset C${m}: ${this.range(`CP${m}`)} (0: output off)`)),
         el("div", { class: "tile-foot" }, el("span", { class: "fillbar", title: `C${m}: count against preset` }, fill)));
       tile.fill = fill;
       this.counterTiles.push(tile);
@@ -186,10 +179,10 @@ export class Card {
       this[`meter${n}`] = { fill, mark, volts };
       box.append(el("div", { class: "analog" },
         el("span", { class: "name", text: `A${n}` }),
-        this.bind(el("span", { class: "num reading", text: "0", title: `reading of A${n}, 0..1023` }), `A${n}`),
+        this.bind(el("span", { class: "num reading", text: "0", title: `reading of A${n}, ${this.range(`A${n}`)}` }), `A${n}`),
         volts,
         el("span", { class: "meter" }, fill, mark),
-        el("label", { class: "sp" }, "set-point ", this.setting(`S${n}`, `set-point S${n}: 0..1023 (0: threshold off)`)),
+        el("label", { class: "sp" }, "set-point ", this.setting(`S${n}`, `set-point S${n}: ${this.range(`S${n}`)} (0: threshold off)`)),
         this.lamp(`H${n}`, `H${n}`, `H${n}: A${n} at or over its set-point`)));
     }
     return box;
@@ -233,8 +226,9 @@ export class Card {
         headers: { "content-type": "application/json" },
         body: JSON.stringify({ signal, value }),
       });
-      answer = await res.json();
       if (res.ok) return;
+      if (res.status === 401) window.dispatchEvent(new Event("utile-token"));
+      answer = { error: await errorText(res) };
     } catch (e) {
       answer = { error: `the server did not answer (${e})` };
     }
@@ -251,7 +245,8 @@ export class Card {
     this.root.dataset.state = u.state;
     this.stateEl.dataset.state = u.state;
     this.stateEl.textContent = STATE_WORDS[u.state] || u.state;
-    this.adviceEl.textContent = advice(u);
+    this.show(this.stateEl, "online", u.online ? 1 : 0);
+    this.adviceEl.textContent = u.advice;
     for (const [name, els] of this.signals) {
       const value = v[name];
       if (value === undefined) continue;

@@ -1,4 +1,5 @@
-// Building the page's elements: one helper the card and the program view share.
+// What the card, the program view and the trend share: one element builder, and the words of
+// an API failure.
 
 // An element `tag` with its attributes ("class" and "text" set the class and the text) and
 // children.
@@ -11,4 +12,15 @@ export function el(tag, attrs = {}, ...children) {
   }
   e.append(...children);
   return e;
+}
+
+// A failed answer's words: the API answers every failure as {"error": "..."}.
+export async function errorText(res) {
+  try {
+    const body = await res.json();
+    if (body && typeof body.error === "string") return body.error;
+  } catch (e) {
+    // Not JSON: said below.
+  }
+  return `the server answered ${res.status} ${res.statusText}`;
 }

@@ -3,7 +3,7 @@
 // that pops (`.Y0` …) the bit it took (shown with an arrow); `?` where the picture cannot
 // tell (edges, toggles, clocks). With --program FILE, whether that listing is the one that runs.
 
-import { el } from "/dom.js";
+import { el, errorText } from "/dom.js";
 
 export class ProgramView {
   constructor(addr) {
@@ -22,8 +22,11 @@ export class ProgramView {
     const res = await fetch(`/api/units/${this.addr}/program`);
     if (!res.ok) {
       this.fingerprint = null;
+      this.note.textContent = `the program cannot be shown: ${await errorText(res)}`;
+      this.note.dataset.error = "1";
       return;
     }
+    delete this.note.dataset.error;
     const p = await res.json();
     this.table.replaceChildren();
     this.cells = [];

@@ -1,12 +1,12 @@
 // The trend of A6, A7 and the counts over the last minutes (uPlot): the history kept by the
-// server (/api/units/N/trend), then a point from the events every quarter second. The time
-// axis reads the wall clock as hh:mm:ss (the PC's time of day), never a date.
+// server (/api/units/N/trend, which also gives the step and the names), then a point from the
+// events every step. The time axis reads the wall clock as hh:mm:ss (the PC's time of day),
+// never a date.
 
 import uPlot from "/vendor/uplot.mjs";
+import { errorText } from "/dom.js";
 
-const STEP_MS = 250;
 const KEEP_S = 300;
-const NAMES = ["A6", "A7", "C0", "C1", "C2", "C3", "C4", "C5", "C6", "C7"];
 const COLOURS = ["#5fb3ff", "#c792ea", "#ffb02e", "#3ddc84", "#ff5c5c", "#f07178", "#89ddff", "#c3e88d", "#ffcb6b", "#82aaff"];
 
 export class Trend {
@@ -15,8 +15,10 @@ export class Trend {
     this.root = document.createElement("div");
     this.root.className = "trend";
     this.t = [];
-    this.series = NAMES.map(() => []);
+    this.names = [];
+    this.series = [];
     this.last = 0;
+    this.stepMs = null;
     this.plot = null;
     this.loaded = false;
     this.load();
@@ -28,11 +30,15 @@ export class Trend {
       if (res.ok) {
         const h = await res.json();
         const now = Date.now() / 1000;
+        this.stepMs = h.step_ms;
+        this.names = h.names;
         this.t = h.t.map((s) => now + s);
         this.series = h.series.map((s) => s.slice());
+      } else {
+        this.root.textContent = `no trend: ${await errorText(res)}`;
       }
     } catch (e) {
-      // No history: the trend starts now.
+      this.root.textContent = `no trend: the server did not answer (${e})`;
     }
     this.loaded = true;
     this.draw();
@@ -40,10 +46,10 @@ export class Trend {
 
   add(v) {
     const now = Date.now();
-    if (!this.loaded || now - this.last < STEP_MS || v.A6 === undefined) return;
+    if (!this.loaded || this.stepMs === null || now - this.last < this.stepMs || v.A6 === undefined) return;
     this.last = now;
     this.t.push(now / 1000);
-    NAMES.forEach((n, i) => this.series[i].push(v[n]));
+    this.names.forEach((n, i) => this.series[i].push(v[n]));
     while (this.t.length && this.t[0] < now / 1000 - KEEP_S) {
       this.t.shift();
       this.series.forEach((s) => s.shift());
@@ -53,16 +59,16 @@ export class Trend {
 
   draw() {
     // Counters that never counted stay off the chart.
-    const used = NAMES.map((n, i) => i < 2 || this.series[i].some((x) => x > 0));
+    const used = this.names.map((n, i) => i < 2 || this.series[i].some((x) => x > 0));
     const key = used.join();
     if (!this.plot || key !== this.key) {
       this.key = key;
       if (this.plot) this.plot.destroy();
       const series = [{ label: "time", value: (u, t) => (t == null ? "" : timeOfDay(t)) }];
-      NAMES.forEach((n, i) => {
+      this.names.forEach((n, i) => {
         if (used[i]) series.push({ label: n, stroke: COLOURS[i], width: 1.5, scale: i < 2 ? "adc" : "count", points: { show: false } });
       });
-      this.idx = NAMES.map((n, i) => i).filter((i) => used[i]);
+      this.idx = this.names.map((n, i) => i).filter((i) => used[i]);
       this.plot = new uPlot({
         width: 560,
         height: 150,

@@ -1,0 +1,263 @@
+//! `utile live` beyond loopback (issue 30, item 4): with `--http 0.0.0.0:PORT` (reached here
+//! through 127.0.0.1 only) every write and every read of the API needs the token (401 and a
+//! JSON error without it, unless `--public-read` for reads), which comes printed as a URL,
+//! from `--token-file`, in the cookie that URL sets, or as a Bearer header; the page itself
+//! is served so it can ask. `--tcp` beyond loopback needs `--tcp-allow`; other clients are
+//! refused and counted. On loopback nothing changes.
+
+mod support;
+
+use std::io::{Read, Write};
+use std::net::{SocketAddr, TcpStream};
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use serde_json::Value;
+
+use support::live::{mbap, Live, UTILE};
+use support::vnano::scratch;
+
+const T: Duration = Duration::from_secs(30);
+
+/// An answer: status, headers (lower-case names), body as JSON (`Null` if not).
+struct Answer {
+    status: u16,
+    head: String,
+    body: Value,
+}
+
+/// One HTTP/1.1 request with extra header lines.
+fn http(addr: SocketAddr, method: &str, path: &str, headers: &[&str], body: &str) -> Answer {
+    let mut s = TcpStream::connect(addr).expect("connect");
+    s.set_read_timeout(Some(Duration::from_secs(15))).unwrap();
+    let mut head = format!(
+        "{method} {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\
+         Content-Type: application/json\r\nContent-Length: {}\r\n",
+        body.len()
+    );
+    for h in headers {
+        head.push_str(h);
+        head.push_str("\r\n");
+    }
+    head.push_str("\r\n");
+    s.write_all(head.as_bytes()).unwrap();
+    s.write_all(body.as_bytes()).unwrap();
+    let mut got = Vec::new();
+    let _ = s.read_to_end(&mut got);
+    let text = String::from_utf8_lossy(&got).into_owned();
+    let (head, body) = text.split_once("\r\n\r\n").unwrap_or((&text, ""));
+    Answer {
+        status: head
+            .split_whitespace()
+            .nth(1)
+            .and_then(|c| c.parse().ok())
+            .unwrap_or(0),
+        head: head.to_ascii_lowercase(),
+        body: serde_json::from_str(body).unwrap_or(Value::Null),
+    }
+}
+
+/// `utile live` on a port that does not exist (no uTile needed: the rules are the server's)
+/// with `extra`; the page's address as reached through 127.0.0.1.
+fn portless(extra: &[&str]) -> (Live, SocketAddr) {
+    let live = Live::start(Path::new("/nonexistent/utile-guard-tty"), extra);
+    let at = SocketAddr::from(([127, 0, 0, 1], live.http.port()));
+    (live, at)
+}
+
+/// The token in the URL `live` printed at its start.
+fn printed_token(live: &Live) -> String {
+    let t0 = Instant::now();
+    loop {
+        let line = live
+            .console
+            .recv_timeout(T.saturating_sub(t0.elapsed()))
+            .expect("a line with the token's URL");
+        if let Some(rest) = line.split("?token=").nth(1) {
+            return rest.trim().to_string();
+        }
+    }
+}
+
+const WRITE: &str = r#"{"signal": "U0", "value": 1}"#;
+
+#[test]
+fn beyond_loopback_every_read_and_write_needs_the_token() {
+    let (live, at) = portless(&["--http", "0.0.0.0:0"]);
+    assert!(live.http.ip().is_unspecified(), "{}", live.http);
+    let token = printed_token(&live);
+    assert_eq!(token.len(), 32, "{token}");
+
+    // Without it: 401 with a JSON error, for reads and writes alike.
+    for (method, path, body) in [
+        ("GET", "/api/state", ""),
+        ("GET", "/api/units/1/trend", ""),
+        ("POST", "/api/units/1/write", WRITE),
+        ("POST", "/api/terminal", "/"),
+    ] {
+        let a = http(at, method, path, &[], body);
+        assert_eq!(a.status, 401, "{method} {path}");
+        assert!(
+            a.body["error"].as_str().unwrap().contains("token"),
+            "{}",
+            a.body
+        );
+        assert_eq!(a.body["token_needed"], true);
+        let wrong = http(
+            at,
+            method,
+            path,
+            &["Authorization: Bearer 0123456789abcdef0123456789abcdef"],
+            body,
+        );
+        assert_eq!(wrong.status, 401, "{method} {path} with a wrong token");
+        assert!(wrong.body["error"]
+            .as_str()
+            .unwrap()
+            .contains("wrong token"));
+    }
+    // The terminal's WebSocket carries keys: refused before the upgrade.
+    let ws = http(
+        at,
+        "GET",
+        "/api/terminal",
+        &[
+            "Upgrade: websocket",
+            "Connection: Upgrade",
+            "Sec-WebSocket-Version: 13",
+            "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==",
+        ],
+        "",
+    );
+    assert_eq!(ws.status, 401);
+    // The page itself is served, so it can ask.
+    assert_eq!(http(at, "GET", "/", &[], "").status, 200);
+
+    // The printed URL: its answer sets the cookie, which then opens the API.
+    let page = http(at, "GET", &format!("/?token={token}"), &[], "");
+    assert_eq!(page.status, 200);
+    let cookie_line = page
+        .head
+        .lines()
+        .find(|l| l.starts_with("set-cookie:"))
+        .expect("a cookie");
+    assert!(cookie_line.contains("httponly") && cookie_line.contains("samesite=strict"));
+    let cookie = format!("Cookie: utile_token={token}");
+    let a = http(at, "GET", "/api/state", &[&cookie], "");
+    assert_eq!(a.status, 200);
+    assert_eq!(a.body["port"], "/nonexistent/utile-guard-tty");
+    // A write with the token passes the guard (the line has no port: 503, not 401).
+    let bearer = format!("Authorization: Bearer {token}");
+    let w = http(at, "POST", "/api/units/1/write", &[&bearer], WRITE);
+    assert_ne!(w.status, 401, "{}", w.body);
+    assert!(
+        w.body["error"].as_str().unwrap().contains("serial port"),
+        "{}",
+        w.body
+    );
+    let q = http(at, "GET", &format!("/api/state?token={token}"), &[], "");
+    assert_eq!(q.status, 200);
+}
+
+#[test]
+fn public_read_opens_reads_only_and_a_token_file_gives_the_token() {
+    let dir = scratch("guard-token-file");
+    let file = dir.join("token");
+    let token = "a-token-kept-in-a-file-42";
+    std::fs::write(&file, format!("{token}\n")).unwrap();
+    let (live, at) = portless(&[
+        "--http",
+        "0.0.0.0:0",
+        "--public-read",
+        "--token-file",
+        file.to_str().unwrap(),
+    ]);
+    assert_eq!(printed_token(&live), token);
+    assert_eq!(http(at, "GET", "/api/state", &[], "").status, 200);
+    assert_eq!(
+        http(at, "POST", "/api/units/1/write", &[], WRITE).status,
+        401
+    );
+    assert_eq!(http(at, "POST", "/api/terminal", &[], "/").status, 401);
+    let bearer = format!("Authorization: Bearer {token}");
+    assert_ne!(
+        http(at, "POST", "/api/units/1/write", &[&bearer], WRITE).status,
+        401
+    );
+    drop(live);
+
+    // On loopback nothing is asked.
+    let (live, at) = portless(&[]);
+    assert_eq!(http(at, "GET", "/api/state", &[], "").status, 200);
+    assert_ne!(
+        http(at, "POST", "/api/units/1/write", &[], WRITE).status,
+        401
+    );
+    drop(live);
+
+    // A token file with too short a token is refused at start.
+    std::fs::write(&file, "short\n").unwrap();
+    let out = Command::new(UTILE)
+        .args([
+            "live",
+            "--port",
+            "/nonexistent/x",
+            "--http",
+            "0.0.0.0:0",
+            "--no-tcp",
+        ])
+        .arg("--token-file")
+        .arg(&file)
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("at least 16"));
+}
+
+#[test]
+fn the_gateway_beyond_loopback_takes_only_the_allowed_networks() {
+    // Without --tcp-allow it does not start.
+    let out = Command::new(UTILE)
+        .args(["live", "--port", "/nonexistent/x", "--http", "127.0.0.1:0"])
+        .args(["--tcp", "0.0.0.0:0"])
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--tcp-allow CIDR"), "{err}");
+
+    // 127.0.0.1 is not in 10.0.0.0/8: refused (the connection closed) and counted.
+    let (live, _) = portless(&[
+        "--tcp",
+        "0.0.0.0:0",
+        "--tcp-allow",
+        "10.0.0.0/8,192.168.0.0/16",
+    ]);
+    let gw = SocketAddr::from(([127, 0, 0, 1], live.tcp.port()));
+    for _ in 0..2 {
+        let mut s = TcpStream::connect(gw).unwrap();
+        s.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
+        let _ = s.write_all(&[0, 1, 0, 0, 0, 6, 1, 3, 0, 0, 0, 1]);
+        let mut buf = [0u8; 16];
+        assert!(
+            matches!(s.read(&mut buf), Ok(0) | Err(_)),
+            "no answer to a refused client"
+        );
+    }
+    live.wait("two clients refused", T, |s| {
+        s["line"]["tcp_refused_clients"] == 2
+    });
+    drop(live);
+
+    // 127.0.0.1/32 is allowed: the request gets the gateway's answer (no uTile: exception 0x0B).
+    let (live, _) = portless(&["--tcp", "0.0.0.0:0", "--tcp-allow", "127.0.0.1/32"]);
+    let gw = SocketAddr::from(([127, 0, 0, 1], live.tcp.port()));
+    let mut s = TcpStream::connect(gw).unwrap();
+    s.set_read_timeout(Some(Duration::from_secs(15))).unwrap();
+    let pdu = mbap(&mut s, 7, 1, &[3, 0, 0, 0, 1]);
+    assert_eq!(pdu, [0x83, 0x0B]);
+    assert_eq!(live.state()["line"]["tcp_refused_clients"], 0);
+}
