@@ -25,9 +25,11 @@ mod firmware {
     use crate::hal::scan::{self, Exit, RunState};
     use crate::modbus;
     use avr_device::interrupt::CriticalSection;
+    use core::mem::MaybeUninit;
     use utile_core::board::Board;
     use utile_core::editor::{Editor, Mode};
     use utile_core::engine::Engine;
+    use utile_core::modbus::hold::Next;
     use utile_core::stats::ScanStats;
 
     /// The editor lives in static RAM, so the linker counts it against the RAM budget
@@ -36,6 +38,12 @@ mod firmware {
     /// (writing `Editor::new()` field by field took 142 B of flash), and nothing takes flash
     /// as `.data` would (it would if `Editor::new()` had a byte other than 0).
     static mut EDITOR: Editor = Editor::new();
+
+    /// RUN mode's Modbus slave, in static RAM rather than in `run`'s stack frame: with it
+    /// there the frame reached past the 63 bytes an AVR `ldd`/`std Y+q` reaches, and each
+    /// slot beyond cost four more instructions (SPEC §18's hold made it 125 bytes). All
+    /// zeros (`.bss`); `Server::begin` sets it up in place at each RUN.
+    static mut SERVER: MaybeUninit<modbus::Server> = MaybeUninit::zeroed();
 
     /// Autostart: D8 grounded and a valid stored image → load it and run at once (drawing
     /// comes later).
@@ -93,7 +101,8 @@ mod firmware {
     /// and comes back only for KEY's break key, pending displays (every 16th scan), Modbus
     /// work (after the scan in which it arose) and each 65,536th scan; STAT's figures come
     /// from its bookkeeping. The line is a Modbus slave's meanwhile (`modbus.rs`); while a
-    /// master is active, or a frame is on its way, the terminal is quiet.
+    /// master is active, or a frame is on its way, the terminal is quiet. Between two scans
+    /// a master's hold (SPEC §18) runs no scan, or one scan a step, while the rest goes on.
     ///
     /// Out of line: its locals (scan figures, the Modbus server) made `main`'s stack frame
     /// 84 bytes, past the 63 an AVR `std Y+q` reaches, so the editor code inlined into `main`
@@ -102,12 +111,36 @@ mod firmware {
     fn run(eng: &mut Engine, editor: &mut Editor, board: &mut hal::Nano, by_watchdog: bool) {
         let mut st = RunState::new(board.stats_ticks());
         let mut wraps: u16 = 0;
-        let mut server = modbus::Server::begin(eng, board, by_watchdog, editor.stored);
+        // SAFETY: the only reference to SERVER, taken once per RUN (`run` is not re-entered);
+        // no interrupt handler uses it; all-zero bytes are a valid `Server` (integers and
+        // bools only).
+        let server =
+            core::hint::black_box(unsafe { (*core::ptr::addr_of_mut!(SERVER)).assume_init_mut() });
+        server.begin(eng, board, by_watchdog, editor.stored);
         loop {
             board.feed_watchdog();
             let quiet = server.quiet(board);
             let want = !quiet && editor.has_output(eng);
-            match scan::run(eng, &mut st, want) {
+            // SPEC §18, between two scans (a scan a KEY left half done goes on first).
+            let next = if st.next == 0 {
+                server.next_scan(board)
+            } else {
+                Next::Free
+            };
+            let exit = match next {
+                Next::Free => scan::run(eng, &mut st, want),
+                Next::Step => {
+                    // Back after this one scan's END.
+                    hal::line::again();
+                    scan::run(eng, &mut st, want)
+                }
+                Next::Held => {
+                    // No scan: its length runs from the last visit, not across the hold.
+                    st.last = board.stats_ticks();
+                    Exit::Scans
+                }
+            };
+            match exit {
                 Exit::Key => {
                     // KEY takes one received byte; only `/` stops the program.
                     if board.rx() == Some(b'/') {

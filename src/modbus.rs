@@ -1,6 +1,7 @@
-//! RUN mode's Modbus RTU slave (SPEC §13, §17), between scans: judge a frame once its silence
-//! has passed, carry the request out on the engine (the core's `PlcMap`) and start its reply
-//! at once, then feed the reply to the transmitter a few bytes per visit. The line's timing
+//! RUN mode's Modbus RTU slave (SPEC §13, §17, §18), between scans: judge a frame once its
+//! silence has passed, carry the request out on the engine (the core's `PlcMap`) and start its
+//! reply at once, then feed the reply to the transmitter a few bytes per visit; and whether
+//! the next scan may run (§18's hold, the core's `Hold`, kept in the status). The line's timing
 //! and the slave itself are the hardware layer's (`hal/line.rs`); this file has no `unsafe`.
 //!
 //! The scan comes back for this after the very scan in which the work arose (a frame ended,
@@ -9,6 +10,7 @@
 
 use utile_core::board::Board;
 use utile_core::engine::Engine;
+use utile_core::modbus::hold::{Hold, Next, HR_SCAN_CONTROL};
 use utile_core::modbus::plc::{PlcMap, Status, STATUS_OVERRUN, STATUS_RUNNING};
 use utile_core::modbus::plc::{STATUS_STORED, STATUS_WATCHDOG};
 use utile_core::modbus::slave::Event;
@@ -61,7 +63,8 @@ impl Server {
     /// RUN starts: the address from EEPROM, the status bits (`by_watchdog`: the last reset
     /// was the watchdog's; `stored`: EEPROM holds a valid program, as the editor knows it),
     /// the program's fingerprint, the line switched to Modbus.
-    pub fn begin(eng: &Engine, board: &mut Nano, by_watchdog: bool, stored: bool) -> Self {
+    #[inline(never)]
+    pub fn begin(&mut self, eng: &Engine, board: &mut Nano, by_watchdog: bool, stored: bool) {
         let mut flags = STATUS_RUNNING;
         if by_watchdog {
             flags |= STATUS_WATCHDOG;
@@ -69,20 +72,18 @@ impl Server {
         if stored {
             flags |= STATUS_STORED;
         }
-        let mut status = Status::default();
-        status.start(&eng.prog.uf);
-        let server = Server {
-            address: store::slave_address(board),
-            flags,
-            status,
-            start_ms: board.now_ms(),
-            overruns_at_start: board.rx_overruns(),
-            pending: false,
-            started: false,
-            reseal: false,
-        };
+        // Field by field, in place: the rest of the status is written at every request
+        // before it is read.
+        self.address = store::slave_address(board);
+        self.flags = flags;
+        self.status.start(&eng.prog.uf);
+        self.status.hold = Hold::default();
+        self.start_ms = board.now_ms();
+        self.overruns_at_start = board.rx_overruns();
+        self.pending = false;
+        self.started = false;
+        self.reseal = false;
         line::serve(true);
-        server
     }
 
     /// RUN ends: the line goes back to the terminal.
@@ -114,20 +115,26 @@ impl Server {
             let mut map = PlcMap {
                 eng: &mut *eng,
                 b: &mut *board,
-                status: &self.status,
+                status: &mut self.status,
             };
             match line::judge(self.address, &mut map, now) {
                 Event::Slash => {
                     serial::inject(b'/');
                     after = After::BreakKey;
+                    // The terminal's break key ends a hold (SPEC §18): KEY stops the
+                    // program at its next scan; a program without KEY runs on.
+                    self.status.hold.write(HR_SCAN_CONTROL, 0);
                 }
-                Event::Reply => {
-                    self.pending = true;
-                    self.started = false;
+                ev @ (Event::Reply | Event::Broadcast) => {
+                    if ev == Event::Reply {
+                        self.pending = true;
+                        self.started = false;
+                    }
                     // Any request may have written: the seal is renewed (0.14 ms) anyway.
                     self.reseal = true;
+                    // A valid frame for this slave: a hold's lease starts again (SPEC §18).
+                    self.status.hold.heard(now);
                 }
-                Event::Broadcast => self.reseal = true,
                 Event::None | Event::Dropped => {}
             }
         } else if !self.pending && self.reseal {
@@ -159,7 +166,7 @@ impl Server {
         let mut map = PlcMap {
             eng: &mut *eng,
             b: &mut *board,
-            status: &self.status,
+            status: &mut self.status,
         };
         let mut made = 0u8;
         while made < MIN_BYTES || map.b.stats_ticks().wrapping_sub(start) < VISIT_TICKS {
@@ -176,6 +183,11 @@ impl Server {
                 }
             }
         }
+    }
+
+    /// Between two scans: whether the next scan runs (SPEC §18, the core's `Hold::next`).
+    pub fn next_scan(&mut self, board: &mut Nano) -> Next {
+        self.status.hold.next(board)
     }
 
     /// The figures the input registers report, as they are now, and the snapshot's

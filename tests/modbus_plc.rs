@@ -1,9 +1,11 @@
 //! The slave of SPEC §13 on the engine (host): §13's map over a running program, writes that
 //! the program sees at its next scan, range checks that change nothing, broadcasts, drops,
 //! the break key, and the master's activity window; SPEC §17's snapshot (one scan's bits
-//! however late a reply reads them) and program window.
+//! however late a reply reads them) and program window; SPEC §18's hold and steps
+//! (holding registers 32–33, status bits 4–5, the lease) with the RUN loop's decision.
 
 use utile_core::engine::{Engine, Program};
+use utile_core::modbus::hold::{Hold, Next, STATUS_HELD, STATUS_LAPSED};
 use utile_core::modbus::plc::{PlcMap, Status, STATUS_RUNNING};
 use utile_core::modbus::slave::{Event, Slave, ACTIVE_MS};
 use utile_core::modbus::snapshot::{self, Snapshot, PROGRAM, SNAPSHOT, SNAPSHOT_LEN};
@@ -71,7 +73,7 @@ impl Rig {
         let mut map = PlcMap {
             eng: &mut self.eng,
             b: &mut self.b,
-            status: &self.status,
+            status: &mut self.status,
         };
         self.slave.end(ADDRESS, &mut map, now)
     }
@@ -81,7 +83,7 @@ impl Rig {
         let mut map = PlcMap {
             eng: &mut self.eng,
             b: &mut self.b,
-            status: &self.status,
+            status: &mut self.status,
         };
         self.slave.next_byte(&mut map)
     }
@@ -409,4 +411,159 @@ fn a_reply_read_over_later_scans_still_shows_the_bits_of_one_scan() {
         assert_eq!(regs[1..5], [y << 8 | 0x3F, y << 8 | y, q, q]);
         assert_eq!(u32::from(regs[6]) << 16 | u32::from(regs[7]), scans - 21);
     }
+}
+
+/// SPEC §18: the RUN loop between two scans as the firmware runs it, `ms` times: the hold
+/// decides whether a scan runs (free: four scans a ms, a step: one), then a ms passes.
+/// Returns the scans run.
+fn run_held(r: &mut Rig, ms: u32) -> u32 {
+    let mut scans = 0;
+    for _ in 0..ms {
+        let n = match r.status.hold.next(&mut r.b) {
+            Next::Free => 4,
+            Next::Step => 1,
+            Next::Held => 0,
+        };
+        for _ in 0..n {
+            r.eng.scan(&mut r.b);
+        }
+        scans += n;
+        r.b.advance_ms(1);
+    }
+    scans
+}
+
+/// FC03 of holding registers 32 and 33.
+fn scan_control(r: &mut Rig) -> Vec<u16> {
+    modbus::registers(&r.ask(&[0x03, 0, 32, 0, 2]))
+}
+
+#[test]
+fn holding_registers_32_and_33_hold_and_step_and_refuse_other_values() {
+    let mut r = Rig::new(&["Y0.", "!", ".Y0", "END"]);
+    assert_eq!(scan_control(&mut r), vec![0, 0], "RUN starts free");
+    // Exception 03 for every value outside 0..1 and 1..1000, and nothing changes.
+    let before = r.status.hold;
+    assert_eq!(r.ask(&[0x06, 0, 32, 0, 2]), vec![0x86, 3]);
+    assert_eq!(r.ask(&[0x06, 0, 32, 0xFF, 0xFF]), vec![0x86, 3]);
+    assert_eq!(r.ask(&[0x06, 0, 33, 0, 0]), vec![0x86, 3], "0 steps");
+    assert_eq!(
+        r.ask(&[0x06, 0, 33, 0x03, 0xE9]),
+        vec![0x86, 3],
+        "1001 steps"
+    );
+    assert_eq!(
+        r.ask(&[0x10, 0, 32, 0, 2, 4, 0, 1, 0, 0]),
+        vec![0x90, 3],
+        "hold fine, 0 steps: neither written"
+    );
+    assert_eq!(r.status.hold, before);
+    // Registers 26..31 are no part of the map: a read across the gap is exception 02.
+    assert_eq!(r.ask(&[0x03, 0, 25, 0, 8]), vec![0x83, 2]);
+    assert_eq!(r.ask(&[0x03, 0, 33, 0, 2]), vec![0x83, 2]);
+    assert_eq!(r.ask(&[0x06, 0, 34, 0, 1]), vec![0x86, 2]);
+    // Hold: 1, and status bit 4 at the next request.
+    assert_eq!(r.ask(&[0x06, 0, 32, 0, 1]), vec![0x06, 0, 32, 0, 1]);
+    assert_eq!(scan_control(&mut r), vec![1, 0]);
+    r.status.refresh(STATUS_RUNNING, &ScanStats::new(), 0, 0);
+    assert_eq!(
+        read_input(&mut r, 0, 1).unwrap()[0],
+        STATUS_RUNNING | STATUS_HELD
+    );
+    // 1000 steps are taken, and counted down as they run.
+    assert_eq!(
+        r.ask(&[0x06, 0, 33, 0x03, 0xE8]),
+        vec![0x06, 0, 33, 3, 0xE8]
+    );
+    assert_eq!(scan_control(&mut r), vec![1, 1000]);
+    assert_eq!(run_held(&mut r, 10), 10);
+    assert_eq!(scan_control(&mut r), vec![1, 990]);
+    // Release: free again, the steps dropped; bit 4 off.
+    assert_eq!(r.ask(&[0x06, 0, 32, 0, 0]), vec![0x06, 0, 32, 0, 0]);
+    assert_eq!(scan_control(&mut r), vec![0, 0]);
+    r.status.refresh(STATUS_RUNNING, &ScanStats::new(), 0, 0);
+    assert_eq!(read_input(&mut r, 64, 1).unwrap()[0], STATUS_RUNNING);
+    // Both in one write, in address order: release, then 5 steps and a hold.
+    assert_eq!(
+        r.ask(&[0x10, 0, 32, 0, 2, 4, 0, 0, 0, 5]),
+        vec![0x10, 0, 32, 0, 2]
+    );
+    assert_eq!(scan_control(&mut r), vec![1, 5]);
+}
+
+#[test]
+fn held_the_scan_count_moves_only_by_the_steps_asked_for_and_nothing_else_changes() {
+    // U0 triggers T0 (0.3 s); Y1 shows TQ0 as the scan saw it; Y0 toggles each scan.
+    let mut r = Rig::new(&["U0.", ".TK0", "TQ0.", ".Y1", "Y0.", "!", ".Y0", "END"]);
+    r.eng.prog.presets[0] = 3;
+    r.eng.pu = 1;
+    assert!(run_held(&mut r, 5) > 0, "free, it scans");
+    r.eng.pu = 0;
+    run_held(&mut r, 5);
+    assert!(r.b.output(1), "T0 runs");
+    r.ask(&[0x06, 0, 32, 0, 1]);
+    let (eng, outputs) = (r.eng.clone(), r.b.outputs);
+    assert_eq!(run_held(&mut r, 500), 0, "held: no scan");
+    assert_eq!(r.b.outputs, outputs, "the pins stay");
+    assert_eq!(r.eng, eng, "the engine stays");
+    assert_eq!(r.eng.time_left_ms(0, r.b.ticker.now_ms()), 0, "T0 ran out");
+    // One step: one scan, which sees TQ0 = 0 (the timer ran out while held).
+    r.ask(&[0x06, 0, 33, 0, 1]);
+    assert_eq!(run_held(&mut r, 50), 1);
+    assert_eq!(r.eng.tq & 1, 0, "TQ0 = 0 at the step");
+    assert!(!r.b.output(1), "the program saw TQ0 = 0");
+    assert_ne!(r.eng.py & 1, eng.py & 1, "the step's scan toggled Y0");
+    for n in [1u16, 7, 250, 1000] {
+        r.ask(&[0x06, 0, 33, (n >> 8) as u8, n as u8]);
+        assert_eq!(run_held(&mut r, 1500), u32::from(n), "{n} steps");
+        assert_eq!(scan_control(&mut r), vec![1, 0]);
+    }
+    // Steps asked for while free run and then hold.
+    r.ask(&[0x06, 0, 32, 0, 0]);
+    assert!(run_held(&mut r, 3) > 3);
+    r.ask(&[0x06, 0, 33, 0, 2]);
+    assert_eq!(run_held(&mut r, 100), 2);
+}
+
+#[test]
+fn a_hold_ends_by_itself_ten_seconds_after_the_last_frame() {
+    let mut r = Rig::new(&["Y0.", "!", ".Y0", "END"]);
+    let now = r.b.ticker.now_ms();
+    r.ask(&[0x06, 0, 32, 0, 1]);
+    // The firmware renews the lease at every valid frame for it (src/modbus.rs).
+    r.status.hold.heard(now);
+    assert_eq!(run_held(&mut r, 9_000), 0);
+    // A read 9 s later renews it.
+    r.ask(&[0x03, 0, 32, 0, 1]);
+    r.status.hold.heard(r.b.ticker.now_ms());
+    assert_eq!(
+        run_held(&mut r, 9_999),
+        0,
+        "held until 9.999 s after the last frame"
+    );
+    assert_eq!(run_held(&mut r, 2), 4, "free at 10 s");
+    assert!(!r.status.hold.held());
+    r.status.refresh(STATUS_RUNNING, &ScanStats::new(), 0, 0);
+    assert_eq!(
+        read_input(&mut r, 0, 1).unwrap()[0],
+        STATUS_RUNNING | STATUS_LAPSED,
+        "bit 5: a hold ended by itself"
+    );
+    // Steps left when the lease ends are dropped: 5 steps, then free.
+    r.ask(&[0x06, 0, 33, 0x03, 0xE8]);
+    r.status.hold.heard(r.b.ticker.now_ms() - 9_995);
+    assert_eq!(run_held(&mut r, 10), 5 + 5 * 4);
+    assert!(!r.status.hold.held());
+    assert_eq!(scan_control(&mut r), vec![0, 0]);
+    // Bit 5 stays with a new hold.
+    r.ask(&[0x06, 0, 32, 0, 1]);
+    r.status.hold.heard(r.b.ticker.now_ms());
+    r.status.refresh(STATUS_RUNNING, &ScanStats::new(), 0, 0);
+    assert_eq!(
+        read_input(&mut r, 0, 1).unwrap()[0],
+        STATUS_RUNNING | STATUS_HELD | STATUS_LAPSED
+    );
+    // A new RUN starts free, bit 5 clear.
+    assert_eq!(Status::default().hold, Hold::default());
+    assert_eq!(Hold::default().bits, 0);
 }

@@ -11,6 +11,9 @@
     modbus_master.py PORT bus N            slaves 1..N on one line, and a broadcast
     modbus_master.py PORT windows          SPEC 17: the snapshot (64..103) and the program
                                            (256..383); prints them, checks exception 02
+    modbus_master.py PORT hold             SPEC 18 on a program whose Y0..Y7 count its scans
+                                           (tests/data/scan_counter.utl): hold, steps,
+                                           exception 03, release, the 10 s lease
 
 Prints one line per check or value; exits 1 with the reason when a check fails.
 """
@@ -164,6 +167,59 @@ def windows(c):
     print("ALL OK")
 
 
+HELD, LAPSED = 1 << 4, 1 << 5
+
+
+def picture(c):
+    """Status, Y0..Y7 and the scan count, from one read of the snapshot."""
+    r = ok(c.read_input_registers(64, count=8, slave=SLAVE), "04 snapshot").registers
+    return r[0], r[1] >> 8, r[6] << 16 | r[7]
+
+
+def hold(c):
+    if ok(c.read_holding_registers(32, count=2, slave=SLAVE), "03 32-33").registers != [0, 0]:
+        fail("RUN did not start free")
+    ok(c.write_register(32, 1, slave=SLAVE), "06 hold")
+    status, y, scans = picture(c)
+    if not status & HELD or y != scans & 0xFF:
+        fail(f"held: status {status:#06x}, Y {y}, {scans} scans")
+    time.sleep(0.5)
+    if picture(c) != (status, y, scans):
+        fail("the scan count moved while held")
+    print(f"held at scan {scans}")
+    for n in [1, 10, 1000]:
+        ok(c.write_register(33, n, slave=SLAVE), f"06 {n} steps")
+        time.sleep(0.5)
+        _, y, now = picture(c)
+        if now != scans + n or y != now & 0xFF:
+            fail(f"{n} steps: {scans} -> {now} scans, Y {y}")
+        if ok(c.read_holding_registers(32, count=2, slave=SLAVE), "03").registers != [1, 0]:
+            fail(f"after {n} steps not held with none left")
+        print(f"{n} steps: {scans} -> {now} scans")
+        scans = now
+    for addr, value in [(32, 2), (33, 0), (33, 1001)]:
+        exception(c.write_register(addr, value, slave=SLAVE), 3, f"06 {addr} = {value}")
+    exception(c.write_registers(32, [0, 0], slave=SLAVE), 3, "16 32-33 = 0 0")
+    exception(c.read_holding_registers(26, count=8, slave=SLAVE), 2, "03 26 x 8")
+    if picture(c)[2] != scans:
+        fail("a refused write released the hold")
+    ok(c.write_register(32, 0, slave=SLAVE), "06 release")
+    time.sleep(0.2)
+    status, _, now = picture(c)
+    if status & HELD or now <= scans:
+        fail(f"released: status {status:#06x}, {scans} -> {now} scans")
+    print("released: the scan runs")
+    # The lease: a master that says nothing for 10 s leaves the plant running.
+    ok(c.write_register(32, 1, slave=SLAVE), "06 hold")
+    _, _, scans = picture(c)
+    time.sleep(10.8)
+    status, _, now = picture(c)
+    if status & (HELD | LAPSED) != LAPSED or now <= scans:
+        fail(f"10.8 s of silence: status {status:#06x}, {scans} -> {now} scans")
+    print(f"the lease ended the hold by itself: status {status:#06x}")
+    print("ALL OK")
+
+
 def bus(c, n):
     for s in range(1, n + 1):
         # Coil 8 + s is U(s): with PU. .PY, output Y(s) of slave s only.
@@ -201,6 +257,8 @@ def main():
         wire(c)
     elif what == "windows":
         windows(c)
+    elif what == "hold":
+        hold(c)
     elif what == "bus":
         bus(c, int(sys.argv[3]))
     elif what == "poll":

@@ -1,6 +1,7 @@
 //! Real Modbus masters against the real image in the virtual Nano, over its pty (SPEC §13,
 //! issue 16; SPEC §17, issue 24): pymodbus (`modbus_master.py`: every function and
-//! exception, values, writes, the snapshot and program windows) and mbpoll. A program with U0 as a remote start and a counter, and the tank example whose
+//! exception, values, writes, the snapshot and program windows; SPEC §18's hold, steps and
+//! lease) and mbpoll. A program with U0 as a remote start and a counter, and the tank example whose
 //! behaviour a written set-point changes. `./x setup` installs both masters; without them
 //! the tests say so and pass, unless `CI` is set.
 
@@ -196,6 +197,21 @@ fn mbpoll_reads_the_snapshot_and_the_program() {
         let expected = u16::from_be_bytes([prog.uf[line], prog.uf[line + 1]]);
         assert_eq!(value(&program, 257 + n), expected, "register {}", 256 + n);
     }
+}
+
+#[test]
+fn pymodbus_holds_and_steps_the_scan_and_the_lease_frees_it() {
+    // SPEC §18: tests/data/scan_counter.utl's Y0..Y7 count its scans, so the master sees
+    // each step land, and no scan more.
+    if !pymodbus() {
+        return;
+    }
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/scan_counter.utl");
+    let text = std::fs::read_to_string(&path).expect("scan_counter.utl");
+    let prog = listing::parse("scan_counter", &text).expect("the listing");
+    let n = nano("hold.eeprom", &prog, &[]);
+    let out = master(&n.path, &["hold"]);
+    assert!(out.contains("ALL OK"), "{out}");
 }
 
 #[test]

@@ -12,6 +12,7 @@
 //! - [`slave`]: one slave on the line: frames in, requests carried out, replies out, drops
 //!   counted, whether a master is active;
 //! - [`plc`]: §13's map on top of the engine;
+//! - [`hold`]: §18's hold and steps, the decision the RUN loop takes between two scans;
 //! - [`snapshot`]: §17's snapshot and program windows, their layout shared by the firmware
 //!   and the host.
 //!
@@ -20,6 +21,7 @@
 
 pub mod crc;
 pub mod frame;
+pub mod hold;
 pub mod map;
 pub mod plc;
 pub mod reply;

@@ -1,7 +1,8 @@
 //! The map of SPEC §13 on top of the engine's own state (no second copy of the I/O image):
 //! coils Y/U/V, discrete inputs A/Q/TQ/CQ/H, holding registers for the presets and
 //! set-points, input registers for status, STAT's figures, counts, readings, time left;
-//! and SPEC §17's snapshot and program windows of input registers ([`super::snapshot`]).
+//! SPEC §17's snapshot and program windows of input registers ([`super::snapshot`]); and
+//! SPEC §18's scan control, holding registers 32–33 ([`super::hold`]).
 
 use crate::analog;
 use crate::board::Board;
@@ -9,6 +10,7 @@ use crate::engine::{Engine, COUNTERS, LINES, SET_POINTS, UNITS};
 use crate::stats::{self, ScanStats};
 
 use super::crc::Crc16;
+use super::hold::{Hold, HR_SCAN_CONTROL};
 use super::map::{Map, Table};
 use super::snapshot::{at, PROGRAM, PROGRAM_LEN, SNAPSHOT, SNAPSHOT_LEN};
 
@@ -51,6 +53,8 @@ pub struct Status {
     /// The running program's fingerprint ([`super::snapshot::fingerprint`]), taken at its start:
     /// a running CRC, so no other copy of one is needed (`.value()` is the register).
     pub fingerprint: Crc16,
+    /// SPEC §18's hold and steps; its status bits join register 0 at [`Status::refresh`].
+    pub hold: Hold,
 }
 
 impl Status {
@@ -71,13 +75,14 @@ impl Status {
         }
     }
 
-    /// Input registers 0..7 as [`Status::new`] makes them; the rest kept.
+    /// Input registers 0..7 as [`Status::new`] makes them, with the hold's status bits 4
+    /// and 5 (SPEC §18); the rest kept.
     pub fn refresh(&mut self, flags: u16, st: &ScanStats, overruns: u16, dropped: u16) {
         // No scan yet shows 0.
         let us = |ticks: u16| if st.count == 0 { 0 } else { ticks >> 1 };
         self.run_ms = st.run_ms;
         self.regs = [
-            flags,
+            flags | u16::from(self.hold.bits),
             us(st.min),
             0,
             us(st.max),
@@ -136,8 +141,8 @@ pub struct PlcMap<'a, B: Board> {
     pub eng: &'a mut Engine,
     /// The board: inputs, analog readings, the clock.
     pub b: &'a mut B,
-    /// Status and figures.
-    pub status: &'a Status,
+    /// Status and figures, and the hold that holding registers 32–33 write.
+    pub status: &'a mut Status,
 }
 
 /// Bit `n` (0..7) of `byte`.
@@ -159,6 +164,9 @@ fn window(table: Table, addr: u16) -> Option<u16> {
         Table::DiscreteInputs if addr < 6 => 0,
         Table::DiscreteInputs if (8..50).contains(&addr) => 8,
         Table::HoldingRegisters if addr < HR_SET_POINTS + SET_POINTS as u16 => 0,
+        Table::HoldingRegisters if (HR_SCAN_CONTROL..HR_SCAN_CONTROL + 2).contains(&addr) => {
+            HR_SCAN_CONTROL
+        }
         Table::InputRegisters if addr < IR_READINGS + SET_POINTS as u16 => 0,
         Table::InputRegisters if (IR_TIME_LEFT..IR_TIME_LEFT + UNITS as u16).contains(&addr) => {
             IR_TIME_LEFT
@@ -210,7 +218,7 @@ impl<B: Board> PlcMap<'_, B> {
             };
             a = usize::from(addr);
         }
-        let s = self.status;
+        let s = &*self.status;
         if addr == IR_MEAN {
             let scans = u32::from(s.regs[4]) << 16 | u32::from(s.regs[5]);
             stats::per_1000(s.run_ms, scans).min(0xFFFF) as u16
@@ -263,7 +271,9 @@ impl<B: Board> Map for PlcMap<'_, B> {
             // Masks instead of checks: `contains` has kept the address in range.
             Table::HoldingRegisters => {
                 let (p, a) = (&self.eng.prog, usize::from(addr));
-                if addr < HR_COUNTER_PRESETS {
+                if addr >= HR_SCAN_CONTROL {
+                    self.status.hold.read(addr)
+                } else if addr < HR_COUNTER_PRESETS {
                     u16::from(p.presets[a & 15])
                 } else if addr < HR_SET_POINTS {
                     p.counter_presets[a & 7]
@@ -280,8 +290,10 @@ impl<B: Board> Map for PlcMap<'_, B> {
             value <= 255
         } else if addr < HR_SET_POINTS {
             true
-        } else {
+        } else if addr < HR_SCAN_CONTROL {
             value <= analog::MAX
+        } else {
+            Hold::accepts(addr, value)
         }
     }
 
@@ -301,7 +313,9 @@ impl<B: Board> Map for PlcMap<'_, B> {
             // LDC (only theirs: a write of 16 timer presets stays short between two scans).
             Table::HoldingRegisters => {
                 let (p, a) = (&mut self.eng.prog, usize::from(addr));
-                if addr < HR_COUNTER_PRESETS {
+                if addr >= HR_SCAN_CONTROL {
+                    self.status.hold.write(addr, value);
+                } else if addr < HR_COUNTER_PRESETS {
                     p.presets[a & 15] = value as u8;
                 } else if addr < HR_SET_POINTS {
                     p.counter_presets[a & 7] = value;

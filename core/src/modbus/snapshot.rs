@@ -7,6 +7,7 @@
 use crate::engine::{COUNTERS, LINES, SET_POINTS, UNITS};
 
 use super::crc::Crc16;
+use super::hold::{STATUS_HELD, STATUS_LAPSED};
 
 /// First input register of the snapshot.
 pub const SNAPSHOT: u16 = 64;
@@ -138,6 +139,17 @@ impl Snapshot {
         pick(at::SCAN_TIMES, &mut s.scan_us);
         s
     }
+
+    /// Whether the scan is held (status bit 4, SPEC §18).
+    pub fn held(&self) -> bool {
+        self.status & STATUS_HELD != 0
+    }
+
+    /// Whether a hold has ended by itself since RUN (status bit 5, SPEC §18: the master
+    /// that held it fell silent for 10 s).
+    pub fn hold_lapsed(&self) -> bool {
+        self.status & STATUS_LAPSED != 0
+    }
 }
 
 /// The program from the [`PROGRAM_LEN`] registers of the program window: line 2n in the
@@ -193,6 +205,11 @@ mod tests {
             (s.overruns, s.dropped, s.fingerprint),
             (r[37], r[38], r[39])
         );
+        // Status 7 = 0b000111: neither held nor a hold lapsed.
+        assert!(!s.held() && !s.hold_lapsed());
+        r[0] = 0x0031;
+        let s = Snapshot::from_registers(&r);
+        assert!(s.held() && s.hold_lapsed());
     }
 
     #[test]

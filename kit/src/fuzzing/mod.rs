@@ -11,7 +11,7 @@
 //! and calls `after_scan`, and KEY's `/` ends in `on_break`.
 //!
 //! Rooms: `term.rs` (the terminal model), `main_loop.rs`, and the harnesses by subject:
-//! `editor.rs`, `storage.rs`, `modbus.rs`.
+//! `editor.rs`, `storage.rs`, `modbus.rs` (with `hold.rs`, SPEC §18's part of it).
 
 use std::format;
 use std::string::{String, ToString};
@@ -38,6 +38,7 @@ pub const ESC_PAUSE_MS: u32 = 60;
 pub const RX_RING: usize = 64;
 
 mod editor;
+mod hold;
 mod main_loop;
 mod modbus;
 mod storage;

@@ -147,7 +147,8 @@ pub fn modbus(data: &[u8]) -> Verdict {
 /// presets and set-points, and the counter outputs a preset moves), an exception or a
 /// dropped frame nothing; set-points stay ≤ 1023; every reply is a valid frame; a read of
 /// §17's windows shows the engine as it was when the frame was judged, the program two
-/// lines per register and the program's fingerprint.
+/// lines per register and the program's fingerprint; and SPEC §18's ([`super::hold`]):
+/// held, the scan count moves only by the steps asked for.
 pub fn modbus_plc(data: &[u8]) -> Verdict {
     use utile_core::board::Board;
     use utile_core::engine::Engine;
@@ -160,6 +161,7 @@ pub fn modbus_plc(data: &[u8]) -> Verdict {
     let mut slave = Slave::new();
     let mut status = Status::new(STATUS_RUNNING, &utile_core::stats::ScanStats::new(), 0, 0);
     status.start(&eng.prog.uf);
+    let mut hold = super::hold::Model::default();
     // The bytes since the last frame end: the request, if it was one.
     let mut frame = Vec::new();
     for event in line_events(data) {
@@ -169,7 +171,8 @@ pub fn modbus_plc(data: &[u8]) -> Verdict {
             continue;
         }
         let request = std::mem::take(&mut frame);
-        b.run_for(&mut eng, 1, 1);
+        // An empty frame end stands for a long silence (the hold's lease).
+        hold.between_frames(&mut eng, &mut b, &mut status, request.is_empty())?;
         let before = eng.clone();
         let (inputs, thresholds) = (b.inputs(), b.analog_bits());
         let now = b.ticker.now_ms();
@@ -177,7 +180,7 @@ pub fn modbus_plc(data: &[u8]) -> Verdict {
         let mut map = PlcMap {
             eng: &mut eng,
             b: &mut b,
-            status: &status,
+            status: &mut status,
         };
         let event = slave.end(ADDRESS, &mut map, now);
         let mut reply = Vec::new();
@@ -187,6 +190,7 @@ pub fn modbus_plc(data: &[u8]) -> Verdict {
                 return Err("a reply of more than 256 bytes".into());
             }
         }
+        hold.judged(&request, event, &reply, now, &mut status)?;
         // What a request may change: outputs and virtual ports, presets, set-points, and
         // the counter outputs that follow a counter preset.
         let mut allowed = eng.clone();

@@ -1,0 +1,192 @@
+//! SPEC §18 in the harness of the slave on the engine ([`super::modbus_plc`]): the RUN loop
+//! between two frames as the firmware runs it (the core's `Hold::next` decides: a free scan,
+//! one step, or none), and a model of holding registers 32–33 written from the spec's words
+//! that the core's `Hold` is held to after every frame and every decision.
+//!
+//! Invariant: held, the scan count moves only by the steps asked for; registers 32–33 and
+//! status bits 4–5 read as the model says; an exception changes no hold; a hold ends by
+//! itself 10 s after the last valid frame for the slave, and only then.
+
+use std::format;
+use std::vec::Vec;
+
+use utile_core::engine::Engine;
+use utile_core::modbus::hold::{
+    Next, HR_SCAN_CONTROL, LEASE_MS, MAX_STEPS, STATUS_HELD, STATUS_LAPSED,
+};
+use utile_core::modbus::plc::{Status, STATUS_RUNNING};
+use utile_core::modbus::slave::Event;
+use utile_core::stats::ScanStats;
+
+use super::Verdict;
+use crate::sim::SimBoard;
+
+/// An empty frame end (silence and nothing else) stands for this long a silence, so that
+/// a fuzz input reaches the lease's 10 s in a few events.
+const QUIET_MS: u32 = 1000;
+
+/// The spec's hold, kept apart from the core's.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Model {
+    held: bool,
+    /// Steps asked for and not yet run.
+    left: u32,
+    /// A hold ended by itself since RUN.
+    lapsed: bool,
+    /// The ms clock at the last valid frame for the slave.
+    heard: u32,
+    /// Scans run since RUN.
+    scans: u32,
+}
+
+/// The writes to registers 32–33 that a request (its PDU) carries, in address order, when
+/// the spec takes it whole: FC06 or FC16 inside 32..33 with every value in range. `None`
+/// for any other request (which leaves the hold alone, or is refused).
+fn hold_writes(pdu: &[u8]) -> Option<Vec<(u16, u16)>> {
+    let word = |i: usize| Some(u16::from_be_bytes([*pdu.get(i)?, *pdu.get(i + 1)?]));
+    let (function, start) = (*pdu.first()?, word(1)?);
+    let writes: Vec<(u16, u16)> = match function {
+        0x06 if pdu.len() == 5 => std::vec![(start, word(3)?)],
+        0x10 => {
+            let qty = word(3)?;
+            let count = usize::from(*pdu.get(5)?);
+            if pdu.len() != 6 + count || count != 2 * usize::from(qty) || qty == 0 {
+                return None;
+            }
+            (0..qty)
+                .map(|i| Some((start.wrapping_add(i), word(6 + 2 * usize::from(i))?)))
+                .collect::<Option<_>>()?
+        }
+        _ => return None,
+    };
+    let fits = |&(addr, value): &(u16, u16)| match addr {
+        32 => value <= 1,
+        33 => (1..=MAX_STEPS).contains(&value),
+        _ => false,
+    };
+    writes.iter().all(fits).then_some(writes)
+}
+
+impl Model {
+    /// The RUN loop between two frames: the core decides, the model agrees, the scan runs
+    /// (one scan free or a step, none held), then a ms passes (`quiet`: a long silence).
+    pub(super) fn between_frames(
+        &mut self,
+        eng: &mut Engine,
+        b: &mut SimBoard,
+        status: &mut Status,
+        quiet: bool,
+    ) -> Verdict {
+        let next = status.hold.next(b);
+        let expected = if !self.held {
+            Next::Free
+        } else if b.ticker.now_ms().wrapping_sub(self.heard) >= LEASE_MS {
+            (self.held, self.left, self.lapsed) = (false, 0, true);
+            Next::Free
+        } else if self.left > 0 {
+            self.left -= 1;
+            Next::Step
+        } else {
+            Next::Held
+        };
+        if next != expected {
+            return Err(format!("the hold said {next:?}, the spec {expected:?}"));
+        }
+        let scans = match next {
+            Next::Free | Next::Step => 1,
+            Next::Held => 0,
+        };
+        for _ in 0..scans {
+            eng.scan(b);
+        }
+        self.scans += scans;
+        b.advance_ms(if quiet { QUIET_MS } else { 1 });
+        self.agrees(status)?;
+        // The registers the next frame reads: the scan count and status bits 4-5 of now.
+        let st = ScanStats {
+            count: self.scans,
+            ..ScanStats::new()
+        };
+        status.refresh(STATUS_RUNNING, &st, 0, 0);
+        let bits = u16::from(self.held) * STATUS_HELD | u16::from(self.lapsed) * STATUS_LAPSED;
+        if status.regs[0] != STATUS_RUNNING | bits {
+            return Err(format!(
+                "status {:#06X}, bits 4-5 {bits:#06X}",
+                status.regs[0]
+            ));
+        }
+        Ok(())
+    }
+
+    /// A frame was judged at `now`: `frame` its bytes (address, PDU, CRC), `event` and
+    /// `reply` the slave's answer. Its writes to registers 32–33 (the spec's reading of the
+    /// request) move the model; a read of them shows the model.
+    pub(super) fn judged(
+        &mut self,
+        frame: &[u8],
+        event: Event,
+        reply: &[u8],
+        now: u32,
+        status: &mut Status,
+    ) -> Verdict {
+        if event == Event::Slash {
+            status.hold.write(HR_SCAN_CONTROL, 0);
+        }
+        let pdu = frame.get(1..frame.len().saturating_sub(2)).unwrap_or(&[]);
+        if event == Event::Slash {
+            // The terminal's break key ends a hold (the firmware's visit, src/modbus.rs).
+            (self.held, self.left) = (false, 0);
+        }
+        if matches!(event, Event::Reply | Event::Broadcast) {
+            self.heard = now;
+            let refused = reply.get(1).is_some_and(|f| f & 0x80 != 0);
+            match hold_writes(pdu) {
+                Some(writes) if !refused => {
+                    for (addr, value) in writes {
+                        if addr == 32 {
+                            (self.held, self.left) = (value == 1, 0);
+                        } else {
+                            (self.held, self.left) = (true, u32::from(value));
+                        }
+                    }
+                }
+                Some(_) => return Err(format!("{pdu:02X?} refused: {reply:02X?}")),
+                None => {}
+            }
+            if event == Event::Reply && pdu.first() == Some(&0x03) && !refused {
+                self.check_read(pdu, reply)?;
+            }
+        }
+        self.agrees(status)
+    }
+
+    /// An FC03 reply's registers 32 and 33 against the model.
+    fn check_read(&self, pdu: &[u8], reply: &[u8]) -> Verdict {
+        let start = u16::from_be_bytes([pdu[1], pdu[2]]);
+        let values = reply.get(3..reply.len().saturating_sub(2)).unwrap_or(&[]);
+        for (k, pair) in values.chunks_exact(2).enumerate() {
+            let addr = start.wrapping_add(k as u16);
+            let got = u32::from(u16::from_be_bytes([pair[0], pair[1]]));
+            let expected = match addr {
+                32 => u32::from(self.held),
+                33 => self.left,
+                _ => continue,
+            };
+            if got != expected {
+                return Err(format!(
+                    "holding register {addr} read {got}, expected {expected}"
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The core's hold as the model has it.
+    fn agrees(&self, status: &Status) -> Verdict {
+        let h = &status.hold;
+        if (h.held(), u32::from(h.steps), h.lapsed()) != (self.held, self.left, self.lapsed) {
+            return Err(format!("hold {h:?}, the spec's {self:?}"));
+        }
+        Ok(())
+    }
+}
