@@ -228,6 +228,76 @@ def api_failures(p, unit):
     other.close()
 
 
+def snapshots(p, unit):
+    """The snapshots of `unit` taken so far and the scan count of the latest (the API's)."""
+    u = [x for x in api(p.url, "/api/state")["units"] if x["addr"] == unit][0]
+    return u["snapshots"], u["values"]["scans"]
+
+
+def still(p, unit, scans, pictures=3):
+    """Waits for `pictures` newer snapshots of `unit`: its scan count is still `scans`, on
+    the page too (held, nothing moves)."""
+    seen, _ = snapshots(p, unit)
+    t0 = time.time()
+    while snapshots(p, unit)[0] < seen + pictures:
+        if time.time() - t0 > T / 1000:
+            fail(f"uTile {unit}: no new snapshot while held")
+        time.sleep(0.05)
+    now = snapshots(p, unit)[1]
+    if now != scans:
+        fail(f"uTile {unit}: held, the scan count moved from {scans} to {now}")
+    p.wait(unit, "scans", scans)
+
+
+def hold_and_step(p, unit):
+    """Run, Hold, Step on the card (SPEC §18); Step line in the Program tab."""
+    card = f'.card[data-unit="{unit}"]'
+    button = lambda action, steps=None: (
+        f'{card} button[data-action="{action}"][data-unit="{unit}"]'
+        + (f'[data-steps="{steps}"]' if steps else ""))
+    step(f"uTile {unit}: Hold: the card says held, the scan count stops")
+    p.page.wait_for_selector(button("hold") + ":not([disabled])", timeout=T)
+    p.page.click(button("hold"))
+    p.page.wait_for_selector(f'{card} .state[data-state="held"]', timeout=T)
+    p.wait_text(f"{card} .state", "held")
+    scans = snapshots(p, unit)[1]
+    still(p, unit, scans)
+    step(f"uTile {unit}: Step 1 and Step 10: the scan count rises by exactly 1 and 10")
+    p.page.click(button("step", 1))
+    p.wait(unit, "scans", scans + 1)
+    still(p, unit, scans + 1)
+    p.page.click(button("step", 10))
+    p.wait(unit, "scans", scans + 11)
+    still(p, unit, scans + 11)
+    scans += 11
+    step(f"uTile {unit}: Step line walks the cursor through the held scan; past END, one scan")
+    p.tab("program")
+    walk = f'.program[data-unit="{unit}"] button[data-action="step-line"]'
+    cursor = f'.program[data-unit="{unit}"] tr[data-line-cursor]'
+    p.page.wait_for_selector(walk + ":visible", timeout=T)
+    reached = p.page.eval_on_selector_all(
+        f'.program[data-unit="{unit}"] td.v', "cs => cs.filter(c => c.dataset.value !== '').length")
+    if reached < 2:
+        fail(f"the held scan reaches {reached} lines")
+    for n in range(reached):
+        p.page.click(walk)
+        p.page.wait_for_selector(f'.program[data-unit="{unit}"] tr[data-line-cursor="{n}"]', timeout=T)
+        if p.page.eval_on_selector_all(cursor, "rs => rs.length") != 1:
+            fail("more than one line carries the cursor")
+        if snapshots(p, unit)[1] != scans:
+            fail("Step line ran a scan before the cursor passed END")
+    p.page.click(walk)
+    p.page.wait_for_selector(f'.program[data-unit="{unit}"] tr[data-line-cursor="0"]', timeout=T)
+    p.wait(unit, "scans", scans + 1)
+    p.tab("plant")
+    step(f"uTile {unit}: Run: free again, the cursor gone")
+    p.page.click(button("run"))
+    p.page.wait_for_selector(f'{card} .state[data-state="online"]', timeout=T)
+    p.newer_than(unit, scans + 1, T, "the scan count does not move after Run")
+    if p.page.query_selector(cursor):
+        fail("the cursor stays after Run")
+
+
 def single(p, a):
     step("the page: one card, the program running")
     p.wait(1, "online", 1)
@@ -250,6 +320,7 @@ def single(p, a):
     p.wait(1, "A0", 1)
     gateway(p, a.tcp, 1)
     api_failures(p, 1)
+    hold_and_step(p, 1)
 
     step("D8 removed and reset: uTile starts in EDIT mode and the page says so")
     ask("rig 8r")
