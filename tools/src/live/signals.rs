@@ -174,28 +174,22 @@ pub struct Family {
     pub unit: &'static str,
 }
 
-const fn family(
-    prefix: &'static str,
-    first: u8,
-    count: u8,
-    digits: Digits,
-    what: &'static str,
-    source: Source,
-    writes: Writes,
-    max: u32,
-    unit: &'static str,
-) -> Family {
-    Family {
-        prefix,
-        first,
-        count,
-        digits,
-        what,
-        source,
-        writes,
-        max,
-        unit,
-    }
+/// A row of [`FAMILIES`]: the fields of [`Family`] in order.
+macro_rules! family {
+    ($prefix:expr, $first:expr, $count:expr, $digits:expr, $what:expr, $source:expr,
+     $writes:expr, $max:expr, $unit:expr) => {
+        Family {
+            prefix: $prefix,
+            first: $first,
+            count: $count,
+            digits: $digits,
+            what: $what,
+            source: $source,
+            writes: $writes,
+            max: $max,
+            unit: $unit,
+        }
+    };
 }
 
 use Digits::{Decimal, Hex};
@@ -205,27 +199,27 @@ use Source::{Holding, Snapshot as Snap};
 /// Every signal, declared once (SPEC §13's map and §17's snapshot).
 #[rustfmt::skip]
 pub const FAMILIES: &[Family] = &[
-    family("A", 0, 6, Decimal, "input", Snap(F::Inputs), Writes::No, 1, "bit"),
-    family("Y", 0, 8, Decimal, "output", Snap(F::Outputs), Writes::Coil(0), 1, "bit"),
-    family("U", 0, 8, Decimal, "virtual coil", Snap(F::U), Writes::Coil(8), 1, "bit"),
-    family("V", 0, 8, Decimal, "virtual coil", Snap(F::V), Writes::Coil(16), 1, "bit"),
-    family("Q", 0, 16, Hex, "flip-flop", Snap(F::FlipFlops), Writes::No, 1, "bit"),
-    family("TQ", 0, 16, Hex, "timer output", Snap(F::TimerOutputs), Writes::No, 1, "bit"),
-    family("TL", 0, 16, Hex, "time left", Snap(F::TimeLeft), Writes::No, 65535, "0.1 s"),
-    family("T", 0, 16, Hex, "timer preset", Holding(0), Writes::Register(0), 255, "timer unit"),
-    family("C", 0, 8, Decimal, "count", Snap(F::Counts), Writes::No, 65535, "count"),
-    family("CQ", 0, 8, Decimal, "counter output", Snap(F::CounterOutputs), Writes::No, 1, "bit"),
-    family("CP", 0, 8, Decimal, "counter preset", Holding(HR_COUNTER_PRESETS), Writes::Register(HR_COUNTER_PRESETS), 65535, "count"),
-    family("A", 6, 2, Decimal, "reading", Snap(F::Readings), Writes::No, 1023, "ADC step"),
-    family("H", 6, 2, Decimal, "threshold", Snap(F::Thresholds), Writes::No, 1, "bit"),
-    family("S", 6, 2, Decimal, "set-point", Holding(HR_SET_POINTS), Writes::Register(HR_SET_POINTS), 1023, "ADC step"),
-    family("status", 0, 1, Digits::None, "status", Snap(F::Status), Writes::No, 65535, "bits"),
-    family("scans", 0, 1, Digits::None, "scans", Snap(F::Scans), Writes::No, u32::MAX, "scans"),
-    family("scan_min", 0, 1, Digits::None, "shortest scan", Snap(F::ScanTimes), Writes::No, 65535, "µs"),
-    family("scan_mean", 1, 1, Digits::None, "mean scan", Snap(F::ScanTimes), Writes::No, 65535, "µs"),
-    family("scan_max", 2, 1, Digits::None, "longest scan", Snap(F::ScanTimes), Writes::No, 65535, "µs"),
-    family("overruns", 0, 1, Digits::None, "overruns", Snap(F::Overruns), Writes::No, 65535, "bytes"),
-    family("dropped", 0, 1, Digits::None, "frames set aside", Snap(F::Dropped), Writes::No, 65535, "frames"),
+    family!("A", 0, 6, Decimal, "input", Snap(F::Inputs), Writes::No, 1, "bit"),
+    family!("Y", 0, 8, Decimal, "output", Snap(F::Outputs), Writes::Coil(0), 1, "bit"),
+    family!("U", 0, 8, Decimal, "virtual coil", Snap(F::U), Writes::Coil(8), 1, "bit"),
+    family!("V", 0, 8, Decimal, "virtual coil", Snap(F::V), Writes::Coil(16), 1, "bit"),
+    family!("Q", 0, 16, Hex, "flip-flop", Snap(F::FlipFlops), Writes::No, 1, "bit"),
+    family!("TQ", 0, 16, Hex, "timer output", Snap(F::TimerOutputs), Writes::No, 1, "bit"),
+    family!("TL", 0, 16, Hex, "time left", Snap(F::TimeLeft), Writes::No, 65535, "0.1 s"),
+    family!("T", 0, 16, Hex, "timer preset", Holding(0), Writes::Register(0), 255, "timer unit"),
+    family!("C", 0, 8, Decimal, "count", Snap(F::Counts), Writes::No, 65535, "count"),
+    family!("CQ", 0, 8, Decimal, "counter output", Snap(F::CounterOutputs), Writes::No, 1, "bit"),
+    family!("CP", 0, 8, Decimal, "counter preset", Holding(HR_COUNTER_PRESETS), Writes::Register(HR_COUNTER_PRESETS), 65535, "count"),
+    family!("A", 6, 2, Decimal, "reading", Snap(F::Readings), Writes::No, 1023, "ADC step"),
+    family!("H", 6, 2, Decimal, "threshold", Snap(F::Thresholds), Writes::No, 1, "bit"),
+    family!("S", 6, 2, Decimal, "set-point", Holding(HR_SET_POINTS), Writes::Register(HR_SET_POINTS), 1023, "ADC step"),
+    family!("status", 0, 1, Digits::None, "status", Snap(F::Status), Writes::No, 65535, "bits"),
+    family!("scans", 0, 1, Digits::None, "scans", Snap(F::Scans), Writes::No, u32::MAX, "scans"),
+    family!("scan_min", 0, 1, Digits::None, "shortest scan", Snap(F::ScanTimes), Writes::No, 65535, "µs"),
+    family!("scan_mean", 1, 1, Digits::None, "mean scan", Snap(F::ScanTimes), Writes::No, 65535, "µs"),
+    family!("scan_max", 2, 1, Digits::None, "longest scan", Snap(F::ScanTimes), Writes::No, 65535, "µs"),
+    family!("overruns", 0, 1, Digits::None, "overruns", Snap(F::Overruns), Writes::No, 65535, "bytes"),
+    family!("dropped", 0, 1, Digits::None, "frames set aside", Snap(F::Dropped), Writes::No, 65535, "frames"),
 ];
 
 /// One signal of a family.

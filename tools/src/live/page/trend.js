@@ -34,7 +34,6 @@ export class Trend {
         this.names = h.names;
         this.t = h.t.map((s) => now + s);
         this.series = h.series.map((s) => s.slice());
-      }
       } else {
         this.root.textContent = `no trend: ${await errorText(res)}`;
       }
