@@ -131,7 +131,7 @@ mod firmware {
                 Next::Free => scan::run(eng, &mut st, want),
                 Next::Step => {
                     // Back after this one scan's END.
-                    hal::line::again();
+                    hal::want_next_end();
                     scan::run(eng, &mut st, want)
                 }
                 Next::Held => {

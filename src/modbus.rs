@@ -10,7 +10,7 @@
 
 use utile_core::board::Board;
 use utile_core::engine::Engine;
-use utile_core::modbus::hold::{Hold, Next, HR_SCAN_CONTROL};
+use utile_core::modbus::hold::{Next, HR_SCAN_CONTROL};
 use utile_core::modbus::plc::{PlcMap, Status, STATUS_OVERRUN, STATUS_RUNNING};
 use utile_core::modbus::plc::{STATUS_STORED, STATUS_WATCHDOG};
 use utile_core::modbus::slave::Event;
@@ -35,10 +35,8 @@ const AHEAD: u8 = 12;
 /// What the RUN loop must do after a visit.
 #[derive(Clone, Copy, PartialEq, Eq)]
 pub enum After {
-    /// Nothing.
+    /// Nothing (a lone `/` went to the receive ring, where KEY takes it).
     Nothing,
-    /// A lone `/` came: the break key (KEY takes it from the receive ring).
-    BreakKey,
     /// The master wrote presets or set-points: reseal the program kept over a warm reset.
     Written,
 }
@@ -77,12 +75,14 @@ impl Server {
         self.address = store::slave_address(board);
         self.flags = flags;
         self.status.start(&eng.prog.uf);
-        self.status.hold = Hold::default();
+        // Free, bit 5 clear. No steps are left: a RUN ends only at a `/`, which ends any
+        // hold (`visit`), or at a reset, which clears static RAM; the lease starts with the
+        // frame that holds.
+        self.status.hold.bits = 0;
         self.start_ms = board.now_ms();
         self.overruns_at_start = board.rx_overruns();
+        // No reply (`started` is set with each reply; a seal left over is renewed, harmless).
         self.pending = false;
-        self.started = false;
-        self.reseal = false;
         line::serve(true);
     }
 
@@ -107,11 +107,10 @@ impl Server {
         st: &RunState,
         wraps: u16,
     ) -> After {
-        let mut after = After::Nothing;
         let start = board.stats_ticks();
         if line::take_frame_end() {
-            self.refresh(eng, board, st, wraps);
             let now = board.now_ms();
+            self.refresh(eng, board, st, wraps, now);
             let mut map = PlcMap {
                 eng: &mut *eng,
                 b: &mut *board,
@@ -120,19 +119,20 @@ impl Server {
             match line::judge(self.address, &mut map, now) {
                 Event::Slash => {
                     serial::inject(b'/');
-                    after = After::BreakKey;
                     // The terminal's break key ends a hold (SPEC §18): KEY stops the
                     // program at its next scan; a program without KEY runs on.
                     self.status.hold.write(HR_SCAN_CONTROL, 0);
                 }
-                ev @ (Event::Reply | Event::Broadcast) => {
-                    if ev == Event::Reply {
-                        self.pending = true;
-                        self.started = false;
-                    }
+                Event::Reply => {
+                    self.pending = true;
+                    self.started = false;
                     // Any request may have written: the seal is renewed (0.14 ms) anyway.
                     self.reseal = true;
                     // A valid frame for this slave: a hold's lease starts again (SPEC §18).
+                    self.status.hold.heard(now);
+                }
+                Event::Broadcast => {
+                    self.reseal = true;
                     self.status.hold.heard(now);
                 }
                 Event::None | Event::Dropped => {}
@@ -150,7 +150,7 @@ impl Server {
         if (self.pending && !self.started) || (!self.pending && self.reseal) {
             line::again();
         }
-        after
+        After::Nothing
     }
 
     /// Make reply bytes while the transmit ring has room, at least [`MIN_BYTES`] and then
@@ -192,7 +192,7 @@ impl Server {
 
     /// The figures the input registers report, as they are now, and the snapshot's
     /// registers of this scan (SPEC §17).
-    fn refresh(&mut self, eng: &Engine, board: &mut Nano, st: &RunState, wraps: u16) {
+    fn refresh(&mut self, eng: &Engine, board: &mut Nano, st: &RunState, wraps: u16, now: u32) {
         let overruns = board.rx_overruns();
         if overruns != self.overruns_at_start {
             self.flags |= STATUS_OVERRUN;
@@ -201,7 +201,7 @@ impl Server {
             min: st.min,
             max: st.max,
             count: (u32::from(wraps) << 16) | u32::from(st.scans),
-            run_ms: board.now_ms().wrapping_sub(self.start_ms),
+            run_ms: now.wrapping_sub(self.start_ms),
         };
         self.status
             .refresh(self.flags, &stats, overruns, line::dropped());

@@ -56,3 +56,4 @@ pub use tick::on_tick;
 #[cfg(feature = "scan-check")]
 pub(crate) use tick::publish;
 pub(crate) use tick::{CLOCKS, LEVEL, TICKER, TOGGLES};
+pub(crate) use want::now_from_main as want_next_end;

@@ -34,6 +34,19 @@ pub(crate) fn now(_cs: CriticalSection) {
         .modify(|r, w| unsafe { w.bits(r.bits() | (1 << NOW_BIT)) });
 }
 
+/// The main loop is wanted at the next END, asked by the main loop itself between two
+/// scans with interrupts on (SPEC §18's step). No critical section: the handlers only ever
+/// set this same bit (the line's) or bit 0 and then never return (the watchdog's restart),
+/// so no update of theirs can be lost.
+#[inline(always)]
+pub(crate) fn now_from_main() {
+    regs()
+        .CPU
+        .gpior0()
+        // SAFETY: as in `now`.
+        .modify(|r, w| unsafe { w.bits(r.bits() | (1 << NOW_BIT)) });
+}
+
 /// The main loop is back: call (interrupts off) before it looks at what it was wanted for,
 /// so that a wish made after that is kept for the next END.
 #[inline(always)]

@@ -189,12 +189,16 @@ def hold(c):
     print(f"held at scan {scans}")
     for n in [1, 10, 1000]:
         ok(c.write_register(33, n, slave=SLAVE), f"06 {n} steps")
-        time.sleep(0.5)
+        # Until every step has run (register 33 counts them down), then held.
+        deadline = time.time() + 10
+        while ok(c.read_holding_registers(32, count=2, slave=SLAVE), "03").registers != [1, 0]:
+            if time.time() > deadline:
+                fail(f"{n} steps never all ran")
+            time.sleep(0.1)
+        time.sleep(0.3)
         _, y, now = picture(c)
         if now != scans + n or y != now & 0xFF:
             fail(f"{n} steps: {scans} -> {now} scans, Y {y}")
-        if ok(c.read_holding_registers(32, count=2, slave=SLAVE), "03").registers != [1, 0]:
-            fail(f"after {n} steps not held with none left")
         print(f"{n} steps: {scans} -> {now} scans")
         scans = now
     for addr, value in [(32, 2), (33, 0), (33, 1001)]:

@@ -67,7 +67,6 @@ impl Status {
     }
 
     /// The program `uf` starts (RUN, EX0, autostart): its fingerprint.
-    #[inline(never)]
     pub fn start(&mut self, uf: &[u8; LINES]) {
         self.fingerprint = Crc16::new();
         for &line in uf {
@@ -81,25 +80,23 @@ impl Status {
         // No scan yet shows 0.
         let us = |ticks: u16| if st.count == 0 { 0 } else { ticks >> 1 };
         self.run_ms = st.run_ms;
-        self.regs = [
-            flags | u16::from(self.hold.bits),
-            us(st.min),
-            0,
-            us(st.max),
-            (st.count >> 16) as u16,
-            st.count as u16,
-            overruns,
-            dropped,
-        ];
+        // Register 2, the mean, is worked out when it is read: its slot is never written.
+        self.regs[0] = flags | u16::from(self.hold.bits);
+        self.regs[1] = us(st.min);
+        self.regs[3] = us(st.max);
+        self.regs[4] = (st.count >> 16) as u16;
+        self.regs[5] = st.count as u16;
+        self.regs[6] = overruns;
+        self.regs[7] = dropped;
     }
 
     /// Registers 64..71 now, between two scans and just after [`Status::refresh`]: the
     /// status, the inputs and thresholds, every port, flip-flop, timer and counter output,
     /// and the scan count, all of one scan (SPEC §17).
-    #[inline(never)]
     pub fn take_scan<B: Board>(&mut self, eng: &Engine, b: &mut B) {
-        let thresholds = b.analog_bits() >> analog::FIRST_CHANNEL;
-        let inputs = (b.inputs() & 0x3F) | (thresholds << 6);
+        // H6 and H7 are bits 6 and 7 of the board's threshold bits already, the rest 0.
+        const _: () = assert!(analog::FIRST_CHANNEL == 6);
+        let inputs = (b.inputs() & 0x3F) | b.analog_bits();
         self.scan = [
             self.regs[0],
             u16::from_le_bytes([inputs, eng.py]),
@@ -164,9 +161,7 @@ fn window(table: Table, addr: u16) -> Option<u16> {
         Table::DiscreteInputs if addr < 6 => 0,
         Table::DiscreteInputs if (8..50).contains(&addr) => 8,
         Table::HoldingRegisters if addr < HR_SET_POINTS + SET_POINTS as u16 => 0,
-        Table::HoldingRegisters if (HR_SCAN_CONTROL..HR_SCAN_CONTROL + 2).contains(&addr) => {
-            HR_SCAN_CONTROL
-        }
+        Table::HoldingRegisters if addr >> 1 == HR_SCAN_CONTROL >> 1 => HR_SCAN_CONTROL,
         Table::InputRegisters if addr < IR_READINGS + SET_POINTS as u16 => 0,
         Table::InputRegisters if (IR_TIME_LEFT..IR_TIME_LEFT + UNITS as u16).contains(&addr) => {
             IR_TIME_LEFT
@@ -264,21 +259,25 @@ impl<B: Board> Map for PlcMap<'_, B> {
                     // A TQ bit is retired when a scan starts (or the editor idles).
                     3 | 4 => (self.eng.tq, 24),
                     5 => (u16::from(self.eng.cq), 40),
-                    _ => (u16::from(self.b.analog_bits() >> analog::FIRST_CHANNEL), 48),
+                    // H6, H7 (48, 49) are bits 6 and 7 of the threshold bits.
+                    _ => (
+                        u16::from(self.b.analog_bits()),
+                        48 - analog::FIRST_CHANNEL as u16,
+                    ),
                 };
                 bit16(word, addr - first)
             }
             // Masks instead of checks: `contains` has kept the address in range.
             Table::HoldingRegisters => {
                 let (p, a) = (&self.eng.prog, usize::from(addr));
-                if addr >= HR_SCAN_CONTROL {
-                    self.status.hold.read(addr)
-                } else if addr < HR_COUNTER_PRESETS {
+                if addr < HR_COUNTER_PRESETS {
                     u16::from(p.presets[a & 15])
                 } else if addr < HR_SET_POINTS {
                     p.counter_presets[a & 7]
-                } else {
+                } else if addr < HR_SCAN_CONTROL {
                     p.set_points[a & 1]
+                } else {
+                    self.status.hold.read(addr)
                 }
             }
             Table::InputRegisters => self.input_register(addr),
@@ -313,13 +312,13 @@ impl<B: Board> Map for PlcMap<'_, B> {
             // LDC (only theirs: a write of 16 timer presets stays short between two scans).
             Table::HoldingRegisters => {
                 let (p, a) = (&mut self.eng.prog, usize::from(addr));
-                if addr >= HR_SCAN_CONTROL {
-                    self.status.hold.write(addr, value);
-                } else if addr < HR_COUNTER_PRESETS {
+                if addr < HR_COUNTER_PRESETS {
                     p.presets[a & 15] = value as u8;
                 } else if addr < HR_SET_POINTS {
                     p.counter_presets[a & 7] = value;
                     self.eng.refresh_counter_outputs();
+                } else if addr >= HR_SCAN_CONTROL {
+                    self.status.hold.write(addr, value);
                 } else {
                     p.set_points[a & 1] = value;
                     let sp = p.set_points;
