@@ -407,7 +407,8 @@ def main():
     a = ap.parse_args()
     with sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path="/usr/bin/chromium", args=ARGS)
-        page = browser.new_page(viewport={"width": 1300, "height": 1000})
+        # A context of its own: api_failures opens a second page in it.
+        page = browser.new_context(viewport={"width": 1300, "height": 1000}).new_page()
         errors = []
         page.on("pageerror", lambda e: errors.append(str(e)))
         page.goto(a.url)
