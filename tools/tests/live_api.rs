@@ -410,7 +410,10 @@ fn hold_run_and_step_through_the_api() {
     assert_eq!(code, 200, "{body}");
     let s = live.wait("uTile 1 held", T, |s| s["units"][0]["state"] == "held");
     assert!(
-        s["units"][0]["advice"].as_str().unwrap().starts_with("Held"),
+        s["units"][0]["advice"]
+            .as_str()
+            .unwrap()
+            .starts_with("Held"),
         "{s:#}"
     );
     assert_eq!(s["units"][0]["online"], true);
@@ -441,7 +444,10 @@ fn hold_run_and_step_through_the_api() {
     assert_eq!(code, 400, "{body}");
     let (code, body) = scan(json!({"action": "pause"}));
     assert_eq!(code, 400, "{body}");
-    assert!(body["error"].as_str().unwrap().contains("\"pause\" is no action"));
+    assert!(body["error"]
+        .as_str()
+        .unwrap()
+        .contains("\"pause\" is no action"));
     let (code, _) = live.post("/api/units/9/scan", &json!({"action": "hold"}));
     assert_eq!(code, 404);
     assert_eq!(live.state()["line"]["writes"].as_u64().unwrap(), writes);

@@ -20,10 +20,10 @@ use futures_util::stream::{self, Stream};
 
 use super::api::{ApiError, KeysSent, TrendDoc, WriteBody, WriteDone};
 use super::assets;
-use super::scan_control;
 use super::hub::{Hub, Input};
 use super::queue::{Job, Origin};
 use super::rtu;
+use super::scan_control;
 use super::signals::{self, SIGNALS};
 use super::unit::TREND_STEP;
 use super::view::{View, TREND_SIGNALS};

@@ -204,12 +204,18 @@ mod tests {
         assert_eq!(write_for("run", Some(5)).unwrap(), (32, 0, 0));
         assert_eq!(write_for("step", None).unwrap(), (33, 1, 1));
         assert_eq!(write_for("step", Some(1000)).unwrap(), (33, 1000, 1000));
-        assert!(matches!(write_for("step", Some(0)), Err(ScanError::Steps(0))));
+        assert!(matches!(
+            write_for("step", Some(0)),
+            Err(ScanError::Steps(0))
+        ));
         assert!(matches!(
             write_for("step", Some(1001)),
             Err(ScanError::Steps(1001))
         ));
-        assert!(matches!(write_for("pause", None), Err(ScanError::Action(_))));
+        assert!(matches!(
+            write_for("pause", None),
+            Err(ScanError::Action(_))
+        ));
         assert_eq!(
             write_for("step", Some(-1)).unwrap_err().to_string(),
             "step takes n = 1..1000 scans, not -1"
