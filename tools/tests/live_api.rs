@@ -475,4 +475,37 @@ fn read_only_refuses_hold_and_step() {
         s["units"][0]["snapshots"].as_u64().unwrap() >= seen + 3
     });
     assert_eq!(live.unit(1)["state"], "online");
+    // Checking a listing sends nothing and works read-only: the messages `utile asm` gives.
+    let text = "A0.\n.Y0\nBLAH\n300 END\nT0 = 999\n";
+    let file = std::env::temp_dir().join(format!("live-check-{}.utl", std::process::id()));
+    std::fs::write(&file, text).unwrap();
+    let asm = std::process::Command::new(support::live::UTILE)
+        .arg("asm")
+        .arg(&file)
+        .arg("-o")
+        .arg(file.with_extension("hex"))
+        .output()
+        .expect("utile asm");
+    assert!(!asm.status.success());
+    let said = String::from_utf8_lossy(&asm.stderr);
+    let (code, problems) = live.post("/api/check", &json!({ "listing": text }));
+    assert_eq!(code, 200, "{problems}");
+    let problems = problems.as_array().unwrap();
+    assert_eq!(
+        problems.len(),
+        said.lines().count(),
+        "{problems:?} against {said}"
+    );
+    for (p, line) in problems.iter().zip(said.lines()) {
+        let want = format!(
+            "{}:{}: {}",
+            file.display(),
+            p["line"],
+            p["message"].as_str().unwrap()
+        );
+        assert_eq!(want, line);
+    }
+    assert_eq!(problems[0]["line"], 3);
+    let (code, problems) = live.post("/api/check", &json!({"listing": "A0.\n.Y0\nEND\n"}));
+    assert_eq!((code, problems), (200, json!([])));
 }

@@ -298,6 +298,38 @@ def hold_and_step(p, unit):
         fail("the cursor stays after Run")
 
 
+def edit_and_check(p, unit):
+    """Edit in the Program tab: a listing with mistakes shows each on its line (the messages of
+    utile asm), the corrected one none; nothing is sent while editing."""
+    prog = f'.program[data-unit="{unit}"]'
+    p.tab("program")
+    step(f"uTile {unit}: Edit opens the running program's listing in the editor")
+    p.page.click(f'{prog} button[data-action="edit"]')
+    area = f'{prog} textarea[data-editor="listing"]'
+    p.page.wait_for_function(
+        "s => { const t = document.querySelector(s); return t && t.value.includes('H6.'); }",
+        arg=area, timeout=T)
+    status = f'{prog} .check-status'
+    p.wait_text(status, "no problems")
+    writes = api(p.url, "/api/state")["line"]["writes"]
+    step(f"uTile {unit}: a listing with mistakes: each shown on its line")
+    p.page.fill(area, "A0.\n.Y0\nBLAH\nT0 = 999\nEND\n")
+    p.page.wait_for_selector(f'{prog} li[data-problem-line="3"]', timeout=T)
+    p.wait_text(f'{prog} li[data-problem-line="3"]', "unknown word 'BLAH'")
+    p.page.wait_for_selector(f'{prog} li[data-problem-line="4"]', timeout=T)
+    p.page.wait_for_selector(f'{prog} .gutter div.bad[data-gutter-line="3"]', timeout=T)
+    if p.page.query_selector(f'{prog} .gutter div.bad[data-gutter-line="1"]'):
+        fail("a good line is marked")
+    step(f"uTile {unit}: corrected, the listing has no problems")
+    p.page.fill(area, "A0.\n.Y0\nEND\nT0 = 99\n")
+    p.wait_text(status, "no problems")
+    if p.page.query_selector(f'{prog} li[data-problem-line]'):
+        fail("problems stay after the correction")
+    if api(p.url, "/api/state")["line"]["writes"] != writes:
+        fail("editing sent something to the uTile")
+    p.tab("plant")
+
+
 def single(p, a):
     step("the page: one card, the program running")
     p.wait(1, "online", 1)
@@ -321,6 +353,7 @@ def single(p, a):
     gateway(p, a.tcp, 1)
     api_failures(p, 1)
     hold_and_step(p, 1)
+    edit_and_check(p, 1)
 
     step("D8 removed and reset: uTile starts in EDIT mode and the page says so")
     ask("rig 8r")

@@ -20,6 +20,7 @@ use futures_util::stream::{self, Stream};
 
 use super::api::{ApiError, KeysSent, TrendDoc, WriteBody, WriteDone};
 use super::assets;
+use super::check;
 use super::hub::{Hub, Input};
 use super::queue::{Job, Origin};
 use super::rtu;
@@ -41,6 +42,7 @@ pub fn router(hub: Arc<Hub>) -> Router {
         .route("/api/signals", get(signal_table))
         .route("/api/units/{addr}/write", post(write))
         .route("/api/units/{addr}/scan", post(scan_control::post))
+        .route("/api/check", post(check::post))
         .route("/api/units/{addr}/program", get(program))
         .route("/api/units/{addr}/trend", get(trend))
         .route("/api/terminal", get(terminal).post(keys))

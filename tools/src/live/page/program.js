@@ -7,6 +7,7 @@
 // one scan on the uTile and starts again at line 0.
 
 import { el, errorText } from "/dom.js";
+import { Editor } from "/editor.js";
 import { scanAction } from "/scan.js";
 
 export class ProgramView {
@@ -25,9 +26,14 @@ export class ProgramView {
     this.stepLine.hidden = true;
     this.stepLine.addEventListener("click", () => this.walk());
     this.why = el("span", { class: "refusal" });
+    this.lines = [];
+    this.editor = new Editor(addr, () => this.lines);
+    const edit = el("button", { class: "scan-button", type: "button", "data-action": "edit",
+      "data-unit": addr, text: "Edit", title: "the listing in an editor, checked as you type" });
+    edit.addEventListener("click", () => this.editor.toggle());
     this.root = el("div", { class: "program", "data-unit": addr },
       el("h2", { text: `uTile ${addr}` }), this.check, el("div", { class: "scan-control" },
-        this.stepLine, this.why), this.note, this.table);
+        edit, this.stepLine, this.why), this.editor.root, this.note, this.table);
   }
 
   // Step line: the cursor to the next line the held scan reaches; past END, one scan.
@@ -71,6 +77,7 @@ export class ProgramView {
     }
     delete this.note.dataset.error;
     const p = await res.json();
+    this.lines = p.lines;
     this.table.replaceChildren();
     this.cells = [];
     for (const line of p.lines) {
