@@ -330,6 +330,63 @@ def edit_and_check(p, unit):
     p.tab("plant")
 
 
+# The page's parts that must neither overflow nor overlap on a phone: each a cell of its
+# panel (a tile, a lamp, a switch, a field, a button, a readout, a meter, a group).
+CELLS = (".panel, .tile, .lamp, .coil, .scan-button, input.setting, .readout, .analog .meter, "
+         ".analog .reading, .analog .volts, .analog .sp, .fillbar, .listing, .editor, .tabs button")
+LAYOUT = """cells => {
+  const shown = [...document.querySelectorAll(cells)].filter(e => {
+    const r = e.getBoundingClientRect();
+    return r.width > 0 && r.height > 0;
+  });
+  const boxes = shown.map(e => e.getBoundingClientRect());
+  const overlaps = [];
+  for (let i = 0; i < shown.length; i++) {
+    for (let j = i + 1; j < shown.length; j++) {
+      if (shown[i].contains(shown[j]) || shown[j].contains(shown[i])) continue;
+      const a = boxes[i], b = boxes[j];
+      const w = Math.min(a.right, b.right) - Math.max(a.left, b.left);
+      const h = Math.min(a.bottom, b.bottom) - Math.max(a.top, b.top);
+      if (w > 1 && h > 1) overlaps.push(`${shown[i].className} / ${shown[j].className}`);
+    }
+  }
+  const small = shown.filter(e => e.matches(".coil, .scan-button, .tabs button"))
+    .filter(e => { const r = e.getBoundingClientRect(); return r.height < 40 || r.width < 44; })
+    .map(e => e.textContent);
+  const wide = shown.filter(e => e.getBoundingClientRect().right > innerWidth + 0.5)
+    .map(e => e.className);
+  return { scroll: document.documentElement.scrollWidth, width: innerWidth, cells: shown.length,
+           overlaps: overlaps.slice(0, 5), small: small.slice(0, 5), wide: wide.slice(0, 5) };
+}"""
+
+
+def phone(p, unit):
+    """The page at 390 x 844: every panel without horizontal scrolling or overlap (the timers'
+    tiles, the analog meters, the new buttons and the editor), buttons big enough to tap."""
+    step("the page on a phone, 390 x 844: no panel overflows, no two cells overlap")
+    context = p.page.context.browser.new_context(viewport={"width": 390, "height": 844})
+    phone = context.new_page()
+    phone.goto(p.url)
+    phone.wait_for_selector(f'.card[data-unit="{unit}"] [data-signal="online"][data-value="1"]', timeout=T)
+    phone.wait_for_selector(f'.card[data-unit="{unit}"] .trend canvas', timeout=T)
+    for tab in ["plant", "program"]:
+        phone.click(f"#tab-{tab}")
+        if tab == "program":
+            phone.click(f'.program[data-unit="{unit}"] button[data-action="edit"]')
+            phone.wait_for_selector(f'.program[data-unit="{unit}"] .editor', timeout=T)
+            phone.wait_for_selector(f'.program[data-unit="{unit}"] td.op', timeout=T)
+        got = phone.evaluate(LAYOUT, CELLS)
+        if got["cells"] < (100 if tab == "plant" else 5):
+            fail(f"{tab} at 390 px: only {got['cells']} cells shown")
+        if got["scroll"] > got["width"] or got["wide"]:
+            fail(f"{tab} at 390 px scrolls sideways: {got}")
+        if got["overlaps"]:
+            fail(f"{tab} at 390 px: cells overlap: {got['overlaps']}")
+        if got["small"]:
+            fail(f"{tab} at 390 px: buttons too small to tap: {got['small']}")
+    context.close()
+
+
 def single(p, a):
     step("the page: one card, the program running")
     p.wait(1, "online", 1)
@@ -354,6 +411,7 @@ def single(p, a):
     api_failures(p, 1)
     hold_and_step(p, 1)
     edit_and_check(p, 1)
+    phone(p, 1)
 
     step("D8 removed and reset: uTile starts in EDIT mode and the page says so")
     ask("rig 8r")
