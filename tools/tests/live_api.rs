@@ -118,10 +118,13 @@ fn twenty_tcp_clients_and_a_garbage_client_never_starve_the_page() {
     );
     // The polls took their turns between the clients' requests all along.
     assert!(seen >= 10, "the page saw {seen} pictures during the load");
-    let s = live.state();
-    assert_eq!(s["units"][0]["state"], "online", "{s:#}");
-    // The gateway counted each of them (and any request the garbage happened to spell).
+    // The gateway counted each of them (and any request the garbage happened to spell); the
+    // line publishes its counters with its next view.
     let total: u64 = counts.iter().sum();
+    let s = live.wait("the gateway's count published", T, |s| {
+        s["line"]["tcp_requests"].as_u64().unwrap() >= before + total
+    });
+    assert_eq!(s["units"][0]["state"], "online", "{s:#}");
     let counted = s["line"]["tcp_requests"].as_u64().unwrap() - before;
     assert!(
         counted >= total && counted <= total + 5,
@@ -144,12 +147,13 @@ fn a_dead_address_backs_off_and_never_slows_the_others() {
     let after = &s1["units"][1];
     assert_eq!(after["state"], "offline", "{after:#}");
     // Counted in the line's own turns, not the wall clock: the dead address is still tried,
-    // at most once for every five polls of the live one (it backs off to one a second while
-    // uTile 1 is polled about 18 times a second).
+    // at most once for every three polls of the live one (it backs off to one a second while
+    // uTile 1 is polled about 18 times a second; three leaves room for a simulation running
+    // at a sixth of the clock on a loaded machine).
     let dead = requests(&s1, 1) - requests(&s0, 1);
     let alive = requests(&s1, 0) - requests(&s0, 0);
     assert!(
-        dead >= 1 && dead * 5 <= alive,
+        dead >= 1 && dead * 3 <= alive,
         "the dead address was polled {dead} times, the live one {alive}"
     );
     assert!(seen >= 10, "uTile 1 gave {seen} snapshots meanwhile");

@@ -210,7 +210,7 @@ def api_failures(p, unit):
     p.fresh(unit)
     p.wait(unit, "S7", 500)
     step("the program asked for at address 300: the program view shows the server's words")
-    other = p.page.context.new_page()
+    other = p.page.context.browser.new_page()
     other.route(
         f"**/api/units/{unit}/program",
         lambda route: route.continue_(url=f"{p.url}/api/units/300/program"),
