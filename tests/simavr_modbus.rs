@@ -7,17 +7,15 @@
 
 mod support;
 
-use support::chip::{Board, CYCLES_PER_MS};
-use support::master::{bytes, char_cycles, pdu, read_input, stored, Line, ADDRESS};
+use support::chip::CYCLES_PER_MS;
+use support::master::{char_cycles, pdu, read_input, stored, Line, ADDRESS};
 use utile_core::engine::Program;
 use utile_core::modbus::plc::{STATUS_RUNNING, STATUS_STORED};
 use utile_core::modbus::snapshot::{self, Snapshot, PROGRAM, SNAPSHOT, SNAPSHOT_LEN};
-use utile_core::store;
 use utile_kit::listing;
 use utile_kit::modbus;
 use utile_kit::rng::Rng;
-use utile_kit::sim::SimBoard;
-use utile_kit::simavr::{frame_cycles, RxPacing};
+use utile_kit::simavr::RxPacing;
 
 fn remote_start() -> Program {
     listing::commands(&["U0.", ".Y0", "KEY", "END"])

@@ -108,7 +108,7 @@ impl Model {
             ..ScanStats::new()
         };
         status.refresh(STATUS_RUNNING, &st, 0, 0);
-        let bits = u16::from(self.held) * STATUS_HELD | u16::from(self.lapsed) * STATUS_LAPSED;
+        let bits = (u16::from(self.held) * STATUS_HELD) | (u16::from(self.lapsed) * STATUS_LAPSED);
         if status.regs[0] != STATUS_RUNNING | bits {
             return Err(format!(
                 "status {:#06X}, bits 4-5 {bits:#06X}",
@@ -129,8 +129,12 @@ impl Model {
         now: u32,
         status: &mut Status,
     ) -> Verdict {
-        if event == Event::Slash {
-            status.hold.write(HR_SCAN_CONTROL, 0);
+        // What the firmware's visit does after a frame (src/modbus.rs): `/` ends a hold, a
+        // valid frame for the slave renews the lease.
+        match event {
+            Event::Slash => status.hold.write(HR_SCAN_CONTROL, 0),
+            Event::Reply | Event::Broadcast => status.hold.heard(now),
+            Event::None | Event::Dropped => {}
         }
         let pdu = frame.get(1..frame.len().saturating_sub(2)).unwrap_or(&[]);
         if event == Event::Slash {

@@ -56,6 +56,14 @@ options:
   --load FILE         start with the .utl program FILE loaded: after boot it is sent to
                       the firmware through READ (hidden, about 2 s of simulated time),
                       then the editor shows it; STORE keeps it in the EEPROM
+  --control PATH      work the rig from another program over a Unix socket at PATH: one
+                      JSON object a line ({\"press\": 0}, {\"release\": 0}, {\"a6\": 2.5},
+                      {\"d8\": true}, {\"reset\": true}, {} to ask), each answered with the
+                      rig's state: switches, jumpers, A6/A7 in volts, outputs Y0..Y7
+  --plant tank        a tank on A6 and A7 (examples/tank-fill.utl's one level sensor): its
+                      level rises 0.4 V/s while the pump Y0 runs and falls 0.2 V/s
+                      otherwise (a steady draw), between 0 and 5 V, from --a6's level;
+                      the rig keys 6 and Shift-6 still move it
   -h, --help          this text
 ";
 
@@ -96,6 +104,10 @@ pub struct Options {
     pub dtr_reset: bool,
     /// Nanos on one line (`--bus N`).
     pub bus: Option<usize>,
+    /// A plant on the pins (`--plant`).
+    pub plant: Option<super::plant::Kind>,
+    /// The rig's control socket (`--control`).
+    pub control: Option<PathBuf>,
     /// `-h`/`--help`.
     pub help: bool,
 }
@@ -172,10 +184,21 @@ pub fn parse<I: IntoIterator<Item = String>>(
                 );
                 o.dtr_reset = true;
             }
+            "--control" => o.control = Some(PathBuf::from(value("--control")?)),
+            "--plant" => {
+                let v = value("--plant")?;
+                o.plant = Some(
+                    super::plant::Kind::from_name(&v)
+                        .ok_or_else(|| format!("--plant: the one plant is tank, not {v}"))?,
+                );
+            }
             "--blank" => o.blank = true,
             "--dtr-reset" => o.dtr_reset = true,
             other => return Err(format!("unknown option {other} (see --help)")),
         }
+    }
+    if o.bus.is_some() && (o.plant.is_some() || o.control.is_some()) {
+        return Err("--plant and --control work on one Nano, not with --bus".into());
     }
     Ok(o)
 }
@@ -273,6 +296,15 @@ mod tests {
         assert!(p(&["--bootloader", "new"])
             .unwrap_err()
             .contains("old or optiboot"));
+    }
+
+    #[test]
+    fn a_plant_is_named() {
+        let o = p(&["--plant", "tank"]).unwrap();
+        assert_eq!(o.plant, Some(super::super::plant::Kind::Tank));
+        assert!(p(&["--plant", "boiler"])
+            .unwrap_err()
+            .contains("the one plant is tank"));
     }
 
     #[test]

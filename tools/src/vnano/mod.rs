@@ -7,13 +7,16 @@
 //! bytes at the simulated time they came), [`status`] (the line below the
 //! screen), [`rig`] (the rig's keys and its view), [`load`] (`--load` through READ),
 //! [`term`] (the user's terminal), [`pty`] (the pseudo-terminal), [`io`] (waiting and
-//! reading on descriptors) and [`bus`] (`--bus N`).
+//! reading on descriptors), [`bus`] (`--bus N`), [`plant`] (`--plant tank`) and [`control`]
+//! (`--control PATH`, the rig over a socket).
 
 pub mod args;
 pub mod arrivals;
 pub mod bus;
+pub mod control;
 pub mod io;
 pub mod load;
+pub mod plant;
 pub mod pty;
 pub mod rig;
 pub mod session;

@@ -9,8 +9,10 @@ use utile_kit::simavr::{self as nano, Chip, CpuState, Reset, RxPacing};
 
 use super::args::Options;
 use super::arrivals::Arrivals;
+use super::control::Control;
 use super::io::{self, STDIN, STDOUT};
 use super::load::{Loader, Step};
+use super::plant::Plant;
 use super::pty::Pty;
 use super::rig::{self, Key, KeyParser, OutputTracker, RigAction};
 use super::term::{self, RawMode};
@@ -56,6 +58,10 @@ pub(super) struct Session {
     dtr_reset: bool,
     /// The pty client's bytes waiting for their simulated time.
     arrivals: Arrivals,
+    /// `--plant`: the plant on A6/A7 that Y0 drives.
+    plant: Option<Plant>,
+    /// `--control`: the rig's socket.
+    control: Option<Control>,
 }
 
 /// Runs the virtual Nano of `o` on the image `elf` until `q`, a quit signal, `--for` or a
@@ -102,6 +108,13 @@ pub fn run(o: &Options, elf: &Path) -> Result<(), String> {
         boot: o.bootloader.map(|b| b.section().start()),
         dtr_reset: o.dtr_reset,
         arrivals: Arrivals::default(),
+        plant: o
+            .plant
+            .map(|kind| Plant::new(kind, o.analog_mv[0], nano.cycle())),
+        control: match &o.control {
+            Some(path) => Some(Control::bind(path)?),
+            None => None,
+        },
     };
     if matches!(s.uart, Uart::Terminal) && stdout_tty {
         // A clean screen below uTile's: its screen is drawn with absolute positions.
@@ -180,6 +193,13 @@ impl Session {
                 self.read_input(nano);
                 self.deliver(nano);
             }
+            if let Some(control) = &mut self.control {
+                let asked = control.poll(nano, &mut self.analog_mv);
+                self.reset |= asked.reset;
+                if asked.handled {
+                    self.drawn = None;
+                }
+            }
             if std::mem::take(&mut self.reset) {
                 nano.reset(Reset::External);
             }
@@ -194,6 +214,9 @@ impl Session {
             let state = nano.run_for(step);
             // simavr drops an external level whenever the firmware writes the PORT register.
             nano.assert_pins();
+            if let Some(plant) = &mut self.plant {
+                plant.step(nano, &mut self.analog_mv);
+            }
             let timed = nano.take_output_timed();
             let last_out = timed.last().map(|&(_, cycle)| cycle);
             let mut out: Vec<u8> = timed.into_iter().map(|(b, _)| b).collect();
