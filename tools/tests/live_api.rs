@@ -380,3 +380,136 @@ fn scan_finds_the_utile_on_the_line() {
     assert_eq!(s["units"].as_array().unwrap().len(), 1, "{s:#}");
     live.wait_value(1, "A6", 409);
 }
+
+/// Snapshots of uTile 1 taken so far, and its scan count in the latest.
+fn scans_now(live: &Live) -> (u64, u64) {
+    let u = live.unit(1);
+    (
+        u["snapshots"].as_u64().unwrap(),
+        u["values"]["scans"].as_u64().unwrap(),
+    )
+}
+
+/// The scan count once `pictures` newer snapshots have come, each showing the same count.
+fn settled_scans(live: &Live, pictures: u64) -> u64 {
+    let (seen, scans) = scans_now(live);
+    live.wait("newer snapshots", T, |s| {
+        s["units"][0]["snapshots"].as_u64().unwrap() >= seen + pictures
+    });
+    let (_, now) = scans_now(live);
+    assert_eq!(now, scans, "the scan count moved while held");
+    now
+}
+
+#[test]
+fn hold_run_and_step_through_the_api() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let (_nano, live) = tank_live("live-hold", &[]);
+    let scan = |body: serde_json::Value| live.post("/api/units/1/scan", &body);
+    // The line asked the firmware once whether it holds (SPEC §18): it does.
+    live.wait("§18 known", T, |s| {
+        s["units"][0]["scan_control"]["supported"] == true
+    });
+    let (code, body) = scan(json!({"action": "hold"}));
+    assert_eq!(code, 200, "{body}");
+    let s = live.wait("uTile 1 held", T, |s| s["units"][0]["state"] == "held");
+    assert!(
+        s["units"][0]["advice"]
+            .as_str()
+            .unwrap()
+            .starts_with("Held"),
+        "{s:#}"
+    );
+    assert_eq!(s["units"][0]["online"], true);
+    // Held: the scan count stops (a few snapshots later it has not moved).
+    let held = settled_scans(&live, 3);
+    // The gateway passes registers 32-33 like any other: 32 reads 1, 33 no steps left.
+    let mut s = TcpStream::connect(live.tcp).unwrap();
+    s.set_read_timeout(Some(T)).unwrap();
+    assert_eq!(mbap(&mut s, 1, 1, &[3, 0, 32, 0, 2]), [3, 4, 0, 1, 0, 0]);
+    // Step 1 and step 10: the count rises by exactly that, and stays.
+    let (code, body) = scan(json!({"action": "step", "n": 1}));
+    assert_eq!((code, body["n"].as_u64()), (200, Some(1)), "{body}");
+    live.wait_value(1, "scans", held + 1);
+    assert_eq!(settled_scans(&live, 3), held + 1);
+    let (code, body) = scan(json!({"action": "step", "n": 10}));
+    assert_eq!(code, 200, "{body}");
+    live.wait_value(1, "scans", held + 11);
+    assert_eq!(settled_scans(&live, 3), held + 11);
+    assert_eq!(live.unit(1)["state"], "held");
+    // Bad requests are refused with the reason, nothing sent.
+    let writes = live.state()["line"]["writes"].as_u64().unwrap();
+    let (code, body) = scan(json!({"action": "step", "n": 0}));
+    assert_eq!(
+        (code, body["error"].as_str().unwrap()),
+        (400, "step takes n = 1..1000 scans, not 0")
+    );
+    let (code, body) = scan(json!({"action": "step", "n": 1001}));
+    assert_eq!(code, 400, "{body}");
+    let (code, body) = scan(json!({"action": "pause"}));
+    assert_eq!(code, 400, "{body}");
+    assert!(body["error"]
+        .as_str()
+        .unwrap()
+        .contains("\"pause\" is no action"));
+    let (code, _) = live.post("/api/units/9/scan", &json!({"action": "hold"}));
+    assert_eq!(code, 404);
+    assert_eq!(live.state()["line"]["writes"].as_u64().unwrap(), writes);
+    // Run: free again, the count moves on.
+    let (code, body) = scan(json!({"action": "run"}));
+    assert_eq!(code, 200, "{body}");
+    live.wait("uTile 1 running freely", T, |s| {
+        s["units"][0]["state"] == "online"
+            && s["units"][0]["values"]["scans"].as_u64() > Some(held + 11)
+    });
+    assert_eq!(mbap(&mut s, 2, 1, &[3, 0, 32, 0, 1]), [3, 2, 0, 0]);
+}
+
+#[test]
+fn read_only_refuses_hold_and_step() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let (_nano, live) = tank_live("live-hold-read-only", &["--read-only"]);
+    for body in [json!({"action": "hold"}), json!({"action": "step", "n": 1})] {
+        let (code, answer) = live.post("/api/units/1/scan", &body);
+        assert_eq!(code, 403, "{answer}");
+        assert!(answer["error"].as_str().unwrap().starts_with("read-only"));
+    }
+    let (seen, _) = scans_now(&live);
+    live.wait("newer snapshots", T, |s| {
+        s["units"][0]["snapshots"].as_u64().unwrap() >= seen + 3
+    });
+    assert_eq!(live.unit(1)["state"], "online");
+    // Checking a listing sends nothing and works read-only: the messages `utile asm` gives.
+    let text = "A0.\n.Y0\nBLAH\n300 END\nT0 = 999\n";
+    let file = std::env::temp_dir().join(format!("live-check-{}.utl", std::process::id()));
+    std::fs::write(&file, text).unwrap();
+    let asm = std::process::Command::new(support::live::UTILE)
+        .arg("asm")
+        .arg(&file)
+        .arg("-o")
+        .arg(file.with_extension("hex"))
+        .output()
+        .expect("utile asm");
+    assert!(!asm.status.success());
+    let said = String::from_utf8_lossy(&asm.stderr);
+    let (code, problems) = live.post("/api/check", &json!({ "listing": text }));
+    assert_eq!(code, 200, "{problems}");
+    let problems = problems.as_array().unwrap();
+    assert_eq!(
+        problems.len(),
+        said.lines().count(),
+        "{problems:?} against {said}"
+    );
+    for (p, line) in problems.iter().zip(said.lines()) {
+        let want = format!(
+            "{}:{}: {}",
+            file.display(),
+            p["line"],
+            p["message"].as_str().unwrap()
+        );
+        assert_eq!(want, line);
+    }
+    assert_eq!(problems[0]["line"], 3);
+    let (code, problems) = live.post("/api/check", &json!({"listing": "A0.\n.Y0\nEND\n"}));
+    assert_eq!((code, problems), (200, json!([])));
+}

@@ -228,6 +228,165 @@ def api_failures(p, unit):
     other.close()
 
 
+def snapshots(p, unit):
+    """The snapshots of `unit` taken so far and the scan count of the latest (the API's)."""
+    u = [x for x in api(p.url, "/api/state")["units"] if x["addr"] == unit][0]
+    return u["snapshots"], u["values"]["scans"]
+
+
+def still(p, unit, scans, pictures=3):
+    """Waits for `pictures` newer snapshots of `unit`: its scan count is still `scans`, on
+    the page too (held, nothing moves)."""
+    seen, _ = snapshots(p, unit)
+    t0 = time.time()
+    while snapshots(p, unit)[0] < seen + pictures:
+        if time.time() - t0 > T / 1000:
+            fail(f"uTile {unit}: no new snapshot while held")
+        time.sleep(0.05)
+    now = snapshots(p, unit)[1]
+    if now != scans:
+        fail(f"uTile {unit}: held, the scan count moved from {scans} to {now}")
+    p.wait(unit, "scans", scans)
+
+
+def hold_and_step(p, unit):
+    """Run, Hold, Step on the card (SPEC §18); Step line in the Program tab."""
+    card = f'.card[data-unit="{unit}"]'
+    button = lambda action, steps=None: (
+        f'{card} button[data-action="{action}"][data-unit="{unit}"]'
+        + (f'[data-steps="{steps}"]' if steps else ""))
+    step(f"uTile {unit}: Hold: the card says held, the scan count stops")
+    p.page.wait_for_selector(button("hold") + ":not([disabled])", timeout=T)
+    p.page.click(button("hold"))
+    p.page.wait_for_selector(f'{card} .state[data-state="held"]', timeout=T)
+    p.wait_text(f"{card} .state", "held")
+    scans = snapshots(p, unit)[1]
+    still(p, unit, scans)
+    step(f"uTile {unit}: Step 1 and Step 10: the scan count rises by exactly 1 and 10")
+    p.page.click(button("step", 1))
+    p.wait(unit, "scans", scans + 1)
+    still(p, unit, scans + 1)
+    p.page.click(button("step", 10))
+    p.wait(unit, "scans", scans + 11)
+    still(p, unit, scans + 11)
+    scans += 11
+    step(f"uTile {unit}: Step line walks the cursor through the held scan; past END, one scan")
+    p.tab("program")
+    walk = f'.program[data-unit="{unit}"] button[data-action="step-line"]'
+    cursor = f'.program[data-unit="{unit}"] tr[data-line-cursor]'
+    p.page.wait_for_selector(walk + ":visible", timeout=T)
+    reached = p.page.eval_on_selector_all(
+        f'.program[data-unit="{unit}"] td.v', "cs => cs.filter(c => c.dataset.value !== '').length")
+    if reached < 2:
+        fail(f"the held scan reaches {reached} lines")
+    for n in range(reached):
+        p.page.click(walk)
+        p.page.wait_for_selector(f'.program[data-unit="{unit}"] tr[data-line-cursor="{n}"]', timeout=T)
+        if p.page.eval_on_selector_all(cursor, "rs => rs.length") != 1:
+            fail("more than one line carries the cursor")
+        if snapshots(p, unit)[1] != scans:
+            fail("Step line ran a scan before the cursor passed END")
+    p.page.click(walk)
+    p.page.wait_for_selector(f'.program[data-unit="{unit}"] tr[data-line-cursor="0"]', timeout=T)
+    p.wait(unit, "scans", scans + 1)
+    p.tab("plant")
+    step(f"uTile {unit}: Run: free again, the cursor gone")
+    p.page.click(button("run"))
+    p.page.wait_for_selector(f'{card} .state[data-state="online"]', timeout=T)
+    p.newer_than(unit, scans + 1, T, "the scan count does not move after Run")
+    if p.page.query_selector(cursor):
+        fail("the cursor stays after Run")
+
+
+def edit_and_check(p, unit):
+    """Edit in the Program tab: a listing with mistakes shows each on its line (the messages of
+    utile asm), the corrected one none; nothing is sent while editing."""
+    prog = f'.program[data-unit="{unit}"]'
+    p.tab("program")
+    step(f"uTile {unit}: Edit opens the running program's listing in the editor")
+    p.page.click(f'{prog} button[data-action="edit"]')
+    area = f'{prog} textarea[data-editor="listing"]'
+    p.page.wait_for_function(
+        "s => { const t = document.querySelector(s); return t && t.value.includes('H6.'); }",
+        arg=area, timeout=T)
+    status = f'{prog} .check-status'
+    p.wait_text(status, "no problems")
+    writes = api(p.url, "/api/state")["line"]["writes"]
+    step(f"uTile {unit}: a listing with mistakes: each shown on its line")
+    p.page.fill(area, "A0.\n.Y0\nBLAH\nT0 = 999\nEND\n")
+    p.page.wait_for_selector(f'{prog} li[data-problem-line="3"]', timeout=T)
+    p.wait_text(f'{prog} li[data-problem-line="3"]', "unknown word 'BLAH'")
+    p.page.wait_for_selector(f'{prog} li[data-problem-line="4"]', timeout=T)
+    p.page.wait_for_selector(f'{prog} .gutter div.bad[data-gutter-line="3"]', timeout=T)
+    if p.page.query_selector(f'{prog} .gutter div.bad[data-gutter-line="1"]'):
+        fail("a good line is marked")
+    step(f"uTile {unit}: corrected, the listing has no problems")
+    p.page.fill(area, "A0.\n.Y0\nEND\nT0 = 99\n")
+    p.wait_text(status, "no problems")
+    if p.page.query_selector(f'{prog} li[data-problem-line]'):
+        fail("problems stay after the correction")
+    if api(p.url, "/api/state")["line"]["writes"] != writes:
+        fail("editing sent something to the uTile")
+    p.tab("plant")
+
+
+# The page's parts that must neither overflow nor overlap on a phone: each a cell of its
+# panel (a tile, a lamp, a switch, a field, a button, a readout, a meter, a group).
+CELLS = (".panel, .tile, .lamp, .coil, .scan-button, input.setting, .readout, .analog .meter, "
+         ".analog .reading, .analog .volts, .analog .sp, .fillbar, .listing, .editor, .tabs button")
+LAYOUT = """cells => {
+  const shown = [...document.querySelectorAll(cells)].filter(e => {
+    const r = e.getBoundingClientRect();
+    return r.width > 0 && r.height > 0;
+  });
+  const boxes = shown.map(e => e.getBoundingClientRect());
+  const overlaps = [];
+  for (let i = 0; i < shown.length; i++) {
+    for (let j = i + 1; j < shown.length; j++) {
+      if (shown[i].contains(shown[j]) || shown[j].contains(shown[i])) continue;
+      const a = boxes[i], b = boxes[j];
+      const w = Math.min(a.right, b.right) - Math.max(a.left, b.left);
+      const h = Math.min(a.bottom, b.bottom) - Math.max(a.top, b.top);
+      if (w > 1 && h > 1) overlaps.push(`${shown[i].className} / ${shown[j].className}`);
+    }
+  }
+  const small = shown.filter(e => e.matches(".coil, .scan-button, .tabs button"))
+    .filter(e => { const r = e.getBoundingClientRect(); return r.height < 40 || r.width < 44; })
+    .map(e => e.textContent);
+  const wide = shown.filter(e => e.getBoundingClientRect().right > innerWidth + 0.5)
+    .map(e => e.className);
+  return { scroll: document.documentElement.scrollWidth, width: innerWidth, cells: shown.length,
+           overlaps: overlaps.slice(0, 5), small: small.slice(0, 5), wide: wide.slice(0, 5) };
+}"""
+
+
+def phone(p, unit):
+    """The page at 390 x 844: every panel without horizontal scrolling or overlap (the timers'
+    tiles, the analog meters, the new buttons and the editor), buttons big enough to tap."""
+    step("the page on a phone, 390 x 844: no panel overflows, no two cells overlap")
+    context = p.page.context.browser.new_context(viewport={"width": 390, "height": 844})
+    phone = context.new_page()
+    phone.goto(p.url)
+    phone.wait_for_selector(f'.card[data-unit="{unit}"] [data-signal="online"][data-value="1"]', timeout=T)
+    phone.wait_for_selector(f'.card[data-unit="{unit}"] .trend canvas', timeout=T)
+    for tab in ["plant", "program"]:
+        phone.click(f"#tab-{tab}")
+        if tab == "program":
+            phone.click(f'.program[data-unit="{unit}"] button[data-action="edit"]')
+            phone.wait_for_selector(f'.program[data-unit="{unit}"] .editor', timeout=T)
+            phone.wait_for_selector(f'.program[data-unit="{unit}"] td.op', timeout=T)
+        got = phone.evaluate(LAYOUT, CELLS)
+        if got["cells"] < (100 if tab == "plant" else 5):
+            fail(f"{tab} at 390 px: only {got['cells']} cells shown")
+        if got["scroll"] > got["width"] or got["wide"]:
+            fail(f"{tab} at 390 px scrolls sideways: {got}")
+        if got["overlaps"]:
+            fail(f"{tab} at 390 px: cells overlap: {got['overlaps']}")
+        if got["small"]:
+            fail(f"{tab} at 390 px: buttons too small to tap: {got['small']}")
+    context.close()
+
+
 def single(p, a):
     step("the page: one card, the program running")
     p.wait(1, "online", 1)
@@ -250,6 +409,9 @@ def single(p, a):
     p.wait(1, "A0", 1)
     gateway(p, a.tcp, 1)
     api_failures(p, 1)
+    hold_and_step(p, 1)
+    edit_and_check(p, 1)
+    phone(p, 1)
 
     step("D8 removed and reset: uTile starts in EDIT mode and the page says so")
     ask("rig 8r")
@@ -336,7 +498,8 @@ def main():
     a = ap.parse_args()
     with sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path="/usr/bin/chromium", args=ARGS)
-        page = browser.new_page(viewport={"width": 1300, "height": 1000})
+        # A context of its own: api_failures opens a second page in it.
+        page = browser.new_context(viewport={"width": 1300, "height": 1000}).new_page()
         errors = []
         page.on("pageerror", lambda e: errors.append(str(e)))
         page.goto(a.url)

@@ -20,9 +20,11 @@ use futures_util::stream::{self, Stream};
 
 use super::api::{ApiError, KeysSent, TrendDoc, WriteBody, WriteDone};
 use super::assets;
+use super::check;
 use super::hub::{Hub, Input};
 use super::queue::{Done, Job, Origin};
 use super::rtu;
+use super::scan_control;
 use super::signals::{self, SIGNALS};
 use super::unit::TREND_STEP;
 use super::view::{View, TREND_SIGNALS};
@@ -39,6 +41,8 @@ pub fn router(hub: Arc<Hub>) -> Router {
         .route("/api/events", get(events))
         .route("/api/signals", get(signal_table))
         .route("/api/units/{addr}/write", post(write))
+        .route("/api/units/{addr}/scan", post(scan_control::post))
+        .route("/api/check", post(check::post))
         .route("/api/units/{addr}/program", get(program))
         .route("/api/units/{addr}/trend", get(trend))
         .route("/api/terminal", get(terminal).post(keys))

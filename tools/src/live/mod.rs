@@ -9,6 +9,8 @@
 //! | `line/` | the line's owner: the port and everything about the line (open/reopen, the boot wait, EDIT or RUN, one transaction at a time, every uTile's poller); it publishes the view |
 //! | `line_use.rs` | line time over a sliding window (the line's busy figure, a uTile's share) |
 //! | `rtu.rs` | the RTU master's side of a transaction and the Modbus vocabulary: reply lengths, finding a reply, a missed one's bytes, timing |
+//! | `check.rs` | a listing checked by the kit's parser for the page's editor (`POST /api/check`) |
+//! | `scan_control.rs` | hold, run and step (SPEC §18): the API's route, whether a uTile's firmware has them |
 //! | `queue.rs` | the queue in front of the line: writes first, reads and polls in turn |
 //! | `screen.rs` | EDIT or RUN, told from the terminal's output |
 //! | `unit.rs` | one uTile as the line's owner keeps it: snapshot, presets, program, back-off, link health, trend |
@@ -28,6 +30,7 @@ pub mod allow;
 pub mod api;
 pub mod args;
 pub mod assets;
+pub mod check;
 pub mod gateway;
 pub mod guard;
 pub mod http;
@@ -39,6 +42,7 @@ pub mod port;
 pub mod program;
 pub mod queue;
 pub mod rtu;
+pub mod scan_control;
 pub mod screen;
 pub mod signals;
 pub mod terminal;

@@ -8,6 +8,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use utile_core::engine::LINES;
+use utile_core::modbus::hold::{STATUS_HELD, STATUS_LAPSED};
 use utile_core::modbus::plc::STATUS_RUNNING;
 use utile_core::modbus::snapshot::{self, Snapshot, PROGRAM, PROGRAM_LEN, SNAPSHOT, SNAPSHOT_LEN};
 use utile_core::modbus::{
@@ -19,9 +20,17 @@ use super::hub::ProgramFile;
 use super::line_use::LineUse;
 use super::program;
 use super::rtu;
+use super::scan_control::{self, ScanControl};
 use super::screen::Mode;
 use super::signals::{self, Holdings, HOLDINGS};
 use super::view::{CardState, FileMatch, Listing, ProgramView, Trend, UnitView, EDIT_ADVICE};
+
+/// A held card's advice (SPEC §18).
+const HELD_ADVICE: &str = "Held: the scan stopped at its END, the outputs stay as they are. Run \
+                           lets it run freely, Step runs 1 or 10 scans. Without a Modbus frame \
+                           for 10 s the hold ends by itself.";
+/// A running card's advice after a hold ended by itself.
+const LAPSED_ADVICE: &str = "A hold ended by itself since RUN (no Modbus frame came for 10 s).";
 
 /// Misses in a row after which a uTile is shown offline.
 const OFFLINE_AFTER: u32 = 3;
@@ -47,6 +56,8 @@ pub enum Read {
     Holdings,
     /// Half of the program window (FC04 256–319, 320–383).
     Program(u8),
+    /// Whether the firmware holds and steps (SPEC §18): FC03 32–33, once.
+    ScanControl,
 }
 
 impl Read {
@@ -67,6 +78,7 @@ impl Read {
             Read::Legacy(_) => read(READ_DISCRETE_INPUTS, 8, 42),
             Read::Holdings => read(READ_HOLDING_REGISTERS, 0, HOLDINGS as u16),
             Read::Program(h) => read(READ_INPUT_REGISTERS, PROGRAM + u16::from(h) * half, half),
+            Read::ScanControl => scan_control::PROBE.to_vec(),
         }
     }
 }
@@ -118,6 +130,8 @@ pub struct Unit {
     program_half: Option<Vec<u16>>,
     /// The firmware has no §17 window (exception 02 to the snapshot read).
     pub legacy: bool,
+    /// Whether the firmware holds and steps (SPEC §18), once asked.
+    pub scan_control: ScanControl,
     /// The legacy read that comes next.
     legacy_step: u8,
     legacy_regs: [u16; SNAPSHOT_LEN as usize],
@@ -154,6 +168,7 @@ impl Unit {
             program_values: Arc::from(""),
             program_half: None,
             legacy: false,
+            scan_control: ScanControl::default(),
             legacy_step: 0,
             legacy_regs: [0; SNAPSHOT_LEN as usize],
             link: Link::default(),
@@ -192,6 +207,9 @@ impl Unit {
         {
             return Read::Holdings;
         }
+        if self.scan_control.supported.is_none() && !self.legacy {
+            return Read::ScanControl;
+        }
         if self.legacy {
             Read::Legacy(self.legacy_step)
         } else {
@@ -224,11 +242,17 @@ impl Unit {
     pub fn answered(&mut self, read: Read, pdu: &[u8], rtt: Duration, now: Instant) -> bool {
         self.link.rtt_ms = rtt.as_secs_f64() * 1e3;
         self.misses = 0;
+        if read == Read::ScanControl {
+            self.scan_control = ScanControl::from_answer(rtu::exception(pdu));
+            self.due = now;
+            return false;
+        }
         if let Some(code) = rtu::exception(pdu) {
             self.link.exceptions += 1;
             if read == Read::Snapshot && code == Exception::IllegalDataAddress as u8 {
                 // Version-2 firmware: no §17 window; read §13's map instead.
                 self.legacy = true;
+                self.scan_control = ScanControl::from_answer(Some(code));
                 self.reason = Some(
                     "firmware without the snapshot of SPEC §17: four reads a refresh, no \
                      program view (update the firmware)"
@@ -261,6 +285,7 @@ impl Unit {
                 self.run_program();
                 false
             }
+            Read::ScanControl => false,
             Read::Program(0) => {
                 self.program_half = Some(regs);
                 false
@@ -427,6 +452,7 @@ impl Unit {
         }
         match &self.snap {
             Some((s, _)) if s.status & STATUS_RUNNING == 0 => CardState::Stopped,
+            Some((s, _)) if s.status & STATUS_HELD != 0 => CardState::Held,
             _ => CardState::Online,
         }
     }
@@ -455,7 +481,12 @@ impl Unit {
                 "uTile answers, but its program is not running: start it with RUN or EX0."
                     .to_string()
             }
-            CardState::Online => self.reason.clone().unwrap_or_default(),
+            CardState::Held => HELD_ADVICE.to_string(),
+            CardState::Online => match (&self.reason, &self.snap) {
+                (Some(r), _) => r.clone(),
+                (None, Some((s, _))) if s.status & STATUS_LAPSED != 0 => LAPSED_ADVICE.into(),
+                _ => String::new(),
+            },
         };
         let snap = self.snap.as_ref();
         let program = match (&self.program, snap) {
@@ -478,6 +509,7 @@ impl Unit {
             advice,
             reason: self.reason.clone(),
             legacy: self.legacy,
+            scan_control: self.scan_control.clone(),
             age_ms: snap.map(|(_, t)| now.duration_since(*t).as_millis() as u64),
             values: snap
                 .map(|(s, _)| signals::values(s, self.holdings.as_ref()))

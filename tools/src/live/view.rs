@@ -12,6 +12,7 @@ use serde::Serialize;
 use utile_core::engine::UNITS;
 
 use super::program::ListingLine;
+use super::scan_control::ScanControl;
 use super::screen::Mode;
 use super::signals::Values;
 use super::unit::Link;
@@ -32,6 +33,8 @@ pub enum CardState {
     Edit,
     /// Answers, but its status says the program is not running.
     Stopped,
+    /// Its program runs, its scan held (SPEC §18).
+    Held,
 }
 
 /// The line and every uTile on it, as of one moment.
@@ -118,6 +121,8 @@ pub struct UnitView {
     pub reason: Option<String>,
     /// Firmware without SPEC §17's snapshot.
     pub legacy: bool,
+    /// Hold and step (SPEC §18): whether the firmware has them, why not.
+    pub scan_control: ScanControl,
     /// Age of the last snapshot when this view was published, ms.
     pub age_ms: Option<u64>,
     /// Every value by its listing name (the signal table's).

@@ -6,6 +6,7 @@
 // (the number it shows, 0/1 for bits); what a user must do is said in words.
 
 import { el, errorText } from "/dom.js";
+import { ScanButtons } from "/scan.js";
 import { Trend } from "/trend.js";
 
 const HEX = "0123456789ABCDEF";
@@ -28,7 +29,8 @@ export function clock(tenths) {
 }
 
 // A card's state in a word (what the user can do about it comes from the server: `advice`).
-const STATE_WORDS = { online: "running", offline: "offline", edit: "EDIT mode", stopped: "not running" };
+const STATE_WORDS = { online: "running", offline: "offline", edit: "EDIT mode", stopped: "not running",
+  held: "held" };
 
 export class Card {
   // `unitMs`: each timer's unit in ms, as the core defines it (/api/state's timer_unit_ms);
@@ -189,7 +191,8 @@ export class Card {
   }
 
   scan() {
-    const box = el("div", { class: "readouts" });
+    this.scanButtons = new ScanButtons(this.addr, this.readOnly, this.refusal);
+    const box = el("div", { class: "readouts" }, this.scanButtons.root);
     const add = (...a) => { const [r, b] = this.readout(...a); box.append(r); return b; };
     this.statusEl = add("program", "input register 0: running, watchdog reset, overrun", "status");
     this.scanEl = add("scan µs min / mean / max", "time per scan since RUN, µs");
@@ -247,6 +250,7 @@ export class Card {
     this.stateEl.textContent = STATE_WORDS[u.state] || u.state;
     this.show(this.stateEl, "online", u.online ? 1 : 0);
     this.adviceEl.textContent = u.advice;
+    this.scanButtons.update(u);
     for (const [name, els] of this.signals) {
       const value = v[name];
       if (value === undefined) continue;
@@ -272,6 +276,7 @@ export class Card {
     });
     if (v.status !== undefined) {
       this.statusEl.textContent = (v.status & 1 ? "running" : "stopped") +
+        (v.status & 16 ? ", held" : "") + (v.status & 32 ? ", a hold ended by itself" : "") +
         (v.status & 2 ? ", after a watchdog reset" : "") + (v.status & 8 ? ", overrun" : "");
       this.scanEl.textContent = `${v.scan_min} / ${v.scan_mean} / ${v.scan_max}`;
     }

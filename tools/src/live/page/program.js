@@ -2,8 +2,13 @@
 // value from the latest picture: the bit on top of the stack after the line, or for a line
 // that pops (`.Y0` …) the bit it took (shown with an arrow); `?` where the picture cannot
 // tell (edges, toggles, clocks). With --program FILE, whether that listing is the one that runs.
+// While the scan is held (SPEC §18), Step line walks a cursor through the held scan's lines
+// (data-line-cursor="N" on the current line; the values after it wait); past END it steps
+// one scan on the uTile and starts again at line 0.
 
 import { el, errorText } from "/dom.js";
+import { Editor } from "/editor.js";
+import { scanAction } from "/scan.js";
 
 export class ProgramView {
   constructor(addr) {
@@ -13,8 +18,52 @@ export class ProgramView {
     this.check = el("div", { class: "check" });
     this.table = el("table", { class: "listing" });
     this.note = el("div", { class: "hint", text: "waiting for the program…" });
+    this.cursor = null;
+    this.held = false;
+    this.stepLine = el("button", { class: "scan-button step-line", type: "button",
+      "data-action": "step-line", "data-unit": addr, text: "Step line",
+      title: "while held: the next line of the held scan; past END, one scan on the uTile" });
+    this.stepLine.hidden = true;
+    this.stepLine.addEventListener("click", () => this.walk());
+    this.why = el("span", { class: "refusal" });
+    this.lines = [];
+    this.editor = new Editor(addr, () => this.lines);
+    const edit = el("button", { class: "scan-button", type: "button", "data-action": "edit",
+      "data-unit": addr, text: "Edit", title: "the listing in an editor, checked as you type" });
+    edit.addEventListener("click", () => this.editor.toggle());
     this.root = el("div", { class: "program", "data-unit": addr },
-      el("h2", { text: `uTile ${addr}` }), this.check, this.note, this.table);
+      el("h2", { text: `uTile ${addr}` }), this.check, el("div", { class: "scan-control" },
+        edit, this.stepLine, this.why), this.editor.root, this.note, this.table);
+  }
+
+  // Step line: the cursor to the next line the held scan reaches; past END, one scan.
+  async walk() {
+    const next = this.cursor === null ? 0 : this.cursor + 1;
+    const cell = this.cells[next];
+    if (cell && cell.dataset.value !== "") {
+      this.cursor = next;
+      this.showCursor();
+      return;
+    }
+    this.why.textContent = "";
+    const why = await scanAction(this.addr, "step", 1);
+    if (why) {
+      this.why.textContent = `step refused: ${why}`;
+      return;
+    }
+    this.cursor = 0;
+    this.showCursor();
+  }
+
+  // Marks the cursor's line; the lines after it keep their values hidden until reached.
+  showCursor() {
+    this.cells.forEach((c, n) => {
+      if (!c) return;
+      const row = c.parentElement;
+      if (n === this.cursor) row.dataset.lineCursor = String(n);
+      else delete row.dataset.lineCursor;
+      row.classList.toggle("ahead", this.cursor !== null && n > this.cursor);
+    });
   }
 
   async load(fingerprint) {
@@ -28,6 +77,7 @@ export class ProgramView {
     }
     delete this.note.dataset.error;
     const p = await res.json();
+    this.lines = p.lines;
     this.table.replaceChildren();
     this.cells = [];
     for (const line of p.lines) {
@@ -42,6 +92,14 @@ export class ProgramView {
   }
 
   update(u) {
+    const held = u.state === "held";
+    this.stepLine.hidden = !held;
+    this.stepLine.disabled = !!u.scan_control && u.scan_control.supported === false;
+    if (!held && this.cursor !== null) {
+      this.cursor = null;
+      this.showCursor();
+    }
+    this.held = held;
     const p = u.program;
     if (u.legacy) {
       this.note.textContent = "this uTile's firmware does not serve its program (SPEC §17): update it";

@@ -70,7 +70,8 @@ export class Trend {
       });
       this.idx = this.names.map((n, i) => i).filter((i) => used[i]);
       this.plot = new uPlot({
-        width: 560,
+        // A phone's width (390 px) leaves room for the card's and the group's edges.
+        width: Math.max(200, Math.min(560, window.innerWidth - 90)),
         height: 150,
         series,
         scales: { x: { time: true }, adc: { range: [0, 1023] }, count: { auto: true } },
