@@ -37,6 +37,17 @@ impl Port {
         })
     }
 
+    /// A port another owner opened (`utile live`'s line lends it for a send), read with
+    /// the same short polls.
+    pub fn wrap(mut port: Box<dyn SerialPort>) -> Result<Port, String> {
+        port.set_timeout(POLL)
+            .map_err(|e| format!("setting the port's time-out: {e}"))?;
+        Ok(Port {
+            port,
+            seen: Vec::new(),
+        })
+    }
+
     /// Sends `bytes` and waits until the system has taken them.
     pub fn send(&mut self, bytes: &[u8]) -> Result<(), String> {
         self.port

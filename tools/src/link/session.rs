@@ -35,6 +35,18 @@ const EOF_RECORD: &[u8] = b":00000001FF";
 const STORED: &[u8] = text::STORED.as_bytes();
 const STORE_FAILED: &[u8] = text::STORE_FAILED.as_bytes();
 
+/// What a session says when `/` did not stop the program.
+const NOT_STOPPED: &str = "did not stop its program on `/`";
+
+/// Why a session could not start on a port already open.
+#[derive(Debug)]
+pub enum Attach {
+    /// A program runs that `/` does not stop: it has no KEY.
+    NoKey,
+    /// Anything else, in words.
+    Failed(String),
+}
+
 /// Ctrl-L: the editor draws its whole screen again.
 const REDRAW: u8 = 0x0C;
 
@@ -118,6 +130,44 @@ impl Session {
         Ok(s)
     }
 
+    /// A session on a port that is already open and past its boot (`utile live`'s line):
+    /// `running` when a program runs, which is stopped first as `--stop` does. A program
+    /// that `/` does not stop (no KEY) is [`Attach::NoKey`].
+    pub fn attach(
+        port: Port,
+        path: &str,
+        running: bool,
+        progress: Progress,
+    ) -> Result<Session, Attach> {
+        let mut s = Session {
+            port,
+            path: path.to_string(),
+        };
+        if running {
+            s.stop(progress).map_err(|e| {
+                if e.contains(NOT_STOPPED) {
+                    Attach::NoKey
+                } else {
+                    Attach::Failed(e)
+                }
+            })?;
+        }
+        s.find_page(Options::default(), progress)
+            .map_err(Attach::Failed)?;
+        Ok(s)
+    }
+
+    /// What came in on the port so far (the editor's screens, for a terminal).
+    pub fn transcript(&self) -> &[u8] {
+        &self.port.seen
+    }
+
+    /// EX0: the program starts, and the RUN screen must say so.
+    pub fn run(&mut self, progress: Progress) -> Result<(), String> {
+        progress("EX0");
+        self.command("EX0", RUNNING)
+    }
+
     /// Ctrl-L, and the page must be what it draws.
     fn find_page(&mut self, opts: Options, progress: Progress) -> Result<(), String> {
         let from = self.port.seen.len();
@@ -169,8 +219,8 @@ impl Session {
             .is_none()
         {
             return Err(format!(
-                "uTile on {} did not stop its program on `/`: only a program with KEY can be \
-                 stopped from the terminal; otherwise remove the D8 jumper and reset",
+                "uTile on {} {NOT_STOPPED}: only a program with KEY can be stopped from the \
+                 terminal; otherwise remove the D8 jumper and reset",
                 self.path
             ));
         }
