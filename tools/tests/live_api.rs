@@ -557,7 +557,7 @@ fn send_checks_stops_loads_verifies_stores_and_starts() {
     let first = "A1.\n.Y1\nKEY\nEND\n";
     let prog = utile_kit::listing::parse("first", first).unwrap();
     let spec = NanoSpec::single("live-send", &prog, false);
-    let _nano = spec.start();
+    let mut nano = spec.start();
     let live = Live::start(&spec.link, &[]);
     let old = u64::from(asm_fingerprint("live-send-first", first));
     live.wait("uTile 1 runs the first program", T, |s| {
@@ -596,6 +596,24 @@ fn send_checks_stops_loads_verifies_stores_and_starts() {
             && s["units"][0]["program"]["consistent"] == true
     });
     assert_eq!(s["mode"], "run", "{s:#}");
+    // STOREd: another program sent without STORE runs until a reset; then (D8 fitted) the
+    // stored one autostarts from EEPROM.
+    let third = "A2.\n.Y2\nKEY\nEND\n";
+    let third_fp = asm_fingerprint("live-send-third", third);
+    let (code, body) = send(third, false);
+    assert_eq!(code, 200, "{body}");
+    live.wait("uTile 1 runs the third program", T, |s| {
+        s["units"][0]["program"]["fingerprint"] == u64::from(third_fp)
+    });
+    live.wait("a million scans", T, |s| {
+        s["units"][0]["values"]["scans"].as_u64() > Some(1_000_000)
+    });
+    nano.key("r");
+    live.wait("the stored program autostarted after the reset", T, |s| {
+        s["units"][0]["state"] == "online"
+            && s["units"][0]["values"]["scans"].as_u64() < Some(1_000_000)
+            && s["units"][0]["program"]["fingerprint"] == u64::from(want)
+    });
     // Read-only refuses a send.
     drop(live);
     let live = Live::start(&spec.link, &["--read-only"]);
@@ -607,4 +625,57 @@ fn send_checks_stops_loads_verifies_stores_and_starts() {
         &json!({"listing": good, "store": false, "run": true}),
     );
     assert_eq!(code, 403, "{body}");
+}
+
+#[test]
+fn the_port_lost_mid_send_is_answered_with_what_happened() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let first = "A1.\n.Y1\nKEY\nEND\n";
+    let prog = utile_kit::listing::parse("first", first).unwrap();
+    let spec = NanoSpec::single("live-send-lost", &prog, false);
+    let nano = spec.start();
+    let live = Live::start(&spec.link, &[]);
+    let old = u64::from(asm_fingerprint("live-send-lost-first", first));
+    live.wait("uTile 1 runs the first program", T, |s| {
+        s["units"][0]["state"] == "online" && s["units"][0]["program"]["fingerprint"] == old
+    });
+    // A long listing: READ takes a good part of the send.
+    let mut long = String::new();
+    for i in 0..60 {
+        long.push_str(&format!("A{}.\n.Y{}\n", i % 6, i % 8));
+    }
+    long.push_str("KEY\nEND\n");
+    let (url, body) = (
+        live.url.clone(),
+        json!({"listing": long, "store": false, "run": true}),
+    );
+    let started = Instant::now();
+    let send = std::thread::spawn(move || {
+        let addr = url.trim_start_matches("http://").parse().unwrap();
+        let bytes = body.to_string();
+        request(addr, "POST", "/api/units/1/program", Some(bytes.as_bytes()))
+    });
+    live.wait("the send under way", T, |s| {
+        s["message"]
+            .as_str()
+            .unwrap_or("")
+            .starts_with("sending a program")
+    });
+    // The stop and the READ command take about a second: then the records are on their way.
+    std::thread::sleep(Duration::from_millis(1500));
+    drop(nano);
+    let (code, answer) = send.join().unwrap();
+    assert_eq!(code, 504, "{answer}");
+    let error = answer["error"].as_str().unwrap();
+    assert!(
+        error.contains("serial port was lost") && error.contains("whole program"),
+        "{error}"
+    );
+    assert!(started.elapsed() < Duration::from_secs(20));
+    // Back: the uTile runs a whole program (its lines give the fingerprint it shows).
+    let _nano = spec.start();
+    let s = live.wait("uTile 1 back", Duration::from_secs(60), |s| {
+        s["units"][0]["state"] == "online" && s["units"][0]["program"]["consistent"] == true
+    });
+    assert_eq!(s["units"][0]["program"]["fingerprint"], old, "{s:#}");
 }
