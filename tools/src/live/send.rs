@@ -174,7 +174,13 @@ pub fn carry_out(line: LineNow, job: &SendJob) -> (Result<Sent, SendError>, Vec<
         Ok(p) => p,
         Err(e) => return (Err(SendError::Lost(e)), Vec::new()),
     };
-    let mut say = |m: &str| tracing::info!(addr = job.addr, "send: {m}");
+    let mut say = |m: &str| {
+        tracing::info!(
+            addr = job.addr,
+            at_ms = start.elapsed().as_millis() as u64,
+            "send: {m}"
+        )
+    };
     let mut session = match Session::attach(port, line.path, line.running, &mut say) {
         Ok(s) => s,
         Err(Attach::NoKey) => return (Err(SendError::NoKey), Vec::new()),
