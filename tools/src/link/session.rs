@@ -271,6 +271,18 @@ impl Session {
     /// Sends `prog` through READ: only a wholly valid file replaces uTile's program, and
     /// READ's answer is checked; then the program is read back through WRITE and compared.
     pub fn push(&mut self, prog: &Program, progress: Progress) -> Result<(), String> {
+        let hex = self.load(prog, progress)?;
+        progress("uTile took the file; reading it back through WRITE");
+        let (back, _) = self.pull(progress)?;
+        if listing::to_hex(&back) != hex {
+            return Err("the program read back through WRITE differs from the file sent".into());
+        }
+        Ok(())
+    }
+
+    /// READ alone: `prog` as records, uTile's answer checked; the records sent. Only a
+    /// wholly valid file replaces uTile's program. [`Session::push`] reads it back too.
+    pub fn load(&mut self, prog: &Program, progress: Progress) -> Result<Vec<u8>, String> {
         let hex = listing::to_hex(prog);
         let records: Vec<&[u8]> = hex
             .split(|&b| b == b'\n')
@@ -312,12 +324,7 @@ impl Session {
         };
         self.back_to_page()?;
         result?;
-        progress("uTile took the file; reading it back through WRITE");
-        let (back, _) = self.pull(progress)?;
-        if listing::to_hex(&back) != hex {
-            return Err("the program read back through WRITE differs from the file sent".into());
-        }
-        Ok(())
+        Ok(hex)
     }
 
     /// The program through WRITE: the program and the records as uTile sent them. A file

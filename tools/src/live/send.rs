@@ -5,8 +5,8 @@
 //! editor has the line. On the line it is `utile push --stop`'s steps
 //! ([`crate::link::Session`], on a clone of the line's port): `/` stops the program (a program
 //! without KEY is refused), READ takes the image (only a whole, checked file replaces the
-//! program), WRITE reads it back for comparison, STORE if asked, EX0 if asked; after EX0 the
-//! snapshot's fingerprint (SPEC §17) must be the image's.
+//! program), STORE if asked, EX0 if asked; then the line reads it back: the §17 program block
+//! and the snapshot's fingerprint must be the image's (without EX0, WRITE reads it back).
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -195,9 +195,15 @@ pub fn carry_out(line: LineNow, job: &SendJob) -> (Result<Sent, SendError>, Vec<
     (result.map_err(classify), session.transcript().to_vec())
 }
 
-/// READ (with WRITE's read-back), STORE, EX0.
+/// READ (with WRITE's read-back when it is not started), STORE, EX0.
 fn steps(s: &mut Session, job: &SendJob, say: &mut dyn FnMut(&str)) -> Result<(), String> {
-    s.push(&job.prog, say)?;
+    if job.run {
+        // Read back over Modbus once it runs (the §17 program block, by the line).
+        s.load(&job.prog, say)?;
+    } else {
+        // It will not run: read back through WRITE.
+        s.push(&job.prog, say)?;
+    }
     if job.store {
         s.store(say)?;
     }

@@ -1,10 +1,12 @@
 //! A send's turn on the line ([`crate::live::send`]): the owner lends its port to `utile
 //! push`'s session, polls nothing meanwhile, shows the editor's screens in the terminal,
-//! and after EX0 reads the snapshot's fingerprint (SPEC §17) to check it is the image's.
+//! and after EX0 reads the program back over Modbus: the snapshot's fingerprint and the
+//! program block (SPEC §17) must be the image's.
 
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
-use utile_core::modbus::snapshot::{at, SNAPSHOT};
+use utile_core::engine::LINES;
+use utile_core::modbus::snapshot::{self, at, PROGRAM, PROGRAM_LEN, SNAPSHOT};
 use utile_core::modbus::READ_INPUT_REGISTERS;
 
 use super::super::screen::{Mode, Screen};
@@ -17,6 +19,7 @@ const FIRST_ANSWER: Duration = Duration::from_millis(500);
 impl Owner {
     /// Carries out `job` and answers it.
     pub(super) fn send_program(&mut self, job: SendJob) {
+        let started = Instant::now();
         self.say(format!("sending a program to uTile {}", job.addr));
         let line = LineNow {
             path: &self.opts.path,
@@ -32,29 +35,19 @@ impl Owner {
             let why = why.clone();
             self.close(&why);
         }
-        if let Ok(sent) = &outcome {
+        if let Ok(sent) = &mut outcome {
             if job.run {
                 self.set_mode(Mode::Run);
-                let [a0, a1] = (SNAPSHOT + at::FINGERPRINT).to_be_bytes();
-                let read = [READ_INPUT_REGISTERS, a0, a1, 0, 1];
-                let fp = self
-                    .transact(job.addr, &read, FIRST_ANSWER)
-                    .ok()
-                    .and_then(|(pdu, _)| {
-                        (pdu.len() == 4 && pdu[0] == READ_INPUT_REGISTERS)
-                            .then(|| u16::from_be_bytes([pdu[2], pdu[3]]))
-                    });
-                if fp != Some(sent.fingerprint) {
-                    outcome = Err(SendError::Refused(format!(
-                        "the program was loaded and started, but its snapshot shows \
-                         fingerprint {} instead of {:04X}: send it again",
-                        fp.map_or("nothing (no answer)".into(), |f| format!("{f:04X}")),
-                        sent.fingerprint
-                    )));
-                }
-                let now = std::time::Instant::now();
+                let check = self.read_back(job.addr, sent.fingerprint, &job.prog.uf);
+                sent.ms = started.elapsed().as_secs_f64() * 1e3;
+                let now = Instant::now();
                 for u in &mut self.units {
                     u.due = now;
+                }
+                if let Err(why) = check {
+                    outcome = Err(SendError::Refused(format!(
+                        "the program was loaded and started, but {why}: send it again"
+                    )));
                 }
             }
         }
@@ -69,5 +62,49 @@ impl Owner {
             }
         }
         let _ = job.reply.send(outcome);
+    }
+
+    /// The running program read back over Modbus: the snapshot's fingerprint and the §17
+    /// program block must be the image's.
+    fn read_back(&mut self, addr: u8, fingerprint: u16, uf: &[u8; LINES]) -> Result<(), String> {
+        let fp = self
+            .read_input(addr, SNAPSHOT + at::FINGERPRINT, 1)
+            .ok_or("its snapshot did not answer")?;
+        if fp[0] != fingerprint {
+            return Err(format!(
+                "its snapshot shows fingerprint {:04X} instead of {fingerprint:04X}",
+                fp[0]
+            ));
+        }
+        let half = PROGRAM_LEN / 2;
+        let mut regs = self
+            .read_input(addr, PROGRAM, half)
+            .ok_or("its program block did not answer")?;
+        regs.extend(
+            self.read_input(addr, PROGRAM + half, half)
+                .ok_or("its program block did not answer")?,
+        );
+        let regs: [u16; PROGRAM_LEN as usize] = regs
+            .try_into()
+            .map_err(|_| "its program block came short")?;
+        if snapshot::program_from_registers(&regs) != *uf {
+            return Err("its program block differs from the image sent".into());
+        }
+        Ok(())
+    }
+
+    /// `n` input registers from `start` (FC04), or nothing.
+    fn read_input(&mut self, addr: u8, start: u16, n: u16) -> Option<Vec<u16>> {
+        let [a0, a1] = start.to_be_bytes();
+        let [n0, n1] = n.to_be_bytes();
+        let (pdu, _) = self
+            .transact(addr, &[READ_INPUT_REGISTERS, a0, a1, n0, n1], FIRST_ANSWER)
+            .ok()?;
+        let data = pdu.get(2..)?;
+        (pdu[0] == READ_INPUT_REGISTERS && data.len() == usize::from(n) * 2).then(|| {
+            data.chunks(2)
+                .map(|c| u16::from_be_bytes([c[0], c[1]]))
+                .collect()
+        })
     }
 }
