@@ -513,3 +513,169 @@ fn read_only_refuses_hold_and_step() {
     let (code, problems) = live.post("/api/check", &json!({"listing": "A0.\n.Y0\nEND\n"}));
     assert_eq!((code, problems), (200, json!([])));
 }
+
+/// The fingerprint of the image `utile asm` makes of `text` (SPEC §17, on the host).
+fn asm_fingerprint(name: &str, text: &str) -> u16 {
+    let file = std::env::temp_dir().join(format!("{name}-{}.utl", std::process::id()));
+    std::fs::write(&file, text).unwrap();
+    let hex = file.with_extension("hex");
+    let asm = std::process::Command::new(support::live::UTILE)
+        .arg("asm")
+        .arg(&file)
+        .arg("-o")
+        .arg(&hex)
+        .output()
+        .expect("utile asm");
+    assert!(asm.status.success(), "{asm:?}");
+    let prog = utile_kit::listing::from_hex(&std::fs::read(&hex).unwrap()).unwrap();
+    utile_core::modbus::snapshot::fingerprint(&prog.uf)
+}
+
+#[test]
+fn a_program_without_key_running_is_refused_and_nothing_is_sent() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let (_nano, live) = tank_live("live-send-no-key", &[]);
+    let fp = live.unit(1)["program"]["fingerprint"].clone();
+    let (code, body) = live.post(
+        "/api/units/1/program",
+        &json!({"listing": "A0.\n.Y0\nKEY\nEND\n", "store": false, "run": true}),
+    );
+    assert_eq!(code, 409, "{body}");
+    assert!(body["error"]
+        .as_str()
+        .unwrap()
+        .contains("stop it at the uTile — remove D8 and reset — or add KEY"));
+    // The tank still runs its own program, polled again.
+    live.wait("the tank polled again", T, |s| {
+        s["units"][0]["state"] == "online" && s["units"][0]["program"]["fingerprint"] == fp
+    });
+}
+
+#[test]
+fn send_checks_stops_loads_verifies_stores_and_starts() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let first = "A1.\n.Y1\nKEY\nEND\n";
+    let prog = utile_kit::listing::parse("first", first).unwrap();
+    let spec = NanoSpec::single("live-send", &prog, false);
+    let mut nano = spec.start();
+    let live = Live::start(&spec.link, &[]);
+    let old = u64::from(asm_fingerprint("live-send-first", first));
+    live.wait("uTile 1 runs the first program", T, |s| {
+        s["units"][0]["state"] == "online" && s["units"][0]["program"]["fingerprint"] == old
+    });
+    let send = |listing: &str, store: bool| {
+        live.post(
+            "/api/units/1/program",
+            &json!({"listing": listing, "store": store, "run": true}),
+        )
+    };
+    // A listing with a mistake: 400 with its line, and nothing goes on the line.
+    let before = live.state()["line"].clone();
+    let bad = "A0.\n.Y0\nBLAH\nKEY\nEND\n";
+    let (code, body) = send(bad, false);
+    assert_eq!((code, body["line"].as_u64()), (400, Some(3)), "{body}");
+    let said = utile_kit::listing::parse("x", bad).unwrap_err();
+    assert!(body["error"]
+        .as_str()
+        .unwrap()
+        .contains(&said.problems[0].message));
+    let after = live.state()["line"].clone();
+    assert_eq!(after["writes"], before["writes"]);
+    assert_eq!(live.unit(1)["program"]["fingerprint"], old);
+    // The corrected listing: running, with `utile asm`'s fingerprint.
+    let good = "A0.\n.Y0\nKEY\nEND\n";
+    let want = asm_fingerprint("live-send-good", good);
+    assert_ne!(u64::from(want), old);
+    let (code, body) = send(good, true);
+    assert_eq!(code, 200, "{body}");
+    assert_eq!(body["fingerprint"].as_u64(), Some(u64::from(want)));
+    eprintln!("send: {} ms on the line", body["ms"]);
+    let s = live.wait("uTile 1 runs the new program", T, |s| {
+        s["units"][0]["state"] == "online"
+            && s["units"][0]["program"]["fingerprint"] == u64::from(want)
+            && s["units"][0]["program"]["consistent"] == true
+    });
+    assert_eq!(s["mode"], "run", "{s:#}");
+    // STOREd: another program sent without STORE runs until a reset; then (D8 fitted) the
+    // stored one autostarts from EEPROM.
+    let third = "A2.\n.Y2\nKEY\nEND\n";
+    let third_fp = asm_fingerprint("live-send-third", third);
+    let (code, body) = send(third, false);
+    assert_eq!(code, 200, "{body}");
+    live.wait("uTile 1 runs the third program", T, |s| {
+        s["units"][0]["program"]["fingerprint"] == u64::from(third_fp)
+    });
+    live.wait("a million scans", T, |s| {
+        s["units"][0]["values"]["scans"].as_u64() > Some(1_000_000)
+    });
+    nano.key("r");
+    live.wait("the stored program autostarted after the reset", T, |s| {
+        s["units"][0]["state"] == "online"
+            && s["units"][0]["values"]["scans"].as_u64() < Some(1_000_000)
+            && s["units"][0]["program"]["fingerprint"] == u64::from(want)
+    });
+    // Read-only refuses a send.
+    drop(live);
+    let live = Live::start(&spec.link, &["--read-only"]);
+    live.wait("online read-only", T, |s| {
+        s["units"][0]["state"] == "online"
+    });
+    let (code, body) = live.post(
+        "/api/units/1/program",
+        &json!({"listing": good, "store": false, "run": true}),
+    );
+    assert_eq!(code, 403, "{body}");
+}
+
+#[test]
+fn the_port_lost_mid_send_is_answered_with_what_happened() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let first = "A1.\n.Y1\nKEY\nEND\n";
+    let prog = utile_kit::listing::parse("first", first).unwrap();
+    let spec = NanoSpec::single("live-send-lost", &prog, false);
+    let nano = spec.start();
+    let live = Live::start(&spec.link, &[]);
+    let old = u64::from(asm_fingerprint("live-send-lost-first", first));
+    live.wait("uTile 1 runs the first program", T, |s| {
+        s["units"][0]["state"] == "online" && s["units"][0]["program"]["fingerprint"] == old
+    });
+    // A long listing: READ takes a good part of the send.
+    let mut long = String::new();
+    for i in 0..60 {
+        long.push_str(&format!("A{}.\n.Y{}\n", i % 6, i % 8));
+    }
+    long.push_str("KEY\nEND\n");
+    let (url, body) = (
+        live.url.clone(),
+        json!({"listing": long, "store": false, "run": true}),
+    );
+    let started = Instant::now();
+    let send = std::thread::spawn(move || {
+        let addr = url.trim_start_matches("http://").parse().unwrap();
+        let bytes = body.to_string();
+        request(addr, "POST", "/api/units/1/program", Some(bytes.as_bytes()))
+    });
+    live.wait("the send under way", T, |s| {
+        s["message"]
+            .as_str()
+            .unwrap_or("")
+            .starts_with("sending a program")
+    });
+    // The stop and the READ command take about a second: then the records are on their way.
+    std::thread::sleep(Duration::from_millis(1500));
+    drop(nano);
+    let (code, answer) = send.join().unwrap();
+    assert_eq!(code, 504, "{answer}");
+    let error = answer["error"].as_str().unwrap();
+    assert!(
+        error.contains("serial port was lost") && error.contains("whole program"),
+        "{error}"
+    );
+    assert!(started.elapsed() < Duration::from_secs(20));
+    // Back: the uTile runs a whole program (its lines give the fingerprint it shows).
+    let _nano = spec.start();
+    let s = live.wait("uTile 1 back", Duration::from_secs(60), |s| {
+        s["units"][0]["state"] == "online" && s["units"][0]["program"]["consistent"] == true
+    });
+    assert_eq!(s["units"][0]["program"]["fingerprint"], old, "{s:#}");
+}

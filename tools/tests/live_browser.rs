@@ -75,6 +75,12 @@ fn drive(scenario: &str, spec: &NanoSpec, live_args: &[&str], page_args: &[&str]
         let Some(command) = line.strip_prefix('@') else {
             continue;
         };
+        if let Some(listing) = command.strip_prefix("fp ") {
+            // The fingerprint of `utile asm`'s image of the listing ('|' for each newline).
+            let fp = asm_fingerprint(&listing.replace('|', "\n"));
+            writeln!(answers, "ok {fp:04X}").expect("answer the page script");
+            continue;
+        }
         match command {
             "kill" => nano = None,
             "start" => nano = Some(spec.start()),
@@ -91,6 +97,24 @@ fn drive(scenario: &str, spec: &NanoSpec, live_args: &[&str], page_args: &[&str]
         "live_page.py {scenario} failed:\n{transcript}"
     );
     drop(nano);
+}
+
+/// The fingerprint (SPEC §17) of the image `utile asm` makes of `text`.
+fn asm_fingerprint(text: &str) -> u16 {
+    let file = std::env::temp_dir().join(format!("live-page-send-{}.utl", std::process::id()));
+    std::fs::write(&file, text).expect("the listing");
+    let hex = file.with_extension("hex");
+    let asm = Command::new(support::live::UTILE)
+        .arg("asm")
+        .arg(&file)
+        .arg("-o")
+        .arg(&hex)
+        .output()
+        .expect("utile asm");
+    assert!(asm.status.success(), "{asm:?}");
+    let image = std::fs::read(&hex).expect("utile asm's image");
+    let prog = utile_kit::listing::from_hex(&image).expect("a uTile image");
+    utile_core::modbus::snapshot::fingerprint(&prog.uf)
 }
 
 #[test]

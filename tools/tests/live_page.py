@@ -53,6 +53,15 @@ def ask(command):
         fail(f"@{command}: {answer}")
 
 
+def ask_value(command):
+    """Asks the Rust test for a value (`ok VALUE`)."""
+    print(f"@{command}", flush=True)
+    answer = sys.stdin.readline().strip()
+    if not answer.startswith("ok "):
+        fail(f"@{command}: {answer}")
+    return answer[3:]
+
+
 def api(url, path):
     with urllib.request.urlopen(url + path, timeout=10) as r:
         return json.load(r)
@@ -330,6 +339,42 @@ def edit_and_check(p, unit):
     p.tab("plant")
 
 
+def send_program(p, unit):
+    """Send in the Program tab: a listing with a mistake sends nothing; the corrected one,
+    confirmed, runs, with the fingerprint of utile asm's image shown."""
+    prog = f'.program[data-unit="{unit}"]'
+    p.tab("program")
+    area = f'{prog} textarea[data-editor="listing"]'
+    if not p.page.is_visible(area):
+        p.page.click(f'{prog} button[data-action="edit"]')
+    p.page.on("dialog", lambda d: d.accept())
+    state = api(p.url, "/api/state")
+    writes, old = state["line"]["writes"], state["units"][0]["program"]["fingerprint"]
+    step(f"uTile {unit}: Send with a mistake in the listing: refused, nothing sent")
+    p.page.fill(area, "A1.\n.Y4\nBLAH\nKEY\nEND\n")
+    p.page.click(f'{prog} button[data-action="send"]')
+    p.page.wait_for_selector(f'{prog} .send-status[data-send="error"]', timeout=T)
+    p.wait_text(f'{prog} .send-status', "line 3")
+    state = api(p.url, "/api/state")
+    if state["line"]["writes"] != writes or state["units"][0]["program"]["fingerprint"] != old:
+        fail("a listing with a mistake was sent")
+    step(f"uTile {unit}: the corrected listing sent: running, utile asm's fingerprint shown")
+    good = "A1.\n.Y4\nKEY\nEND\n"
+    fp = ask_value("fp " + good.replace("\n", "|"))
+    p.page.fill(area, good)
+    p.wait_text(f'{prog} .check-status', "no problems")
+    p.page.click(f'{prog} button[data-action="send"]')
+    p.page.wait_for_selector(f'{prog} .send-status[data-send="ok"][data-fingerprint="{fp}"]',
+                             timeout=T)
+    p.wait_text(f'{prog} .send-status', f"running: program {fp}")
+    p.page.wait_for_selector(f'{prog} td.op >> text="KEY"', timeout=T)
+    p.page.wait_for_function(
+        f"() => fetch('/api/state').then(r => r.json()).then(s => s.units[0].program && "
+        f"s.units[0].program.fingerprint === {int(fp, 16)})", timeout=T)
+    p.tab("plant")
+    p.wait(unit, "Y4", 1)
+
+
 # The page's parts that must neither overflow nor overlap on a phone: each a cell of its
 # panel (a tile, a lamp, a switch, a field, a button, a readout, a meter, a group).
 CELLS = (".panel, .tile, .lamp, .coil, .scan-button, input.setting, .readout, .analog .meter, "
@@ -426,7 +471,7 @@ def single(p, a):
         timeout=T,
     )
     p.page.click("#xterm")
-    for line in ["FILL", "U0.", ".Y2", "A0.", "!", ".Y3", "END", "EX0"]:
+    for line in ["FILL", "U0.", ".Y2", "A0.", "!", ".Y3", "KEY", "END", "EX0"]:
         p.page.keyboard.type(line + "\r", delay=20)
         time.sleep(0.3)
     p.page.wait_for_selector('#mode[data-value="run"]', timeout=T)
@@ -442,6 +487,7 @@ def single(p, a):
     ask("rig 0")
     p.wait(1, "Y3", 1)
     ask("rig 0")
+    send_program(p, 1)
 
     step("the virtual Nano killed: the card says offline; back when it returns")
     ask("kill")

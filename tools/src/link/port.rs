@@ -30,6 +30,9 @@ pub enum PortError {
     /// Receiving failed (the adapter was unplugged?).
     #[error("reading from the port")]
     Read(#[source] std::io::Error),
+    /// The port's read time-out cannot be set.
+    #[error("setting the port's time-out")]
+    Timeout(#[source] serialport::Error),
 }
 
 /// An open port and the transcript of what came in.
@@ -54,6 +57,16 @@ impl Port {
                 path: path.into(),
                 source,
             })?;
+        Ok(Port {
+            port,
+            seen: Vec::new(),
+        })
+    }
+
+    /// A port another owner opened (`utile live`'s line lends it for a send), read with
+    /// the same short polls.
+    pub fn wrap(mut port: Box<dyn SerialPort>) -> Result<Port, PortError> {
+        port.set_timeout(POLL).map_err(PortError::Timeout)?;
         Ok(Port {
             port,
             seen: Vec::new(),

@@ -190,6 +190,37 @@ impl Session {
         Ok(s)
     }
 
+    /// A session on a port that is already open and past its boot (`utile live`'s line):
+    /// `running` when a program runs, which is stopped first as `--stop` does (a program
+    /// that `/` does not stop, one without KEY, is [`LinkError::DidNotStop`]).
+    pub fn attach(
+        port: Port,
+        path: &str,
+        running: bool,
+        progress: Progress,
+    ) -> Result<Session, LinkError> {
+        let mut s = Session {
+            port,
+            path: path.to_string(),
+        };
+        if running {
+            s.stop(progress)?;
+        }
+        s.find_page(Options::default(), progress)?;
+        Ok(s)
+    }
+
+    /// What came in on the port so far (the editor's screens, for a terminal).
+    pub fn transcript(&self) -> &[u8] {
+        &self.port.seen
+    }
+
+    /// EX0: the program starts, and the RUN screen must say so.
+    pub fn run(&mut self, progress: Progress) -> Result<(), LinkError> {
+        progress("EX0");
+        self.command("EX0", RUNNING)
+    }
+
     /// Ctrl-L, and the page must be what it draws.
     fn find_page(&mut self, opts: Options, progress: Progress) -> Result<(), LinkError> {
         let from = self.port.seen.len();
@@ -281,6 +312,18 @@ impl Session {
     /// Sends `prog` through READ: only a wholly valid file replaces uTile's program, and
     /// READ's answer is checked; then the program is read back through WRITE and compared.
     pub fn push(&mut self, prog: &Program, progress: Progress) -> Result<(), LinkError> {
+        let hex = self.load(prog, progress)?;
+        progress("uTile took the file; reading it back through WRITE");
+        let (back, _) = self.pull(progress)?;
+        if listing::to_hex(&back) != hex {
+            return Err(LinkError::ReadBackDiffers);
+        }
+        Ok(())
+    }
+
+    /// READ alone: `prog` as records, uTile's answer checked; the records sent. Only a
+    /// wholly valid file replaces uTile's program. [`Session::push`] reads it back too.
+    pub fn load(&mut self, prog: &Program, progress: Progress) -> Result<Vec<u8>, LinkError> {
         let hex = listing::to_hex(prog);
         let records: Vec<&[u8]> = hex
             .split(|&b| b == b'\n')
@@ -318,12 +361,7 @@ impl Session {
         };
         self.back_to_page()?;
         result?;
-        progress("uTile took the file; reading it back through WRITE");
-        let (back, _) = self.pull(progress)?;
-        if listing::to_hex(&back) != hex {
-            return Err(LinkError::ReadBackDiffers);
-        }
-        Ok(())
+        Ok(hex)
     }
 
     /// The program through WRITE: the program and the records as uTile sent them. A file

@@ -25,6 +25,7 @@ use super::hub::{Hub, Input};
 use super::queue::{Done, Job, Origin};
 use super::rtu;
 use super::scan_control;
+use super::send;
 use super::signals::{self, SIGNALS};
 use super::unit::TREND_STEP;
 use super::view::{View, TREND_SIGNALS};
@@ -43,7 +44,7 @@ pub fn router(hub: Arc<Hub>) -> Router {
         .route("/api/units/{addr}/write", post(write))
         .route("/api/units/{addr}/scan", post(scan_control::post))
         .route("/api/check", post(check::post))
-        .route("/api/units/{addr}/program", get(program))
+        .route("/api/units/{addr}/program", get(program).post(send::post))
         .route("/api/units/{addr}/trend", get(trend))
         .route("/api/terminal", get(terminal).post(keys))
         .fallback(file)

@@ -22,6 +22,8 @@ pub enum Input {
     Job(Job),
     /// Keys typed in a page's terminal.
     Keys(Vec<u8>),
+    /// A program to send (the page's Send).
+    Send(Box<super::send::SendJob>),
 }
 
 /// A listing given with `--program`: its name and fingerprint.

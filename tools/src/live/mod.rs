@@ -6,10 +6,11 @@
 //! |---|---|
 //! | `args.rs` | the command line |
 //! | `port.rs` | opening the port, an adapter's latency timer |
-//! | `line/` | the line's owner: the port and everything about the line (open/reopen, the boot wait, EDIT or RUN, one transaction at a time, every uTile's poller); it publishes the view |
+//! | `line/` | the line's owner: the port and everything about the line (open/reopen, the boot wait, EDIT or RUN, one transaction at a time, every uTile's poller, a send's turn on the line); it publishes the view |
 //! | `line_use.rs` | line time over a sliding window (the line's busy figure, a uTile's share) |
 //! | `rtu.rs` | the RTU master's side of a transaction and the Modbus vocabulary: reply lengths, finding a reply, a missed one's bytes, timing |
 //! | `check.rs` | a listing checked by the kit's parser for the page's editor (`POST /api/check`) |
+//! | `send.rs` | a program sent from the page (`POST /api/units/{addr}/program`): checked, then `utile push --stop`'s steps as a job of the line |
 //! | `scan_control.rs` | hold, run and step (SPEC §18): the API's route, whether a uTile's firmware has them |
 //! | `queue.rs` | the queue in front of the line: writes first, reads and polls in turn |
 //! | `screen.rs` | EDIT or RUN, told from the terminal's output |
@@ -44,6 +45,7 @@ pub mod queue;
 pub mod rtu;
 pub mod scan_control;
 pub mod screen;
+pub mod send;
 pub mod signals;
 pub mod terminal;
 pub mod unit;

@@ -16,6 +16,7 @@
 
 mod life;
 mod publish;
+mod send;
 mod serve;
 mod wire;
 
@@ -256,6 +257,7 @@ impl Owner {
             match input {
                 Input::Job(job) => self.queue.push(job),
                 Input::Keys(k) => self.keys.extend_from_slice(&k),
+                Input::Send(job) => self.send_program(*job),
             }
         }
     }

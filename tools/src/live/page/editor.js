@@ -1,7 +1,8 @@
 // Edit in the Program tab: the listing in a text area with a line-number gutter, checked as
 // you type by the core's own parser (POST /api/check: the messages `utile asm` gives, each on
-// its line), Open a .utl file from the PC, Save the listing. A plain textarea: no editor
-// library, so nothing beyond the page's own files is served.
+// its line), Open a .utl file from the PC, Save the listing, Send it to the uTile
+// (POST /api/units/{addr}/program: stop, READ, read back, STORE if ticked, EX0). A plain
+// textarea: no editor library, so nothing beyond the page's own files is served.
 
 import { el, errorText } from "/dom.js";
 
@@ -23,6 +24,9 @@ export class Editor {
     this.text.addEventListener("scroll", () => { this.gutter.scrollTop = this.text.scrollTop; });
     this.status = el("div", { class: "check-status", "data-unit": addr });
     this.problems = el("ul", { class: "problems" });
+    this.store = el("input", { type: "checkbox", "data-unit": addr, "data-option": "store",
+      title: "STORE it into EEPROM too: it autostarts with D8" });
+    this.sent = el("div", { class: "send-status", "data-unit": addr, role: "status" });
     this.file = el("input", { type: "file", accept: ".utl,.txt,text/plain" });
     this.file.hidden = true;
     this.file.addEventListener("change", () => this.open());
@@ -37,7 +41,10 @@ export class Editor {
         button("open", "Open…", "a .utl listing from this PC", () => this.file.click()),
         button("save", "Save", "the listing as a .utl file", () => this.save()),
         button("reload", "From uTile", "the program the uTile runs, as a listing", () => this.fromUtile()),
+        button("send", "Send", "load the listing into the uTile and start it", () => this.send()),
+        el("label", { class: "store" }, this.store, " STORE"),
         this.file),
+      this.sent,
       el("div", { class: "editor" }, this.gutter, this.text), this.status, this.problems);
     this.root.hidden = true;
   }
@@ -73,6 +80,40 @@ export class Editor {
     const a = el("a", { href: URL.createObjectURL(blob), download: this.name || `utile-${this.addr}.utl` });
     a.click();
     URL.revokeObjectURL(a.href);
+  }
+
+  // Send: after a confirmation, the listing goes to the uTile and starts; the answer says
+  // the new program's fingerprint and how long it took, or what went wrong.
+  async send() {
+    const ok = window.confirm(`Send this listing to uTile ${this.addr}? Its program stops and ` +
+      "its outputs go off while the new one is loaded; then the new program starts.");
+    if (!ok) return;
+    this.sent.dataset.send = "busy";
+    this.sent.textContent = "sending: stop, READ, read back" +
+      (this.store.checked ? ", STORE" : "") + ", EX0…";
+    let res;
+    try {
+      res = await fetch(`/api/units/${this.addr}/program`, {
+        method: "POST",
+        headers: { "content-type": "application/json" },
+        body: JSON.stringify({ listing: this.text.value, store: this.store.checked, run: true }),
+      });
+    } catch (e) {
+      this.sent.dataset.send = "error";
+      this.sent.textContent = `not sent: the server did not answer (${e})`;
+      return;
+    }
+    if (!res.ok) {
+      this.sent.dataset.send = "error";
+      this.sent.textContent = `not sent: ${await errorText(res)}`;
+      return;
+    }
+    const done = await res.json();
+    const fp = done.fingerprint.toString(16).toUpperCase().padStart(4, "0");
+    this.sent.dataset.send = "ok";
+    this.sent.dataset.fingerprint = fp;
+    this.sent.textContent = `running: program ${fp}${done.stored ? ", stored" : ""} ` +
+      `(${Math.round(done.ms)} ms)`;
   }
 
   // The gutter follows the text; the check runs once typing pauses.
