@@ -279,16 +279,21 @@ mod tests {
 
     #[test]
     fn the_port_failing_is_a_lost_port_and_a_refused_file_is_no_time_out() {
+        let io = || std::io::Error::other("Input/output error");
         assert!(matches!(
-            classify("reading from the port: Input/output error".into()),
-            SendError::Lost(_)
+            classify(LinkError::Port(PortError::Read(io()))),
+            SendError::Lost(w) if w.contains("Input/output error")
         ));
         assert!(matches!(
-            classify("uTile refused the file: CRC; its program is unchanged".into()),
+            classify(LinkError::Refused("CRC".into())),
             SendError::Refused(_)
         ));
         assert!(matches!(
-            classify("uTile did not answer READ".into()),
+            classify(LinkError::DidNotStop("/dev/ttyUSB0".into())),
+            SendError::NoKey
+        ));
+        assert!(matches!(
+            classify(LinkError::NotTaken("READ")),
             SendError::NoAnswer(_)
         ));
         assert!(SendError::NoKey
