@@ -332,7 +332,7 @@ def edit_and_check(p, unit):
 
 # The page's parts that must neither overflow nor overlap on a phone: each a cell of its
 # panel (a tile, a lamp, a switch, a field, a button, a readout, a meter, a group).
-CELLS = (".panel, .tile, .lamp, .coil, .scan-button, input.setting, .readout, .analog .meter, "
+CELLS = (".panel, .tile, .lamp, .coil, .scan-button, .rig-button, .rig-level, .rig-volts, input.setting, .readout, .analog .meter, "
          ".analog .reading, .analog .volts, .analog .sp, .fillbar, .listing, .editor, .tabs button")
 LAYOUT = """cells => {
   const shown = [...document.querySelectorAll(cells)].filter(e => {
@@ -350,7 +350,7 @@ LAYOUT = """cells => {
       if (w > 1 && h > 1) overlaps.push(`${shown[i].className} / ${shown[j].className}`);
     }
   }
-  const small = shown.filter(e => e.matches(".coil, .scan-button, .tabs button"))
+  const small = shown.filter(e => e.matches(".coil, .scan-button, .rig-button, .tabs button"))
     .filter(e => { const r = e.getBoundingClientRect(); return r.height < 40 || r.width < 44; })
     .map(e => e.textContent);
   const wide = shown.filter(e => e.getBoundingClientRect().right > innerWidth + 0.5)

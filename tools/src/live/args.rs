@@ -6,14 +6,16 @@ use std::time::Duration;
 /// The usage text.
 pub const USAGE: &str = "\
   utile live --port PATH [--units 1,2,3 | --scan] [--http ADDR:PORT] [--tcp ADDR:PORT]
-             [--no-tcp] [--read-only] [--program PROG.utl] [--wait SECS]
+             [--no-tcp] [--read-only] [--program PROG.utl] [--wait SECS] [--rig SOCKET]
                                        every uTile on the line live in the browser, the
                                        terminal beside it, a Modbus TCP gateway
     --units  the slave addresses on the line (default 1); --scan looks for them
     --http   where the page is served (default 127.0.0.1:8080)
     --tcp    the Modbus TCP gateway (default 127.0.0.1:1502; unit id = slave address)
     --read-only  refuse every write (page, terminal keys and TCP)
-    --program    check that the listing is the program that runs (its fingerprint)";
+    --program    check that the listing is the program that runs (its fingerprint)
+    --rig    the virtual Nano's control socket (cargo nano --control SOCKET): a rig panel
+             on each card (switches A0..A5, A6/A7 in volts, D8/D9, reset)";
 
 /// Options of one run.
 #[derive(Clone, Debug, PartialEq)]
@@ -34,6 +36,8 @@ pub struct Options {
     pub program: Option<String>,
     /// The longest wait for uTile after the port opens.
     pub boot_wait: Duration,
+    /// The virtual Nano's control socket (`--rig`).
+    pub rig: Option<std::path::PathBuf>,
 }
 
 /// `ADDR:PORT`, or a bare port on 127.0.0.1.
@@ -56,6 +60,7 @@ pub fn parse(words: &[String]) -> Result<Options, String> {
         read_only: false,
         program: None,
         boot_wait: Duration::from_millis(2500),
+        rig: None,
     };
     let mut it = words.iter();
     while let Some(w) = it.next() {
@@ -88,6 +93,7 @@ pub fn parse(words: &[String]) -> Result<Options, String> {
             "--no-tcp" => o.tcp = None,
             "--read-only" => o.read_only = true,
             "--program" => o.program = Some(value()?),
+            "--rig" => o.rig = Some(value()?.into()),
             "--wait" => {
                 let v = value()?;
                 let secs: f64 = v

@@ -10,6 +10,7 @@
 //! | `line_use.rs` | line time over a sliding window (the line's busy figure, a uTile's share) |
 //! | `rtu.rs` | the RTU master's side of a transaction and the Modbus vocabulary: reply lengths, finding a reply, a missed one's bytes, timing |
 //! | `check.rs` | a listing checked by the kit's parser for the page's editor (`POST /api/check`) |
+//! | `rig.rs` | `--rig`: the virtual Nano's rig over its control socket, the API's route for the page's rig panel |
 //! | `scan_control.rs` | hold, run and step (SPEC §18): the API's route, whether a uTile's firmware has them |
 //! | `queue.rs` | the queue in front of the line: writes first, reads and polls in turn |
 //! | `screen.rs` | EDIT or RUN, told from the terminal's output |
@@ -36,6 +37,7 @@ pub mod line_use;
 pub mod port;
 pub mod program;
 pub mod queue;
+pub mod rig;
 pub mod rtu;
 pub mod scan_control;
 pub mod screen;
@@ -162,7 +164,11 @@ pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Ru
         say(&note);
         notes.push(note);
     }
-    let (hub, ends) = Hub::new(View::starting(&opts.port, opts.read_only, notes.clone()));
+    let rig = opts.rig.clone().map(rig::Rig::spawn);
+    let (hub, ends) = Hub::new(
+        View::starting(&opts.port, opts.read_only, notes.clone()),
+        rig,
+    );
     let (http, http_addr) = listen("--http", opts.http).await?;
     let tcp_addr = match opts.tcp {
         Some(a) => {
@@ -218,6 +224,12 @@ pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Ru
         if let Some(w) = args::exposed("the Modbus TCP gateway", &t) {
             say(&w);
         }
+    }
+    if let Some(r) = &opts.rig {
+        say(&format!(
+            "the rig panel works the virtual Nano's rig at {}",
+            r.display()
+        ));
     }
     if opts.read_only {
         say("read-only: every write is refused");
