@@ -5,7 +5,8 @@
 
 import { el, errorText } from "/dom.js";
 
-// POSTs `request` for uTile `addr`; the server's words when it refuses, else "".
+// POSTs `request` for uTile `addr`: `{state}`, the rig's state after it, or `{why}`, the
+// server's words when it refuses.
 export async function rigRequest(addr, request) {
   try {
     const res = await fetch(`/api/units/${addr}/rig`, {
@@ -13,9 +14,9 @@ export async function rigRequest(addr, request) {
       headers: { "content-type": "application/json" },
       body: JSON.stringify(request),
     });
-    return res.ok ? "" : await errorText(res);
+    return res.ok ? { state: await res.json() } : { why: await errorText(res) };
   } catch (e) {
-    return `the server did not answer (${e})`;
+    return { why: `the server did not answer (${e})` };
   }
 }
 
@@ -120,17 +121,23 @@ export class RigPanel {
     input.addEventListener("pointerup", () => { delete input.dataset.moving; });
   }
 
+  // Sends `request`; the rig's answer shows at once (the state's events follow).
   async send(request) {
     this.refusal.textContent = "";
-    const why = await rigRequest(this.addr, request);
+    const { state, why } = await rigRequest(this.addr, request);
     if (why) this.refusal.textContent = `rig refused: ${why}`;
+    else this.show(state);
   }
 
   // `rig`: /api/state's `rig` (null without --rig).
   update(rig) {
     const s = rig && rig.connected ? rig.state : null;
     this.root.hidden = !s;
-    if (!s) return;
+    if (s) this.show(s);
+  }
+
+  // The rig's state `s` on the controls.
+  show(s) {
     this.switches.forEach((b, n) => { b.dataset.value = s.switches[n] ? "1" : "0"; });
     this.jumpers[0].dataset.value = s.d8 ? "1" : "0";
     this.jumpers[1].dataset.value = s.d9 ? "1" : "0";
