@@ -152,6 +152,12 @@ mod tests {
             .unwrap()
             .contains("switch outputs"));
         assert_eq!(o.tcp.unwrap().port(), 0);
+        assert_eq!(o.rig, None);
+        let o = parse(&words("--port p --rig out/live-rig.sock")).unwrap();
+        assert_eq!(o.rig.unwrap().to_str(), Some("out/live-rig.sock"));
+        assert!(parse(&words("--port p --rig"))
+            .unwrap_err()
+            .contains("needs a value"));
     }
 
     #[test]
