@@ -679,3 +679,87 @@ fn the_port_lost_mid_send_is_answered_with_what_happened() {
     });
     assert_eq!(s["units"][0]["program"]["fingerprint"], old, "{s:#}");
 }
+
+/// The tank on one virtual Nano with its rig's control socket, and `utile live --rig` on it
+/// with `extra`: uTile 1 online, the rig connected.
+fn tank_live_with_rig(name: &str, extra: &[&str]) -> (support::vnano::PtyNano, Live) {
+    let (spec, socket) = NanoSpec::single(name, &tank(), false).with_rig();
+    let nano = spec.start();
+    let mut args = vec!["--rig", socket.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    let live = Live::start(&spec.link, &args);
+    let s = live.wait("uTile 1 online, the rig connected", T, |s| {
+        s["units"][0]["state"] == "online"
+            && s["units"][0]["values"]["A6"] == 409
+            && s["rig"]["connected"] == true
+    });
+    assert_eq!(s["rig"]["path"], socket.to_str().unwrap());
+    (nano, live)
+}
+
+#[test]
+fn the_rig_through_the_api_presses_a0_and_moves_a6() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let (_nano, live) = tank_live_with_rig("live-rig", &[]);
+    assert_eq!(live.state()["rig"]["state"]["switches"][0], false);
+    assert_eq!(live.unit(1)["values"]["A0"], 1);
+    let (code, body) = live.post("/api/units/1/rig", &json!({"press": 0}));
+    assert_eq!(code, 200, "{body}");
+    assert_eq!(body["switches"][0], true, "{body}");
+    assert_eq!(
+        body["pins"][0], false,
+        "a pressed switch pulls its pin low: {body}"
+    );
+    live.wait_value(1, "A0", 0);
+    live.wait("the state's rig with A0 pressed", T, |s| {
+        s["rig"]["state"]["switches"][0] == true
+    });
+    let (code, body) = live.post("/api/units/1/rig", &json!({"release": 0}));
+    assert_eq!((code, &body["switches"][0]), (200, &json!(false)), "{body}");
+    live.wait_value(1, "A0", 1);
+    // The level below the low mark (1.47 V; the example wires one sensor to A6 and A7): the
+    // tank's alarm Y1 and its pump Y0 come on.
+    let (code, body) = live.post("/api/units/1/rig", &json!({"a6": 1.0, "a7": 1.0}));
+    assert_eq!(
+        (code, &body["a6"], &body["a7"]),
+        (200, &json!(1.0), &json!(1.0)),
+        "{body}"
+    );
+    let s = live.wait("A6 at 1.0 V and the alarm on", T, |s| {
+        let u = &s["units"][0]["values"];
+        u["A6"].as_u64().is_some_and(|a| (200..=210).contains(&a)) && u["Y1"] == 1
+    });
+    assert_eq!(
+        s["units"][0]["values"]["Y0"], 1,
+        "the pump starts below the low mark"
+    );
+    // Refused whole, with the rig's reason; nothing changes.
+    let (code, body) = live.post("/api/units/1/rig", &json!({"a6": 3.0, "press": 9}));
+    assert_eq!(code, 400, "{body}");
+    assert!(body["error"].as_str().unwrap().contains("0..5"), "{body}");
+    assert_eq!(live.post("/api/units/1/rig", &json!({})).1["a6"], 1.0);
+    let (code, body) = live.post("/api/units/1/rig", &json!([1, 2]));
+    assert_eq!(code, 400, "{body}");
+    assert!(body["error"].as_str().unwrap().contains("one JSON object"));
+    let (code, body) = live.post("/api/units/7/rig", &json!({"press": 0}));
+    assert_eq!(code, 404, "{body}");
+    assert_eq!(body["error"], "no uTile 7 on this line");
+}
+
+#[test]
+fn read_only_refuses_the_rig_and_without_rig_there_is_none() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    {
+        let (_nano, live) = tank_live_with_rig("live-rig-read-only", &["--read-only"]);
+        let (code, body) = live.post("/api/units/1/rig", &json!({"press": 0}));
+        assert_eq!(code, 403, "{body}");
+        assert!(body["error"].as_str().unwrap().starts_with("read-only"));
+        assert_eq!(live.state()["rig"]["state"]["switches"][0], false);
+        assert_eq!(live.unit(1)["values"]["A0"], 1);
+    }
+    let (_nano, live) = tank_live("live-no-rig", &[]);
+    assert_eq!(live.state()["rig"], serde_json::Value::Null);
+    let (code, body) = live.post("/api/units/1/rig", &json!({"press": 0}));
+    assert_eq!(code, 404, "{body}");
+    assert!(body["error"].as_str().unwrap().contains("--rig"), "{body}");
+}

@@ -1,6 +1,7 @@
 //! `utile live` in a real browser (issue 25): headless Chromium (Debian's `chromium`, driven
 //! by Playwright from `live_page.py`) against the real image in the virtual Nano, one uTile
-//! with the port-open reset and a bus of three: a rig switch shows on the page, clicking U0
+//! with the port-open reset and a bus of three: a rig switch shows on the page, the page's rig
+//! panel (`--rig`: A0 held and latched, the A6/A7 sliders; none without it), clicking U0
 //! drives an output through the program, editing S6 changes when the tank example's pump
 //! stops, the terminal tab types a program and runs it, offline and back; mbpoll -m tcp and
 //! pymodbus's TCP client through the gateway while the page polls. `./x setup` installs
@@ -120,7 +121,7 @@ fn asm_fingerprint(text: &str) -> u16 {
 #[test]
 fn one_utile_in_the_browser_with_the_port_open_reset() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
-    let spec = NanoSpec::single("live-single", &tank(), true);
+    let (spec, rig) = NanoSpec::single("live-single", &tank(), true).with_rig();
     let program = tank_path();
     let shot = screenshot();
     if let Some(dir) = shot.parent() {
@@ -129,7 +130,12 @@ fn one_utile_in_the_browser_with_the_port_open_reset() {
     drive(
         "single",
         &spec,
-        &["--program", program.to_str().unwrap()],
+        &[
+            "--program",
+            program.to_str().unwrap(),
+            "--rig",
+            rig.to_str().unwrap(),
+        ],
         &[
             "--program",
             program.to_str().unwrap(),

@@ -377,7 +377,7 @@ def send_program(p, unit):
 
 # The page's parts that must neither overflow nor overlap on a phone: each a cell of its
 # panel (a tile, a lamp, a switch, a field, a button, a readout, a meter, a group).
-CELLS = (".panel, .tile, .lamp, .coil, .scan-button, input.setting, .readout, .analog .meter, "
+CELLS = (".panel, .tile, .lamp, .coil, .scan-button, .rig-button, .rig-level, .rig-volts, input.setting, .readout, .analog .meter, "
          ".analog .reading, .analog .volts, .analog .sp, .fillbar, .listing, .editor, .tabs button")
 LAYOUT = """cells => {
   const shown = [...document.querySelectorAll(cells)].filter(e => {
@@ -395,7 +395,7 @@ LAYOUT = """cells => {
       if (w > 1 && h > 1) overlaps.push(`${shown[i].className} / ${shown[j].className}`);
     }
   }
-  const small = shown.filter(e => e.matches(".coil, .scan-button, .tabs button"))
+  const small = shown.filter(e => e.matches(".coil, .scan-button, .rig-button, .tabs button"))
     .filter(e => { const r = e.getBoundingClientRect(); return r.height < 40 || r.width < 44; })
     .map(e => e.textContent);
   const wide = shown.filter(e => e.getBoundingClientRect().right > innerWidth + 0.5)
@@ -432,6 +432,107 @@ def phone(p, unit):
     context.close()
 
 
+RIG_LATENCY = """async ([unit, times]) => {
+  // Pointer down on the rig's A0 button to the A0 lamp it lights (its own, from the rig's
+  // answer) and the card's A0 input lamp (from the next snapshot), ms; then up, and back.
+  const button = document.querySelector(`[data-rig="A0"][data-unit="${unit}"]`);
+  const lamp = document.querySelector(`.card[data-unit="${unit}"] [data-signal="A0"]`);
+  const until = (e, want) => new Promise((done) => {
+    if (e.dataset.value === want) return done();
+    const o = new MutationObserver(() => { if (e.dataset.value === want) { o.disconnect(); done(); } });
+    o.observe(e, { attributes: true, attributeFilter: ["data-value"] });
+  });
+  const own = [], input = [];
+  for (let i = 0; i < times; i++) {
+    const t0 = performance.now();
+    const a = until(button, "1").then(() => own.push(performance.now() - t0));
+    const b = until(lamp, "0").then(() => input.push(performance.now() - t0));
+    button.dispatchEvent(new PointerEvent("pointerdown", { button: 0, pointerId: 1, bubbles: true }));
+    await Promise.all([a, b]);
+    button.dispatchEvent(new PointerEvent("pointerup", { button: 0, pointerId: 1, bubbles: true }));
+    await Promise.all([until(button, "0"), until(lamp, "1")]);
+  }
+  return { own, input };
+}"""
+
+
+def rig_value(p, unit, name):
+    e = p.page.query_selector(f'[data-rig="{name}"][data-unit="{unit}"]')
+    return e.get_attribute("data-value") if e else None
+
+
+def wait_rig(p, unit, name, want):
+    try:
+        p.page.wait_for_function(
+            "([s, w]) => { const e = document.querySelector(s); return e && e.dataset.value === w; }",
+            arg=[f'[data-rig="{name}"][data-unit="{unit}"]', str(want)],
+            timeout=T,
+        )
+    except Exception:
+        fail(f"the rig's {name} shows {rig_value(p, unit, name)!r}, not {want!r}")
+
+
+def slide(p, unit, name, volts):
+    """Moves the rig's slider `name` to `volts` as a user's drag ends (input, then change)."""
+    p.page.evaluate(
+        """([s, v]) => { const i = document.querySelector(s); i.value = String(v);
+           i.dispatchEvent(new Event("input", { bubbles: true }));
+           i.dispatchEvent(new Event("change", { bubbles: true })); }""",
+        [f'[data-rig="{name}"][data-unit="{unit}"]', volts],
+    )
+
+
+def rig_panel(p, unit):
+    """The rig's panel (utile live --rig): a held button, a latched one, the sliders."""
+    step(f"the rig panel on card {unit}: every control there")
+    for name in ["A0", "A1", "A2", "A3", "A4", "A5", "A6", "A7", "D8", "D9", "reset"]:
+        p.page.wait_for_selector(f'.card[data-unit="{unit}"] [data-rig="{name}"][data-unit="{unit}"]',
+                                 state="visible", timeout=T)
+    wait_rig(p, unit, "D8", 1)
+    step("A0 held on the page: the A0 lamp goes off while held, back on when let go")
+    p.wait(unit, "A0", 1)
+    button = p.page.locator(f'[data-rig="A0"][data-unit="{unit}"]')
+    button.hover()
+    p.page.mouse.down()
+    wait_rig(p, unit, "A0", 1)
+    p.wait(unit, "A0", 0)
+    p.page.mouse.up()
+    wait_rig(p, unit, "A0", 0)
+    p.wait(unit, "A0", 1)
+    step("Latch: a click presses A1, the next releases it")
+    p.page.click(f'[data-rig="latch"][data-unit="{unit}"]')
+    p.page.click(f'[data-rig="A1"][data-unit="{unit}"]')
+    p.wait(unit, "A1", 0)
+    p.fresh(unit)
+    if p.value(unit, "A1") != "0":
+        fail("a latched A1 let go by itself")
+    p.page.click(f'[data-rig="A1"][data-unit="{unit}"]')
+    p.wait(unit, "A1", 1)
+    p.page.click(f'[data-rig="latch"][data-unit="{unit}"]')
+    step("the sliders: the level at 1.0 V reads 204 on A6 and A7; the pump and the alarm start")
+    slide(p, unit, "A6", 1.0)
+    slide(p, unit, "A7", 1.0)
+    p.wait(unit, "A6", 204)
+    p.wait(unit, "A7", 204)
+    p.wait(unit, "Y1", 1)
+    p.wait(unit, "Y0", 1)
+    step("the level at 4.5 V: past the high mark, the pump stops; back to 2.0 V")
+    slide(p, unit, "A6", 4.5)
+    slide(p, unit, "A7", 4.5)
+    p.wait(unit, "Y0", 0)
+    p.wait(unit, "Y1", 0)
+    slide(p, unit, "A6", 2.0)
+    slide(p, unit, "A7", 2.0)
+    p.wait(unit, "A6", 409)
+    p.wait(unit, "A7", 409)
+    step("rig button pressed on the page -> its lamp, ms (BENCHMARKS.md)")
+    got = p.page.evaluate(RIG_LATENCY, [unit, 10])
+    mid = lambda xs: sorted(xs)[len(xs) // 2]
+    print(f"rig press -> the button's lamp: median {mid(got['own']):.0f} ms, max {max(got['own']):.0f} ms; "
+          f"-> the card's A0 input lamp: median {mid(got['input']):.0f} ms, max {max(got['input']):.0f} ms",
+          flush=True)
+
+
 def single(p, a):
     step("the page: one card, the program running")
     p.wait(1, "online", 1)
@@ -452,6 +553,7 @@ def single(p, a):
     p.wait(1, "A0", 0)
     ask("rig 0")
     p.wait(1, "A0", 1)
+    rig_panel(p, 1)
     gateway(p, a.tcp, 1)
     api_failures(p, 1)
     hold_and_step(p, 1)
@@ -487,6 +589,13 @@ def single(p, a):
     ask("rig 0")
     p.wait(1, "Y3", 1)
     ask("rig 0")
+    p.wait(1, "Y3", 0)
+    step("A0 held on the page's rig drives Y3 through the typed program")
+    p.page.locator('[data-rig="A0"][data-unit="1"]').hover()
+    p.page.mouse.down()
+    p.wait(1, "Y3", 1)
+    p.page.mouse.up()
+    p.wait(1, "Y3", 0)
     send_program(p, 1)
 
     step("the virtual Nano killed: the card says offline; back when it returns")
@@ -503,6 +612,9 @@ def bus(p, a):
     step(f"the page: a card for each of {units}")
     for u in units:
         p.wait(u, "online", 1)
+    step("without --rig no card shows a rig panel")
+    if p.page.query_selector(".rig:not([hidden]), [data-rig]:visible"):
+        fail("a rig panel shows without --rig")
     step("a rig switch on Nano 3 shows on card 3 only")
     ask("rig @30")
     p.wait(3, "A0", 0)

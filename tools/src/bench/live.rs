@@ -34,6 +34,9 @@ pub struct LiveFigures {
     pub click_ms: Spread,
     /// A rig switch pressed → shown, ms of simulated time.
     pub rig_ms: Spread,
+    /// The page's rig button (`POST /api/units/1/rig`, `--rig`) → the A0 input shown, ms of
+    /// simulated time (one uTile only).
+    pub rig_page_ms: Option<Spread>,
     /// What the gateway adds to a TCP request beyond its wait for the line and its time
     /// on it: mean and largest, ms.
     pub gateway_ms: (f64, f64),
@@ -69,7 +72,8 @@ pub(crate) fn start_nano(dir: &Path, link: &Path, units: usize) -> Result<Child,
     if units > 1 {
         cmd.args(["--bus", &units.to_string()]);
     } else {
-        cmd.args(["--pty", "--d8-low"]);
+        cmd.args(["--pty", "--d8-low", "--control"]);
+        cmd.arg(link.with_file_name("rig.sock"));
     }
     cmd.stdin(Stdio::piped())
         .stdout(Stdio::null())
@@ -135,7 +139,10 @@ fn run(nano: &mut Child, link: &Path, units: usize, secs: u32) -> Result<LiveFig
     .iter()
     .map(|s| s.to_string())
     .collect();
-    let opts = args::parse(&words).map_err(|e| e.to_string())?;
+    let mut opts = args::parse(&words).map_err(|e| e.to_string())?;
+    if units == 1 {
+        opts.rig = Some(link.with_file_name("rig.sock"));
+    }
     std::thread::sleep(Duration::from_millis(500));
     let running = rt
         .block_on(live::start(&opts, &mut |_| {}))
@@ -215,6 +222,31 @@ fn run(nano: &mut Child, link: &Path, units: usize, secs: u32) -> Result<LiveFig
         }
     }
 
+    // The page's rig button → shown: A0 pressed and released through the API.
+    let mut rig_page = Vec::new();
+    let rig_up = || running.hub.view().rig.as_ref().is_some_and(|r| r.connected);
+    if units == 1 && until(Duration::from_secs(10), rig_up).is_some() {
+        for i in 0..20u32 {
+            std::thread::sleep(Duration::from_millis(113 + u64::from(i * 13 % 60)));
+            let press = i % 2 == 0;
+            let body = if press {
+                r#"{"press": 0}"#
+            } else {
+                r#"{"release": 0}"#
+            };
+            let t0 = Instant::now();
+            post(running.http, "/api/units/1/rig", body)?;
+            let want = u32::from(!press);
+            if until(Duration::from_secs(5), || {
+                value(&running, 1, "A0") == Some(want)
+            })
+            .is_some()
+            {
+                rig_page.push(t0.elapsed().as_secs_f64() * 1e3 * pace);
+            }
+        }
+    }
+
     // The gateway: FC03 requests from one TCP client while the page polls.
     let tcp = running.tcp.ok_or("no gateway")?;
     let mut s = TcpStream::connect(tcp).map_err(|e| e.to_string())?;
@@ -238,9 +270,31 @@ fn run(nano: &mut Child, link: &Path, units: usize, secs: u32) -> Result<LiveFig
         pace,
         click_ms: Spread::of(&click).ok_or("no click was shown")?,
         rig_ms: Spread::of(&rig).ok_or("no rig switch was shown")?,
+        rig_page_ms: Spread::of(&rig_page),
         gateway_ms,
         tcp_rtt_ms: Spread::of(&rtts).ok_or("no TCP reply")?,
     })
+}
+
+/// `POST path` with the JSON `body` to the page's server; an error unless it answers 200.
+fn post(http: std::net::SocketAddr, path: &str, body: &str) -> Result<(), String> {
+    use std::io::Read;
+    let mut s = TcpStream::connect(http).map_err(|e| e.to_string())?;
+    s.set_nodelay(true).map_err(|e| e.to_string())?;
+    write!(
+        s,
+        "POST {path} HTTP/1.1\r\nHost: bench\r\nContent-Type: application/json\r\n\
+         Content-Length: {}\r\nConnection: close\r\n\r\n{body}",
+        body.len()
+    )
+    .map_err(|e| e.to_string())?;
+    let mut answer = String::new();
+    s.read_to_string(&mut answer).map_err(|e| e.to_string())?;
+    if answer.starts_with("HTTP/1.1 200") {
+        Ok(())
+    } else {
+        Err(format!("POST {path}: {answer}"))
+    }
 }
 
 /// One Modbus TCP read of holding registers 0..3 of unit 1: whether it was answered

@@ -62,6 +62,10 @@ pub struct LiveArgs {
     /// `--wait SECS`.
     #[command(flatten)]
     pub wait: BootWait,
+    /// The virtual Nano's control socket (cargo nano --control SOCKET): a rig panel on each
+    /// card (switches A0..A5, A6/A7 in volts, D8/D9, reset)
+    #[arg(long, value_name = "SOCKET")]
+    pub rig: Option<std::path::PathBuf>,
     /// The MQTT flags (`--mqtt URL` …).
     #[command(flatten)]
     pub mqtt: Flags,
@@ -96,6 +100,8 @@ pub struct Options {
     pub program: Option<String>,
     /// The longest wait for uTile after the port opens.
     pub boot_wait: Duration,
+    /// The virtual Nano's control socket (`--rig`).
+    pub rig: Option<std::path::PathBuf>,
     /// The MQTT flags (`--mqtt URL` …).
     pub mqtt: Flags,
     /// `--token-file`: the page's token beyond loopback.
@@ -126,6 +132,7 @@ impl From<LiveArgs> for Options {
             read_only: a.read_only,
             program: a.program,
             boot_wait: a.wait.boot_wait,
+            rig: a.rig,
             mqtt: a.mqtt,
             token_file: a.token_file,
             public_read: a.public_read,

@@ -23,6 +23,7 @@ use super::assets;
 use super::check;
 use super::hub::{Hub, Input};
 use super::queue::{Done, Job, Origin};
+use super::rig;
 use super::rtu;
 use super::scan_control;
 use super::send;
@@ -43,6 +44,7 @@ pub fn router(hub: Arc<Hub>) -> Router {
         .route("/api/signals", get(signal_table))
         .route("/api/units/{addr}/write", post(write))
         .route("/api/units/{addr}/scan", post(scan_control::post))
+        .route("/api/units/{addr}/rig", post(rig::post))
         .route("/api/check", post(check::post))
         .route("/api/units/{addr}/program", get(program).post(send::post))
         .route("/api/units/{addr}/trend", get(trend))

@@ -12,6 +12,7 @@ use axum::body::Bytes;
 use tokio::sync::{mpsc, watch};
 
 use super::queue::Job;
+use super::rig::Rig;
 use super::terminal::Terminal;
 use super::view::{Overhead, View};
 
@@ -111,11 +112,13 @@ pub struct Hub {
     pub tcp: GatewayCounters,
     /// Set to end the line's owner.
     pub stop: AtomicBool,
+    /// `--rig`: the virtual Nano's rig.
+    pub rig: Option<Rig>,
 }
 
 impl Hub {
-    /// The hub, its first view `first`, and the line owner's ends.
-    pub fn new(first: View) -> (Arc<Hub>, LineEnds) {
+    /// The hub, its first view `first`, the rig's client (`--rig`) and the line owner's ends.
+    pub fn new(first: View, rig: Option<Rig>) -> (Arc<Hub>, LineEnds) {
         let (tx, rx) = mpsc::unbounded_channel();
         let read_only = first.read_only;
         let (publish, view) = watch::channel(Arc::new(first));
@@ -127,6 +130,7 @@ impl Hub {
             read_only,
             tcp: GatewayCounters::default(),
             stop: AtomicBool::new(false),
+            rig,
         };
         (
             Arc::new(hub),

@@ -11,6 +11,7 @@
 //! | `rtu.rs` | the RTU master's side of a transaction and the Modbus vocabulary: reply lengths, finding a reply, a missed one's bytes, timing |
 //! | `check.rs` | a listing checked by the kit's parser for the page's editor (`POST /api/check`) |
 //! | `send.rs` | a program sent from the page (`POST /api/units/{addr}/program`): checked, then `utile push --stop`'s steps as a job of the line |
+//! | `rig.rs` | `--rig`: the virtual Nano's rig over its control socket, the API's route for the page's rig panel |
 //! | `scan_control.rs` | hold, run and step (SPEC §18): the API's route, whether a uTile's firmware has them |
 //! | `queue.rs` | the queue in front of the line: writes first, reads and polls in turn |
 //! | `screen.rs` | EDIT or RUN, told from the terminal's output |
@@ -42,6 +43,7 @@ pub mod mqtt;
 pub mod port;
 pub mod program;
 pub mod queue;
+pub mod rig;
 pub mod rtu;
 pub mod scan_control;
 pub mod screen;
@@ -180,7 +182,11 @@ pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Ru
         say(&note);
         notes.push(note);
     }
-    let (hub, ends) = Hub::new(View::starting(&opts.port, opts.read_only, notes.clone()));
+    let rig = opts.rig.clone().map(rig::Rig::spawn);
+    let (hub, ends) = Hub::new(
+        View::starting(&opts.port, opts.read_only, notes.clone()),
+        rig,
+    );
     let (http, http_addr) = listen("--http", opts.http).await?;
     let guard = guard::Guard::new(&http_addr, opts.token_file.as_deref(), opts.public_read)?;
     let tcp_addr = match opts.tcp {
@@ -245,6 +251,12 @@ pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Ru
         };
         say(&format!(
             "the page listens beyond this computer: {reads} needs its token; open {url}"
+        ));
+    }
+    if let Some(r) = &opts.rig {
+        say(&format!(
+            "the rig panel works the virtual Nano's rig at {}",
+            r.display()
         ));
     }
     if opts.read_only {

@@ -12,6 +12,7 @@ use serde::Serialize;
 use utile_core::engine::UNITS;
 
 use super::program::ListingLine;
+use super::rig::RigView;
 use super::scan_control::ScanControl;
 use super::screen::Mode;
 use super::signals::Values;
@@ -58,6 +59,9 @@ pub struct View {
     pub line: LineFigures,
     /// The uTiles, by address.
     pub units: Vec<UnitView>,
+    /// `--rig`: the virtual Nano's rig (`null` without it; the page's rig panel shows while it
+    /// is `connected`).
+    pub rig: Option<RigView>,
     /// Views published before this one.
     #[serde(skip)]
     pub seq: u64,
@@ -204,6 +208,7 @@ impl View {
             timer_unit_ms: utile_core::engine::TIMER_UNIT_MS,
             line: LineFigures::default(),
             units: Vec::new(),
+            rig: None,
             seq: 0,
         }
     }

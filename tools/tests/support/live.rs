@@ -83,6 +83,17 @@ impl NanoSpec {
         Self::with(name, prog, &["--bus", &n.to_string()])
     }
 
+    /// Opens its rig's control socket (`--control`, beside the link): the path for
+    /// `utile live --rig`.
+    pub fn with_rig(mut self) -> (NanoSpec, PathBuf) {
+        let socket = self.link.with_file_name("rig.sock");
+        self.args.extend([
+            "--control".to_string(),
+            socket.to_str().unwrap().to_string(),
+        ]);
+        (self, socket)
+    }
+
     /// Starts it.
     pub fn start(&self) -> PtyNano {
         let args: Vec<&str> = self.args.iter().map(String::as_str).collect();

@@ -87,6 +87,17 @@ pub fn live_rows(rows: &mut Report, secs: u32) {
                     "—",
                     "≤ 150 ms",
                 );
+                if let Some(r) = &f.rig_page_ms {
+                    rows.row(
+                        format!(
+                            "live view, {what}: the page's rig button (--rig) → the A0 lamp \
+                             (min / median / max)"
+                        ),
+                        ms(r),
+                        "—",
+                        "≤ 150 ms",
+                    );
+                }
                 rows.row(
                     format!("live view, {what}: gateway overhead (mean / max)"),
                     format!(

@@ -104,6 +104,8 @@ struct Owner {
     published: u64,
     /// The gateway's counters' changes as last published.
     gateway_seen: u64,
+    /// The rig's changes as last published.
+    rig_seen: u64,
     queue: Queue,
     keys: Vec<u8>,
     port: Option<TTYPort>,
@@ -159,6 +161,7 @@ pub fn spawn(opts: Options, hub: Arc<Hub>, ends: LineEnds) -> std::io::Result<Jo
                 publish: ends.publish,
                 published: 0,
                 gateway_seen: 0,
+                rig_seen: 0,
                 queue: Queue::default(),
                 keys: Vec::new(),
                 port: None,
@@ -191,7 +194,12 @@ impl Owner {
         self.publish();
         while !self.hub.stopping() {
             self.take_inputs();
-            if self.hub.tcp.changes() != self.gateway_seen {
+            let rig_moved = self
+                .hub
+                .rig
+                .as_ref()
+                .is_some_and(|r| r.changes() != self.rig_seen);
+            if self.hub.tcp.changes() != self.gateway_seen || rig_moved {
                 self.publish();
             }
             let now = Instant::now();

@@ -17,6 +17,10 @@ impl Owner {
         let now = Instant::now();
         let tcp = &self.hub.tcp;
         self.gateway_seen = tcp.changes();
+        let rig = self.hub.rig.as_ref().map(|r| {
+            self.rig_seen = r.changes();
+            r.view()
+        });
         self.published += 1;
         let view = View {
             port: self.opts.path.clone(),
@@ -44,6 +48,7 @@ impl Owner {
                 .iter()
                 .map(|u| u.view(self.open, self.mode, self.opts.file.as_ref(), now))
                 .collect(),
+            rig,
             seq: self.published,
         };
         self.publish.send_replace(Arc::new(view));

@@ -4,12 +4,14 @@
 
 import { Card } from "/card.js";
 import { ProgramView } from "/program.js";
+import { RigPanel } from "/rig.js";
 import { openTerminal } from "/terminal.js";
 
 const cards = new Map();
 // The signal table (/api/signals) by name.
 const table = new Map();
 const programs = new Map();
+const rigs = new Map();
 let terminalOpen = false;
 
 const $ = (id) => document.getElementById(id);
@@ -75,11 +77,16 @@ function update(state) {
       card = new Card(u.addr, state.read_only, state.timer_unit_ms, table);
       cards.set(u.addr, card);
       $("plant").append(card.root);
+      // The rig's panel beside the inputs and outputs it works (shown while a rig answers).
+      const rig = new RigPanel(u.addr, state.read_only, card.refusal);
+      rigs.set(u.addr, rig);
+      card.root.querySelector(".panels").firstElementChild.after(rig.root);
       const view = new ProgramView(u.addr);
       programs.set(u.addr, view);
       $("program").append(view.root);
     }
     card.update(u);
+    rigs.get(u.addr).update(state.rig);
     programs.get(u.addr).update(u);
   }
 }
