@@ -113,7 +113,10 @@ pub fn read(text: &str, signals: Signals) -> Result<IecProgram, Vec<String>> {
             Some("%IX0.6")
         };
         if let Err(why) = r.signals.declare(n, addr) {
-            problems.push(why.replace("at %IX0.6", &format!("(input {} of the IO LIST)", k + 1)));
+            problems.push(
+                why.0
+                    .replace("at %IX0.6", &format!("(input {} of the IO LIST)", k + 1)),
+            );
         }
     }
     for (k, n) in outs.iter().enumerate() {
@@ -123,12 +126,15 @@ pub fn read(text: &str, signals: Signals) -> Result<IecProgram, Vec<String>> {
             "%QX1.0".into()
         };
         if let Err(why) = r.signals.declare(n, Some(&addr)) {
-            problems.push(why.replace("at %QX1.0", &format!("(output {} of the IO LIST)", k + 1)));
+            problems.push(
+                why.0
+                    .replace("at %QX1.0", &format!("(output {} of the IO LIST)", k + 1)),
+            );
         }
     }
     for n in used.iter().filter(|n| n.starts_with('R')) {
         if let Err(why) = r.signals.declare(n, None) {
-            problems.push(why);
+            problems.push(why.0);
         }
     }
     if !problems.is_empty() {

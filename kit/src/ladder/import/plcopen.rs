@@ -203,7 +203,7 @@ pub fn read(text: &str, signals: Signals) -> Result<IecProgram, Vec<String>> {
         let ty_name = ty.map_or("", |t| t.tag_name().name());
         if ty_name == "BOOL" {
             if let Err(why) = r.signals.declare(name, v.attribute("address")) {
-                r.problems.push(why);
+                r.problems.push(why.0);
             }
         } else if ty_name != "derived" {
             if let Some(val) = v
