@@ -11,6 +11,7 @@ use std::collections::HashMap;
 use std::string::String;
 use std::vec::Vec;
 
+use super::super::Reasons;
 use super::{pop_of, CoilMode, Expr, IecProgram, Signals, Stmt, TimerKind};
 
 /// One element of a rung.
@@ -33,7 +34,11 @@ struct Reader {
 }
 
 /// Read an LDmicro program.
-pub fn read(text: &str, signals: Signals) -> Result<IecProgram, Vec<String>> {
+pub fn read(text: &str, signals: Signals) -> Result<IecProgram, Reasons> {
+    read_all(text, signals).map_err(Reasons)
+}
+
+fn read_all(text: &str, signals: Signals) -> Result<IecProgram, Vec<String>> {
     let lines: Vec<&str> = text.lines().collect();
     let first = lines.first().map_or("", |l| l.trim());
     if first != "LDmicro0.1" && first != "LDmicro0.2" {

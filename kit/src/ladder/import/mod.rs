@@ -401,11 +401,11 @@ pub fn import(file: &str, bytes: &[u8], map: &str) -> Result<Ladder, Refused> {
     } else {
         plcopen::read(trimmed, signals)
     }
-    .map_err(|reasons| Refused {
+    .map_err(|super::Reasons(reasons)| Refused {
         file: file.into(),
         reasons,
     })?;
-    super::iec::lower(&prog).map_err(|reasons| Refused {
+    super::iec::lower(&prog).map_err(|super::Reasons(reasons)| Refused {
         file: file.into(),
         reasons,
     })
