@@ -15,7 +15,7 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use tokio_modbus::ExceptionCode;
-use utile_core::modbus::READ_HOLDING_REGISTERS;
+use utile_core::modbus::{READ_HOLDING_REGISTERS, WRITE_SINGLE_COIL};
 use utile_kit::listing;
 use utile_kit::sim::stored_eeprom;
 
@@ -195,7 +195,11 @@ fn run(nano: &mut Child, link: &Path, units: usize, secs: u32) -> Result<LiveFig
     for i in 0..20u32 {
         let on = i % 2 == 0;
         std::thread::sleep(Duration::from_millis(37 + u64::from(i * 7 % 50)));
-        let (job, _rx) = Job::new(1, vec![5, 0, 8, if on { 0xFF } else { 0 }, 0], Origin::Page);
+        let (job, _rx) = Job::new(
+            1,
+            vec![WRITE_SINGLE_COIL, 0, 8, if on { 0xFF } else { 0 }, 0],
+            Origin::Page,
+        );
         let t0 = Instant::now();
         running
             .hub
