@@ -107,7 +107,7 @@ pub fn export(input: &Path, output: Option<&Path>) -> Result<PathBuf, LadderErro
         .file_stem()
         .map_or_else(|| "program".into(), |n| n.to_string_lossy().into_owned());
     let xml = ladder::plcopen_export::export(&model, &stem)
-        .map_err(|r| LadderError::Export(input.display().to_string(), r))?;
+        .map_err(|r| LadderError::Export(input.display().to_string(), r.0))?;
     let out = output.map_or_else(|| input.with_extension("xml"), Path::to_path_buf);
     write(&out, xml.as_bytes())?;
     Ok(out)

@@ -29,7 +29,7 @@ pub fn editor(data: &[u8]) -> Verdict {
 }
 
 /// [`editor`], returning the main_loop afterwards (the replay test checks its transcript).
-pub fn editor_loop(data: &[u8]) -> Result<MainLoop, String> {
+pub fn editor_loop(data: &[u8]) -> Result<MainLoop, Broken> {
     let Some((&first, bytes)) = data.split_first() else {
         return Ok(MainLoop::boot(Program::blank()));
     };
@@ -160,7 +160,7 @@ pub fn lines(data: &[u8]) -> Verdict {
                 b"STORE" => {
                     let stored = store::load(&mut main_loop.board.clone());
                     if stored.as_ref() != Ok(&model) {
-                        return Err(format!("after STORE, LOAD gives {stored:?}"));
+                        return Err(broken!("after STORE, LOAD gives {stored:?}"));
                     }
                 }
                 b"LOAD" => {
@@ -184,13 +184,13 @@ pub fn lines(data: &[u8]) -> Verdict {
         }
         if stop {
             if main_loop.mode != Mode::Run {
-                return Err(format!(
+                return Err(broken!(
                     "{:?} did not start RUN mode",
                     String::from_utf8_lossy(&word)
                 ));
             }
         } else if main_loop.mode != Mode::Edit {
-            return Err(format!(
+            return Err(broken!(
                 "line {:?} started RUN mode",
                 String::from_utf8_lossy(&typed)
             ));
@@ -199,7 +199,7 @@ pub fn lines(data: &[u8]) -> Verdict {
             if ok {
                 Ok(())
             } else {
-                Err(format!(
+                Err(broken!(
                     "after line {:?}: {what} differs from the model",
                     String::from_utf8_lossy(&typed)
                 ))
@@ -251,14 +251,14 @@ pub fn keys(data: &[u8]) -> Verdict {
         let ev = d.feed(b);
         let printable = (0x20..0x7F).contains(&b);
         match ev {
-            Event::Char(c) if c != b => return Err(format!("byte {b:#04x} came out as {c:#04x}")),
+            Event::Char(c) if c != b => return Err(broken!("byte {b:#04x} came out as {c:#04x}")),
             Event::Char(_) if was_pending && printable => {
-                return Err(format!("printable byte {b:#04x} inside a sequence typed"));
+                return Err(broken!("printable byte {b:#04x} inside a sequence typed"));
             }
             Event::Char(_) => {}
             Event::Key(k) => {
                 if !was_pending {
-                    return Err(format!("key {k:?} from a lone byte {b:#04x}"));
+                    return Err(broken!("key {k:?} from a lone byte {b:#04x}"));
                 }
                 let final_ok = match k {
                     Key::Up => b == b'A',
@@ -269,17 +269,17 @@ pub fn keys(data: &[u8]) -> Verdict {
                     Key::Insert | Key::Delete => b == b'~',
                 };
                 if !final_ok {
-                    return Err(format!("key {k:?} on byte {b:#04x}"));
+                    return Err(broken!("key {k:?} on byte {b:#04x}"));
                 }
             }
             Event::None => {
                 if !was_pending && b != 0x1B {
-                    return Err(format!(
+                    return Err(broken!(
                         "byte {b:#04x} outside a sequence was not handed on"
                     ));
                 }
                 if b != 0x1B && !printable {
-                    return Err(format!("control byte {b:#04x} swallowed by a sequence"));
+                    return Err(broken!("control byte {b:#04x} swallowed by a sequence"));
                 }
             }
         }
@@ -292,7 +292,7 @@ pub fn keys(data: &[u8]) -> Verdict {
         }
         since_esc = since_esc.saturating_add(1);
         if was_pending && since_esc >= 3 && (0x40..0x7F).contains(&b) && d.pending() {
-            return Err(format!("final byte {b:#04x} did not end the sequence"));
+            return Err(broken!("final byte {b:#04x} did not end the sequence"));
         }
     }
     Ok(())

@@ -7,7 +7,6 @@
 //! status bits 4–5 read as the model says; an exception changes no hold; a hold ends by
 //! itself 10 s after the last valid frame for the slave, and only then.
 
-use std::format;
 use std::vec::Vec;
 
 use utile_core::engine::Engine;
@@ -117,10 +116,10 @@ pub(super) fn held(data: &[u8]) -> Verdict {
         match event {
             Event::Reply => {
                 if reply.len() < 5 || !crc_ok(&reply) || reply[0] != ADDRESS {
-                    return Err(format!("reply {reply:02X?} is not a valid frame"));
+                    return Err(broken!("reply {reply:02X?} is not a valid frame"));
                 }
                 if reply[1] & 0x80 != 0 && eng != before {
-                    return Err(format!("exception {reply:02X?} changed the engine"));
+                    return Err(broken!("exception {reply:02X?} changed the engine"));
                 }
                 if reply[1] == 0x04 {
                     let judged = Judged {
@@ -134,7 +133,7 @@ pub(super) fn held(data: &[u8]) -> Verdict {
             }
             Event::Dropped | Event::Slash | Event::None => {
                 if !reply.is_empty() || eng != before {
-                    return Err(format!("{event:?} answered or changed something"));
+                    return Err(broken!("{event:?} answered or changed something"));
                 }
             }
             Event::Broadcast => {
@@ -170,7 +169,7 @@ impl Model {
             Next::Held
         };
         if next != expected {
-            return Err(format!("the hold said {next:?}, the spec {expected:?}"));
+            return Err(broken!("the hold said {next:?}, the spec {expected:?}"));
         }
         let scans = match next {
             Next::Free | Next::Step => 1,
@@ -190,7 +189,7 @@ impl Model {
         status.refresh(STATUS_RUNNING, &st, 0, 0);
         let bits = (u16::from(self.held) * STATUS_HELD) | (u16::from(self.lapsed) * STATUS_LAPSED);
         if status.regs[0] != STATUS_RUNNING | bits {
-            return Err(format!(
+            return Err(broken!(
                 "status {:#06X}, bits 4-5 {bits:#06X}",
                 status.regs[0]
             ));
@@ -234,7 +233,7 @@ impl Model {
                         }
                     }
                 }
-                Some(_) => return Err(format!("{pdu:02X?} refused: {reply:02X?}")),
+                Some(_) => return Err(broken!("{pdu:02X?} refused: {reply:02X?}")),
                 None => {}
             }
             if event == Event::Reply && pdu.first() == Some(&0x03) && !refused {
@@ -257,7 +256,7 @@ impl Model {
                 _ => continue,
             };
             if got != expected {
-                return Err(format!(
+                return Err(broken!(
                     "holding register {addr} read {got}, expected {expected}"
                 ));
             }
@@ -269,7 +268,7 @@ impl Model {
     fn agrees(&self, status: &Status) -> Verdict {
         let h = &status.hold;
         if (h.held(), u32::from(h.steps), h.lapsed()) != (self.held, self.left, self.lapsed) {
-            return Err(format!("hold {h:?}, the spec's {self:?}"));
+            return Err(broken!("hold {h:?}, the spec's {self:?}"));
         }
         Ok(())
     }

@@ -5,7 +5,7 @@
 use std::format;
 use std::string::String;
 
-use super::Verdict;
+use super::{Broken, Verdict};
 use crate::ladder::{self, import};
 use crate::listing;
 
@@ -23,12 +23,12 @@ fn check(result: Result<ladder::Ladder, import::Refused>) -> Verdict {
     let text = listing::print(&prog);
     let back = listing::parse("imported", &text).map_err(|e| format!("its listing: {e}"))?;
     if back != prog {
-        return Err(String::from(
+        return Err(Broken::from(
             "the listing does not read back as the program",
         ));
     }
     if ladder::to_program(&ladder::from_program(&prog)).ok() != Some(prog) {
-        return Err(String::from(
+        return Err(Broken::from(
             "listing -> ladder -> listing changed the program",
         ));
     }

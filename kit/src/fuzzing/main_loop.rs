@@ -83,7 +83,7 @@ impl MainLoop {
     }
 
     /// Autostart: `prog` is STOREd into the EEPROM, loaded back and run (D8 grounded).
-    pub fn autostart(prog: &Program) -> Result<Self, String> {
+    pub fn autostart(prog: &Program) -> Result<Self, Broken> {
         let mut board = SimBoard::new();
         store::store(prog, &mut board)
             .map_err(|e| format!("STORE into the blank EEPROM: {e:?}"))?;
@@ -112,7 +112,7 @@ impl MainLoop {
 
     fn check_term(&self) -> Verdict {
         match &self.term.violation {
-            Some(v) => Err(format!("screen: {v}")),
+            Some(v) => Err(broken!("screen: {v}")),
             None => Ok(()),
         }
     }
@@ -187,7 +187,7 @@ impl MainLoop {
             return if read_result.as_ref() == Some(after) {
                 Ok(())
             } else {
-                Err(why())
+                Err(why().into())
             };
         }
         // Every field of the program is compared: counter presets and set-points change
@@ -202,7 +202,7 @@ impl MainLoop {
             return Ok(());
         }
         if byte != b'\r' && byte != b'\n' {
-            return Err(why());
+            return Err(why().into());
         }
         let one_line = uf_only
             && after
@@ -238,7 +238,7 @@ impl MainLoop {
         if store::load(&mut probe).ok().as_ref() == Some(after) {
             Ok(())
         } else {
-            Err(why())
+            Err(why().into())
         }
     }
 
@@ -297,7 +297,7 @@ impl MainLoop {
     /// Bring the editor back to the main screen from wherever input left it, then type
     /// FILL. Returns `Ok(false)` if the program runs without reading KEY (only a reset stops
     /// it: that is the user's program, not a lock-up), `Ok(true)` once FILL has worked.
-    pub fn recover_and_fill(&mut self) -> Result<bool, String> {
+    pub fn recover_and_fill(&mut self) -> Result<bool, Broken> {
         if self.mode == Mode::Run {
             self.board.rx_queue.clear();
             self.receive(b'/')?;

@@ -30,7 +30,31 @@ use utile_core::opcodes::{self, END, NOP};
 use utile_core::store::{self, SLOT_ADDR, SLOT_LEN};
 
 /// What a harness says: `Ok` or the broken invariant.
-pub type Verdict = Result<(), String>;
+pub type Verdict = Result<(), Broken>;
+
+/// A broken invariant (or a step of a harness that could not be taken), described.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct Broken(pub String);
+
+impl From<&str> for Broken {
+    fn from(what: &str) -> Self {
+        Self(what.to_string())
+    }
+}
+
+impl From<String> for Broken {
+    fn from(what: String) -> Self {
+        Self(what)
+    }
+}
+
+/// [`Broken`] with `format!`'s arguments.
+macro_rules! broken {
+    ($($arg:tt)*) => {
+        $crate::fuzzing::Broken(::std::format!($($arg)*))
+    };
+}
 
 /// A pause longer than the version-1 escape time-out (50 ms): it must change nothing now.
 pub const ESC_PAUSE_MS: u32 = 60;

@@ -9,7 +9,6 @@
 //! read carries the map's values and a write changes exactly what it names
 //! (`modbus_oracle.rs`).
 
-use std::format;
 use std::vec::Vec;
 
 use utile_core::modbus::frame::{Receiver, Verdict as FrameVerdict};
@@ -28,7 +27,7 @@ pub(super) const ADDRESS: u8 = 1;
 fn check_reply(reply: &[u8], pdu: &[u8], answer: Answer) -> Verdict {
     let function = pdu.first().copied().unwrap_or(0);
     if reply.len() < 5 || !crc_ok(reply) || reply[0] != ADDRESS {
-        return Err(format!(
+        return Err(broken!(
             "reply {reply:02X?} to {pdu:02X?} is not a valid frame"
         ));
     }
@@ -36,25 +35,25 @@ fn check_reply(reply: &[u8], pdu: &[u8], answer: Answer) -> Verdict {
     let expected_len = match answer {
         Answer::Exception { .. } => {
             if f != function | 0x80 || !(1..=3).contains(&reply[2]) {
-                return Err(format!("exception {reply:02X?} to {pdu:02X?}"));
+                return Err(broken!("exception {reply:02X?} to {pdu:02X?}"));
             }
             5
         }
         Answer::Echo { len } => {
             if reply.get(1..1 + usize::from(len)) != pdu.get(..usize::from(len)) {
-                return Err(format!("echo {reply:02X?} of {pdu:02X?}"));
+                return Err(broken!("echo {reply:02X?} of {pdu:02X?}"));
             }
             3 + usize::from(len)
         }
         Answer::Read { .. } | Answer::ServerId => {
             if f != function {
-                return Err(format!("reply {reply:02X?} to function {function:02X}"));
+                return Err(broken!("reply {reply:02X?} to function {function:02X}"));
             }
             5 + usize::from(reply[2])
         }
     };
     if reply.len() != expected_len {
-        return Err(format!(
+        return Err(broken!(
             "reply {reply:02X?} is {} bytes, its header says {expected_len}",
             reply.len()
         ));
@@ -123,18 +122,18 @@ pub fn modbus(data: &[u8]) -> Verdict {
             FrameVerdict::Frame { len } => {
                 let frame = rx.frame().to_vec();
                 if frame.len() != usize::from(len) || !crc_ok(&frame) {
-                    return Err(format!("frame {frame:02X?} taken with a bad CRC"));
+                    return Err(broken!("frame {frame:02X?} taken with a bad CRC"));
                 }
                 let pdu = &frame[1..frame.len() - 2];
                 let answer = handle(pdu, &mut map);
                 if matches!(answer, Answer::Exception { .. }) && map != before {
-                    return Err(format!("exception to {pdu:02X?} changed the map"));
+                    return Err(broken!("exception to {pdu:02X?} changed the map"));
                 }
                 let mut reply = Reply::new(ADDRESS, answer, &map);
                 let bytes: Vec<u8> =
                     std::iter::from_fn(|| reply.next_byte(&mut map, pdu)).collect();
                 if bytes.len() > 256 {
-                    return Err(format!("reply of {} bytes", bytes.len()));
+                    return Err(broken!("reply of {} bytes", bytes.len()));
                 }
                 check_reply(&bytes, pdu, answer)?;
                 check_effect(pdu, &bytes[1..bytes.len() - 2], &before, &map)?;
@@ -146,7 +145,7 @@ pub fn modbus(data: &[u8]) -> Verdict {
             }
         }
         if let Some(why) = map.outside.take() {
-            return Err(why);
+            return Err(why.into());
         }
     }
     Ok(())
@@ -236,7 +235,7 @@ fn replies_streamed(data: &[u8]) -> Verdict {
             };
             let event = slave.end(ADDRESS, &mut map, now);
             if event != Event::None || eng != before {
-                return Err(format!("a silence during a reply: {event:?}"));
+                return Err(broken!("a silence during a reply: {event:?}"));
             }
             continue;
         }
@@ -253,7 +252,7 @@ fn replies_streamed(data: &[u8]) -> Verdict {
         };
         let event = slave.end(ADDRESS, &mut map, now);
         if eng.prog.set_points.iter().any(|&s| s > 1023) {
-            return Err(format!("a set-point above 1023: {:?}", eng.prog.set_points));
+            return Err(broken!("a set-point above 1023: {:?}", eng.prog.set_points));
         }
         match event {
             Event::Reply => {
@@ -270,7 +269,7 @@ fn replies_streamed(data: &[u8]) -> Verdict {
             }
             Event::Dropped | Event::Slash | Event::None => {
                 if slave.replying() || eng != before {
-                    return Err(format!("{event:?} answered or changed something"));
+                    return Err(broken!("{event:?} answered or changed something"));
                 }
             }
             Event::Broadcast => {
@@ -308,11 +307,11 @@ impl Going {
     fn check(&self) -> Verdict {
         let reply = &self.reply;
         if reply.len() < 5 || !crc_ok(reply) || reply[0] != ADDRESS {
-            return Err(format!("reply {reply:02X?} is not a valid frame"));
+            return Err(broken!("reply {reply:02X?} is not a valid frame"));
         }
         if reply[1] & 0x80 != 0 {
             if !self.unchanged {
-                return Err(format!("exception {reply:02X?} changed the engine"));
+                return Err(broken!("exception {reply:02X?} changed the engine"));
             }
             return Ok(());
         }
@@ -329,7 +328,7 @@ impl Going {
             _ => true,
         };
         if !echoed {
-            return Err(format!(
+            return Err(broken!(
                 "reply {reply:02X?} does not echo {:02X?}",
                 self.request
             ));
@@ -405,13 +404,13 @@ pub fn named_writes(
         }
     }
     if (after.cq ^ before.cq) & !cq_free != 0 {
-        return Err(format!(
+        return Err(broken!(
             "{request:02X?} moved the outputs of counters whose preset it did not write"
         ));
     }
     want.cq = after.cq;
     if *after != want {
-        return Err(format!("{request:02X?} changed otherwise than it names"));
+        return Err(broken!("{request:02X?} changed otherwise than it names"));
     }
     Ok(())
 }
@@ -459,7 +458,7 @@ pub(super) fn check_windows(request: &[u8], reply: &[u8], j: &Judged<'_>) -> Ver
             None
         };
         if expected.is_some_and(|v| v != got) {
-            return Err(format!(
+            return Err(broken!(
                 "input register {addr} read {got:#06X}, expected {:#06X}",
                 expected.unwrap_or(0)
             ));

@@ -3,7 +3,6 @@
 //! a write changes exactly the coils or registers it names to the values it names, and
 //! anything else (diagnostics, report server ID, an exception) changes nothing.
 
-use std::format;
 use std::vec::Vec;
 
 use utile_core::modbus::map::{Map, Table};
@@ -34,7 +33,7 @@ pub fn check_effect(pdu: &[u8], reply: &[u8], before: &TestMap, after: &TestMap)
     let function = pdu.first().copied().unwrap_or(0);
     if reply.first().is_some_and(|f| f & 0x80 != 0) {
         if after != before {
-            return Err(format!(
+            return Err(broken!(
                 "exception {reply:02X?} to {pdu:02X?} changed the map"
             ));
         }
@@ -58,7 +57,7 @@ pub fn check_effect(pdu: &[u8], reply: &[u8], before: &TestMap, after: &TestMap)
             let mut want = std::vec![function, bytes.len() as u8];
             want.extend(bytes);
             if reply != want.as_slice() {
-                return Err(format!(
+                return Err(broken!(
                     "read {pdu:02X?} got {reply:02X?}, the map holds {want:02X?}"
                 ));
             }
@@ -75,7 +74,7 @@ pub fn check_effect(pdu: &[u8], reply: &[u8], before: &TestMap, after: &TestMap)
                 want.extend(map.read(table, start.wrapping_add(i)).to_be_bytes());
             }
             if reply != want.as_slice() {
-                return Err(format!(
+                return Err(broken!(
                     "read {pdu:02X?} got {reply:02X?}, the map holds {want:02X?}"
                 ));
             }
@@ -105,13 +104,13 @@ pub fn check_effect(pdu: &[u8], reply: &[u8], before: &TestMap, after: &TestMap)
         _ => before.clone(),
     };
     if matches!(function, 0x05 | 0x06) && reply != pdu {
-        return Err(format!("write {pdu:02X?} not echoed: {reply:02X?}"));
+        return Err(broken!("write {pdu:02X?} not echoed: {reply:02X?}"));
     }
     if matches!(function, 0x0F | 0x10) && reply.get(..5) != pdu.get(..5) {
-        return Err(format!("write {pdu:02X?} answered {reply:02X?}"));
+        return Err(broken!("write {pdu:02X?} answered {reply:02X?}"));
     }
     if *after != expected_after {
-        return Err(format!(
+        return Err(broken!(
             "{pdu:02X?} changed the map otherwise than it names"
         ));
     }

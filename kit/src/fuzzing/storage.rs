@@ -61,10 +61,10 @@ pub fn ihex(data: &[u8]) -> Verdict {
         let ev = r.feed(b);
         match (done_at, error, ev) {
             (Some((_, l)), _, HexEvent::Done { len }) if l == len => {}
-            (Some(_), _, e) => return Err(format!("after Done the reader said {e:?}")),
+            (Some(_), _, e) => return Err(broken!("after Done the reader said {e:?}")),
             (None, Some(e0), HexEvent::Error(e)) if e == e0 => {}
             (None, Some(e0), e) => {
-                return Err(format!("after Error({e0:?}) the reader said {e:?}"))
+                return Err(broken!("after Error({e0:?}) the reader said {e:?}"))
             }
             (None, None, HexEvent::Done { len }) => done_at = Some((i + 1, len)),
             (None, None, HexEvent::Error(e)) => error = Some(e),
@@ -87,7 +87,7 @@ pub fn ihex(data: &[u8]) -> Verdict {
             Ok(())
         }
         (Some(_), None) => Err("the reader accepted a file the reference parser refuses".into()),
-        (None, Some(_)) => Err(format!("the reader refused a valid file ({error:?})")),
+        (None, Some(_)) => Err(broken!("the reader refused a valid file ({error:?})")),
         _ => Ok(()),
     }
 }
@@ -113,7 +113,7 @@ pub fn hex_roundtrip(data: &[u8]) -> Verdict {
     }
     match last {
         HexEvent::Done { len } if usize::from(len) == IMAGE_LEN => {}
-        e => return Err(format!("WRITE's own text read back as {e:?}")),
+        e => return Err(broken!("WRITE's own text read back as {e:?}")),
     }
     if image::decode(r.data()) != Ok(prog) {
         return Err("WRITE then READ changed the program".into());
@@ -181,7 +181,7 @@ pub fn image_decode(data: &[u8]) -> Verdict {
             }
         }
         Ok(_) => Err("decode accepted an invalid image".into()),
-        Err(e) if valid => Err(format!("decode refused a valid image: {e:?}")),
+        Err(e) if valid => Err(broken!("decode refused a valid image: {e:?}")),
         Err(_) => Ok(()),
     }
 }
@@ -236,14 +236,14 @@ pub fn eeprom(data: &[u8]) -> Verdict {
             };
             // The program is the slot's image: encoded again it is the same bytes.
             if !same_image(&image::encode(p), &board.eeprom[at..at + len]) {
-                return Err(format!(
+                return Err(broken!(
                     "LOAD did not return the program of slot {k}, the newest valid one"
                 ));
             }
         }
         (Ok(_), None) => return Err("LOAD returned a program though no slot is valid".into()),
         (Err(_), Some(k)) => {
-            return Err(format!(
+            return Err(broken!(
                 "LOAD found nothing although slot {k} holds a valid image"
             ))
         }
@@ -267,7 +267,7 @@ pub fn eeprom(data: &[u8]) -> Verdict {
     let after_cut = store::load(&mut failing);
     let ok = after_cut.as_ref() == Ok(&new) || after_cut == old;
     if !ok {
-        return Err(format!(
+        return Err(broken!(
             "a STORE cut after {cut} writes ({tear:?}) lost the stored program"
         ));
     }

@@ -29,6 +29,7 @@ use utile_core::opcodes::{
 
 use super::import::{CoilMode, Expr, IecProgram, Stmt, TimerKind};
 use super::model::{Block, Coil, Contact, Flow, Item, Ladder, Net, Rung, Step};
+use super::Reasons;
 
 /// The timers of each unit: (first, how many).
 const UNIT_GROUPS: [(u8, u8); 4] = [(0, 4), (4, 8), (12, 3), (15, 1)];
@@ -58,7 +59,11 @@ struct Lowering {
 }
 
 /// The rungs of an imported program, or every reason it cannot run on uTile.
-pub fn lower(prog: &IecProgram) -> Result<Ladder, Vec<String>> {
+pub fn lower(prog: &IecProgram) -> Result<Ladder, Reasons> {
+    lower_all(prog).map_err(Reasons)
+}
+
+fn lower_all(prog: &IecProgram) -> Result<Ladder, Vec<String>> {
     let mut l = Lowering {
         items: Vec::new(),
         presets: [0; UNITS],

@@ -19,3 +19,9 @@ pub use from_listing::from_program;
 pub use model::{Block, Coil, Contact, Flow, Item, Ladder, Net, Rung, Step};
 pub use svg::svg;
 pub use to_listing::{code, to_program, TooLong};
+
+/// Every reason a program cannot be imported, lowered or exported, one a line, each with
+/// what to do.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{}", .0.join("\n"))]
+pub struct Reasons(pub std::vec::Vec<std::string::String>);

@@ -4,6 +4,10 @@
 use std::path::Path;
 
 use utile_core::engine::LINES;
+use utile_core::modbus::{
+    READ_DISCRETE_INPUTS, READ_HOLDING_REGISTERS, READ_INPUT_REGISTERS, REPORT_SERVER_ID,
+    WRITE_MULTIPLE_COILS, WRITE_MULTIPLE_REGISTERS,
+};
 use utile_core::opcodes::{self, END, NOP};
 use utile_kit::modbus;
 use utile_kit::simavr::Chip;
@@ -95,24 +99,45 @@ pub fn measure_stack(elf: &Path) -> Result<(usize, usize, Vec<String>), BenchErr
         ("LOAD", b"LOAD\r".to_vec()),
         ("RUN", b"EX0\r".to_vec()),
         // Modbus requests to slave 7 while the program runs: the deepest map paths.
-        ("Modbus FC03 x 26", modbus::frame(7, &[0x03, 0, 0, 0, 26])),
+        (
+            "Modbus FC03 x 26",
+            modbus::frame(7, &[READ_HOLDING_REGISTERS, 0, 0, 0, 26]),
+        ),
         (
             "Modbus FC16",
             modbus::frame(
                 7,
-                &[0x10, 0, 14, 0, 4, 8, 0, 9, 0, 10, 0x12, 0x34, 0x01, 0x00],
+                &[
+                    WRITE_MULTIPLE_REGISTERS,
+                    0,
+                    14,
+                    0,
+                    4,
+                    8,
+                    0,
+                    9,
+                    0,
+                    10,
+                    0x12,
+                    0x34,
+                    0x01,
+                    0x00,
+                ],
             ),
         ),
         (
             "Modbus FC04 time left",
-            modbus::frame(7, &[0x04, 0, 32, 0, 16]),
+            modbus::frame(7, &[READ_INPUT_REGISTERS, 0, 32, 0, 16]),
         ),
-        ("Modbus FC02", modbus::frame(7, &[0x02, 0, 8, 0, 42])),
+        (
+            "Modbus FC02",
+            modbus::frame(7, &[READ_DISCRETE_INPUTS, 0, 8, 0, 42]),
+        ),
         (
             "Modbus FC15",
-            modbus::frame(7, &[0x0F, 0, 0, 0, 24, 3, 0xFF, 0, 0xFF]),
+            modbus::frame(7, &[WRITE_MULTIPLE_COILS, 0, 0, 0, 24, 3, 0xFF, 0, 0xFF]),
         ),
-        ("Modbus FC17", modbus::frame(7, &[0x11])),
+        ("Modbus FC17", modbus::frame(7, &[REPORT_SERVER_ID])),
         ("break", b"/".to_vec()),
         ("strike", b" ".to_vec()),
         ("STAT", b"STAT\r".to_vec()),

@@ -27,6 +27,10 @@ pub enum BenchError {
         #[source]
         source: std::io::Error,
     },
+    /// A step of the live tool's measures failed (starting the virtual Nano or `utile live`,
+    /// reading its API, a measuring window): the step and why.
+    #[error("{0}")]
+    Live(String),
     /// STORE of a benchmark's program failed.
     #[error("STORE: {0:?}")]
     Store(utile_core::store::StoreError),

@@ -14,12 +14,14 @@ use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+use tokio_modbus::ExceptionCode;
+use utile_core::modbus::{READ_HOLDING_REGISTERS, WRITE_SINGLE_COIL};
 use utile_kit::listing;
 use utile_kit::sim::stored_eeprom;
 
-use crate::live::{self, args, hub::Input, queue::Job, queue::Origin, Running};
+use crate::live::{self, args, hub::Input, queue::Job, queue::Origin, rtu, Running};
 
-use super::Spread;
+use super::{BenchError, Spread};
 
 /// What one run measured.
 pub struct LiveFigures {
@@ -52,7 +54,11 @@ fn program() -> utile_core::engine::Program {
 }
 
 /// The virtual Nano (`units` of them on a bus when more than one), autostarting the program.
-pub(crate) fn start_nano(dir: &Path, link: &Path, units: usize) -> Result<Child, String> {
+pub(crate) fn start_nano(dir: &Path, link: &Path, units: usize) -> Result<Child, BenchError> {
+    spawn_nano(dir, link, units).map_err(BenchError::Live)
+}
+
+fn spawn_nano(dir: &Path, link: &Path, units: usize) -> Result<Child, String> {
     let vnano = std::env::current_exe()
         .map_err(|e| e.to_string())?
         .with_file_name("vnano");
@@ -107,12 +113,15 @@ fn sim_tenths(r: &Running, from: u32) -> Option<u32> {
 }
 
 /// Measures `units` uTiles (1, or a bus of 2..8) for `secs` of the simulation's time.
-pub fn measure_live(units: usize, secs: u32) -> Result<LiveFigures, String> {
+pub fn measure_live(units: usize, secs: u32) -> Result<LiveFigures, BenchError> {
     let dir = std::env::temp_dir().join(format!("utile-live-bench-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    std::fs::create_dir_all(&dir).map_err(|source| BenchError::File {
+        path: dir.clone(),
+        source,
+    })?;
     let link = dir.join("tty");
     let mut nano = start_nano(&dir, &link, units)?;
-    let result = run(&mut nano, &link, units, secs);
+    let result = run(&mut nano, &link, units, secs).map_err(BenchError::Live);
     let _ = nano.kill();
     let _ = nano.wait();
     let _ = std::fs::remove_dir_all(&dir);
@@ -186,7 +195,11 @@ fn run(nano: &mut Child, link: &Path, units: usize, secs: u32) -> Result<LiveFig
     for i in 0..20u32 {
         let on = i % 2 == 0;
         std::thread::sleep(Duration::from_millis(37 + u64::from(i * 7 % 50)));
-        let (job, _rx) = Job::new(1, vec![5, 0, 8, if on { 0xFF } else { 0 }, 0], Origin::Page);
+        let (job, _rx) = Job::new(
+            1,
+            vec![WRITE_SINGLE_COIL, 0, 8, if on { 0xFF } else { 0 }, 0],
+            Origin::Page,
+        );
         let t0 = Instant::now();
         running
             .hub
@@ -256,7 +269,7 @@ fn run(nano: &mut Child, link: &Path, units: usize, secs: u32) -> Result<LiveFig
     let mut rtts = Vec::new();
     for id in 0..50u16 {
         let t0 = Instant::now();
-        // A request that meets a busy moment gets 0x0B: only the answered ones count.
+        // A request that meets a busy moment gets exception 0x0B (gateway target device failed): only the answered ones count.
         if tcp_read(&mut s, id)? {
             rtts.push(t0.elapsed().as_secs_f64() * 1e3);
         }
@@ -302,7 +315,7 @@ fn post(http: std::net::SocketAddr, path: &str, body: &str) -> Result<(), String
 fn tcp_read(s: &mut TcpStream, id: u16) -> Result<bool, String> {
     use std::io::Read;
     let mut req = id.to_be_bytes().to_vec();
-    req.extend_from_slice(&[0, 0, 0, 6, 1, 3, 0, 0, 0, 4]);
+    req.extend_from_slice(&[0, 0, 0, 6, 1, READ_HOLDING_REGISTERS, 0, 0, 0, 4]);
     s.write_all(&req).map_err(|e| e.to_string())?;
     let mut head = [0u8; 7];
     s.read_exact(&mut head).map_err(|e| e.to_string())?;
@@ -310,8 +323,14 @@ fn tcp_read(s: &mut TcpStream, id: u16) -> Result<bool, String> {
     let mut pdu = vec![0u8; len];
     s.read_exact(&mut pdu).map_err(|e| e.to_string())?;
     match pdu.as_slice() {
-        [3, ..] => Ok(true),
-        [0x83, 0x0B] => Ok(false),
+        [READ_HOLDING_REGISTERS, ..] => Ok(true),
+        [f, code]
+            if rtu::is_exception(*f)
+                && rtu::answers(*f) == READ_HOLDING_REGISTERS
+                && ExceptionCode::new(*code) == ExceptionCode::GatewayTargetDevice =>
+        {
+            Ok(false)
+        }
         _ => Err(format!("the gateway answered {pdu:?}")),
     }
 }

@@ -18,6 +18,7 @@ use std::time::{Duration, Instant};
 use serde_json::Value;
 
 use super::live::start_nano;
+use super::BenchError;
 
 /// What one binary did.
 #[derive(Clone, Copy, Debug)]
@@ -167,9 +168,12 @@ fn page(addr: SocketAddr, stop: Arc<AtomicBool>, events: Arc<AtomicU64>) -> Resu
 }
 
 /// Measures the `utile` binary at `utile` for `secs` simulated seconds a window.
-pub fn measure_pages(utile: &Path, secs: u32) -> Result<PagesFigures, String> {
+pub fn measure_pages(utile: &Path, secs: u32) -> Result<PagesFigures, BenchError> {
     let dir = std::env::temp_dir().join(format!("utile-pages-bench-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    std::fs::create_dir_all(&dir).map_err(|source| BenchError::File {
+        path: dir.clone(),
+        source,
+    })?;
     let link = dir.join("tty");
     let mut nano = start_nano(&dir, &link, 1)?;
     std::thread::sleep(Duration::from_millis(500));
@@ -179,6 +183,7 @@ pub fn measure_pages(utile: &Path, secs: u32) -> Result<PagesFigures, String> {
         let _ = tool.wait();
         r
     });
+    let result = result.map_err(BenchError::Live);
     let _ = nano.kill();
     let _ = nano.wait();
     let _ = std::fs::remove_dir_all(&dir);

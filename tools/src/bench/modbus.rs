@@ -9,6 +9,7 @@
 use std::path::Path;
 
 use utile_core::engine::Program;
+use utile_core::modbus::{READ_HOLDING_REGISTERS, READ_INPUT_REGISTERS, WRITE_MULTIPLE_REGISTERS};
 use utile_kit::simavr::{frame_cycles, Chip, RxPacing};
 
 use super::chip::{BenchRun, CYCLES_PER_MS};
@@ -23,15 +24,15 @@ const ADDRESS: u8 = 1;
 const RET: u16 = 0x9508;
 
 /// FC03 for holding registers 0..15.
-const FC03_16: [u8; 5] = [0x03, 0, 0, 0, 16];
+const FC03_16: [u8; 5] = [READ_HOLDING_REGISTERS, 0, 0, 0, 16];
 /// FC04 for the 40 registers of the snapshot (64..103).
-const FC04_SNAPSHOT: [u8; 5] = [0x04, 0, 64, 0, 40];
+const FC04_SNAPSHOT: [u8; 5] = [READ_INPUT_REGISTERS, 0, 64, 0, 40];
 /// FC04 for 125 registers of the program (256..380): the longest read there is.
-const FC04_PROGRAM: [u8; 5] = [0x04, 1, 0, 0, 125];
+const FC04_PROGRAM: [u8; 5] = [READ_INPUT_REGISTERS, 1, 0, 0, 125];
 
 /// FC16 writing the timer presets T0..T15 (all 10): the longest write of the map's kind.
 fn fc16_presets() -> Vec<u8> {
-    let mut pdu = vec![0x10, 0, 0, 0, 16, 32];
+    let mut pdu = vec![WRITE_MULTIPLE_REGISTERS, 0, 0, 0, 16, 32];
     for _ in 0..16 {
         pdu.extend_from_slice(&[0, 10]);
     }
@@ -41,7 +42,7 @@ fn fc16_presets() -> Vec<u8> {
 /// Bytes of the reply to `pdu` (a read of registers, or a write's echo).
 fn reply_len(pdu: &[u8]) -> usize {
     match pdu[0] {
-        0x03 | 0x04 => 5 + 2 * usize::from(pdu[4]),
+        READ_HOLDING_REGISTERS | READ_INPUT_REGISTERS => 5 + 2 * usize::from(pdu[4]),
         _ => 8,
     }
 }

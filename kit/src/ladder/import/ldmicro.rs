@@ -11,6 +11,7 @@ use std::collections::HashMap;
 use std::string::String;
 use std::vec::Vec;
 
+use super::super::Reasons;
 use super::{pop_of, CoilMode, Expr, IecProgram, Signals, Stmt, TimerKind};
 
 /// One element of a rung.
@@ -33,7 +34,11 @@ struct Reader {
 }
 
 /// Read an LDmicro program.
-pub fn read(text: &str, signals: Signals) -> Result<IecProgram, Vec<String>> {
+pub fn read(text: &str, signals: Signals) -> Result<IecProgram, Reasons> {
+    read_all(text, signals).map_err(Reasons)
+}
+
+fn read_all(text: &str, signals: Signals) -> Result<IecProgram, Vec<String>> {
     let lines: Vec<&str> = text.lines().collect();
     let first = lines.first().map_or("", |l| l.trim());
     if first != "LDmicro0.1" && first != "LDmicro0.2" {
@@ -113,7 +118,10 @@ pub fn read(text: &str, signals: Signals) -> Result<IecProgram, Vec<String>> {
             Some("%IX0.6")
         };
         if let Err(why) = r.signals.declare(n, addr) {
-            problems.push(why.replace("at %IX0.6", &format!("(input {} of the IO LIST)", k + 1)));
+            problems.push(
+                why.0
+                    .replace("at %IX0.6", &format!("(input {} of the IO LIST)", k + 1)),
+            );
         }
     }
     for (k, n) in outs.iter().enumerate() {
@@ -123,12 +131,15 @@ pub fn read(text: &str, signals: Signals) -> Result<IecProgram, Vec<String>> {
             "%QX1.0".into()
         };
         if let Err(why) = r.signals.declare(n, Some(&addr)) {
-            problems.push(why.replace("at %QX1.0", &format!("(output {} of the IO LIST)", k + 1)));
+            problems.push(
+                why.0
+                    .replace("at %QX1.0", &format!("(output {} of the IO LIST)", k + 1)),
+            );
         }
     }
     for n in used.iter().filter(|n| n.starts_with('R')) {
         if let Err(why) = r.signals.declare(n, None) {
-            problems.push(why);
+            problems.push(why.0);
         }
     }
     if !problems.is_empty() {

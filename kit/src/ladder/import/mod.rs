@@ -256,9 +256,18 @@ pub fn signal_name(push: u8) -> String {
     super::model::op_word(push).trim_end_matches('.').into()
 }
 
+/// A name that cannot be a uTile signal: why, and what to do (the `--map` to give).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct BadSignal(pub String);
+
 impl Signals {
     /// Signals with the `--map` list (`NAME=SIGNAL,…`) given first.
-    pub fn new(map: &str) -> Result<Signals, String> {
+    pub fn new(map: &str) -> Result<Signals, BadSignal> {
+        Self::with_map(map).map_err(BadSignal)
+    }
+
+    fn with_map(map: &str) -> Result<Signals, String> {
         let mut list = Vec::new();
         for pair in map.split(',').map(str::trim).filter(|p| !p.is_empty()) {
             let Some((name, sig)) = pair.split_once('=') else {
@@ -293,7 +302,11 @@ impl Signals {
 
     /// Declare a BOOL variable with its address (`%IX0.1`, `%Q0.2`, `%MX0.0`, or none).
     /// The error says why it cannot be a uTile signal and what to do.
-    pub fn declare(&mut self, name: &str, address: Option<&str>) -> Result<(), String> {
+    pub fn declare(&mut self, name: &str, address: Option<&str>) -> Result<(), BadSignal> {
+        self.place(name, address).map_err(BadSignal)
+    }
+
+    fn place(&mut self, name: &str, address: Option<&str>) -> Result<(), String> {
         let key = name.to_ascii_uppercase();
         if self.vars.iter().any(|(n, _)| *n == key) {
             return Ok(());
@@ -381,18 +394,18 @@ pub fn import(file: &str, bytes: &[u8], map: &str) -> Result<Ladder, Refused> {
             "file: not UTF-8 text — export the program as PLCopen XML (plc.xml) or save it from LDmicro (.ld)".into(),
         ));
     };
-    let signals = Signals::new(map).map_err(refuse)?;
+    let signals = Signals::new(map).map_err(|e| refuse(e.0))?;
     let trimmed = text.trim_start_matches('\u{feff}').trim_start();
     let prog = if trimmed.starts_with("LDmicro") {
         ldmicro::read(trimmed, signals)
     } else {
         plcopen::read(trimmed, signals)
     }
-    .map_err(|reasons| Refused {
+    .map_err(|super::Reasons(reasons)| Refused {
         file: file.into(),
         reasons,
     })?;
-    super::iec::lower(&prog).map_err(|reasons| Refused {
+    super::iec::lower(&prog).map_err(|super::Reasons(reasons)| Refused {
         file: file.into(),
         reasons,
     })

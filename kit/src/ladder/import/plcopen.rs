@@ -14,6 +14,7 @@ use std::vec::Vec;
 
 use roxmltree::{Document, Node};
 
+use super::super::Reasons;
 use super::{pop_of, CoilMode, Expr, IecProgram, Signals, Stmt, TimerKind};
 
 /// Words for an element in a refusal: `coil Lamp (localId 7)`.
@@ -122,7 +123,11 @@ const FB_TYPES: [&str; 8] = ["TON", "TOF", "TP", "CTU", "R_TRIG", "F_TRIG", "SR"
 const FUNCTIONS: [&str; 4] = ["AND", "OR", "XOR", "NOT"];
 
 /// Read a PLCopen XML document's first program.
-pub fn read(text: &str, signals: Signals) -> Result<IecProgram, Vec<String>> {
+pub fn read(text: &str, signals: Signals) -> Result<IecProgram, Reasons> {
+    read_all(text, signals).map_err(Reasons)
+}
+
+fn read_all(text: &str, signals: Signals) -> Result<IecProgram, Vec<String>> {
     let opts = roxmltree::ParsingOptions {
         allow_dtd: false,
         nodes_limit: 2_000_000,
@@ -203,7 +208,7 @@ pub fn read(text: &str, signals: Signals) -> Result<IecProgram, Vec<String>> {
         let ty_name = ty.map_or("", |t| t.tag_name().name());
         if ty_name == "BOOL" {
             if let Err(why) = r.signals.declare(name, v.attribute("address")) {
-                r.problems.push(why);
+                r.problems.push(why.0);
             }
         } else if ty_name != "derived" {
             if let Some(val) = v

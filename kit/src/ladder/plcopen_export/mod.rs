@@ -18,6 +18,7 @@ use utile_core::opcodes::{
 };
 
 use super::import::read_only_push;
+use super::Reasons;
 use xml::{project, Writer};
 
 mod xml;
@@ -29,7 +30,11 @@ pub(super) fn lines_text(lines: &[u8]) -> String {
 
 /// The XML for `ladder`, a project whose program is named `name`, or why it cannot be
 /// exported: one reason a line, `line NNN: what — what to do`.
-pub fn export(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
+pub fn export(ladder: &Ladder, name: &str) -> Result<String, Reasons> {
+    export_all(ladder, name).map_err(Reasons)
+}
+
+fn export_all(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
     let mut problems = Vec::new();
     let mut rungs = Vec::new();
     for item in &ladder.items {
