@@ -488,6 +488,9 @@ fn set_topics_write_with_mqtt_commands_only_and_refuse_bad_payloads() {
     // With it. A set left retained on the broker is not carried out at the subscription
     // (then the retained message is cleared: an empty payload, refused too).
     sub.publish("utile/plant5/1/U0/set", b"1", true);
+    // On the broker before utile live subscribes (its own copy comes back to the test's
+    // client): a slow machine must not turn it into a live command.
+    sub.wait("utile/plant5/1/U0/set", T, |p| p == "1");
     let (_nano, live) = tank_live("mqtt-commands", &broker, "plant5", &["--mqtt-commands"]);
     console_line(&live, "MQTT: connected to", T);
     refused(&sub, 0, "plant5", "retained");
