@@ -71,9 +71,8 @@ fn hold_writes(pdu: &[u8]) -> Option<Vec<(u16, u16)>> {
 /// core's hold held to the [`Model`] after every frame and every decision, and what a request
 /// may change checked as there.
 pub(super) fn held(data: &[u8]) -> Verdict {
-    use super::modbus::{check_windows, line_events, Judged, Line, ADDRESS};
+    use super::modbus::{check_windows, end_frame, line_events, FrameEnd, Judged, Line, ADDRESS};
     use crate::modbus::crc_ok;
-    use utile_core::board::Board;
     use utile_core::modbus::plc::PlcMap;
     use utile_core::modbus::slave::Slave;
 
@@ -95,16 +94,18 @@ pub(super) fn held(data: &[u8]) -> Verdict {
         let request = std::mem::take(&mut frame);
         // An empty frame end stands for a long silence (the hold's lease).
         hold.between_frames(&mut eng, &mut b, &mut status, request.is_empty())?;
-        let before = eng.clone();
-        let (inputs, thresholds) = (b.inputs(), b.analog_bits());
-        let now = b.ticker.now_ms();
-        status.take_scan(&eng, &mut b);
+        let FrameEnd {
+            before,
+            inputs,
+            thresholds,
+            now,
+            event,
+        } = end_frame(&mut slave, &mut eng, &mut b, &mut status);
         let mut map = PlcMap {
             eng: &mut eng,
             b: &mut b,
             status: &mut status,
         };
-        let event = slave.end(ADDRESS, &mut map, now);
         let mut reply = Vec::new();
         while let Some(x) = slave.next_byte(&mut map) {
             reply.push(x);

@@ -172,7 +172,6 @@ pub fn modbus_plc(data: &[u8]) -> Verdict {
 /// when the frame was judged, the program two lines per register and the program's
 /// fingerprint.
 fn replies_streamed(data: &[u8]) -> Verdict {
-    use utile_core::board::Board;
     use utile_core::engine::Engine;
     use utile_core::modbus::plc::{PlcMap, Status, STATUS_RUNNING};
     use utile_core::modbus::slave::{Event, Slave};
@@ -241,16 +240,13 @@ fn replies_streamed(data: &[u8]) -> Verdict {
         }
         let request = std::mem::take(&mut frame);
         b.run_for(&mut eng, 1, 1);
-        let before = eng.clone();
-        let (inputs, thresholds) = (b.inputs(), b.analog_bits());
-        let now = b.ticker.now_ms();
-        status.take_scan(&eng, &mut b);
-        let mut map = PlcMap {
-            eng: &mut eng,
-            b: &mut b,
-            status: &mut status,
-        };
-        let event = slave.end(ADDRESS, &mut map, now);
+        let FrameEnd {
+            before,
+            inputs,
+            thresholds,
+            event,
+            ..
+        } = end_frame(&mut slave, &mut eng, &mut b, &mut status);
         if eng.prog.set_points.iter().any(|&s| s > 1023) {
             return Err(broken!("a set-point above 1023: {:?}", eng.prog.set_points));
         }
@@ -283,6 +279,45 @@ fn replies_streamed(data: &[u8]) -> Verdict {
         }
     }
     Ok(())
+}
+
+/// What a frame's end between two scans saw: the engine and the pins before the request
+/// was carried out, and the slave's event.
+pub(super) struct FrameEnd {
+    /// The engine before the request was carried out.
+    pub(super) before: utile_core::engine::Engine,
+    /// The input pins when the frame was judged.
+    pub(super) inputs: u8,
+    /// The analog threshold bits when the frame was judged.
+    pub(super) thresholds: u8,
+    /// The time the frame was judged at, ms.
+    pub(super) now: u32,
+    /// What the slave made of the frame.
+    pub(super) event: utile_core::modbus::slave::Event,
+}
+
+/// Ends a frame as the RUN loop does between scans: the last scan's figures taken into the
+/// status, then the slave judges the frame and carries it out against the engine.
+pub(super) fn end_frame(
+    slave: &mut utile_core::modbus::slave::Slave,
+    eng: &mut utile_core::engine::Engine,
+    b: &mut crate::sim::SimBoard,
+    status: &mut utile_core::modbus::plc::Status,
+) -> FrameEnd {
+    use utile_core::board::Board;
+    let before = eng.clone();
+    let (inputs, thresholds) = (b.inputs(), b.analog_bits());
+    let now = b.ticker.now_ms();
+    status.take_scan(eng, b);
+    let mut map = utile_core::modbus::plc::PlcMap { eng, b, status };
+    let event = slave.end(ADDRESS, &mut map, now);
+    FrameEnd {
+        before,
+        inputs,
+        thresholds,
+        now,
+        event,
+    }
 }
 
 /// A reply being made, with what its frame's judgement saw and did.
