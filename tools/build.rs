@@ -16,15 +16,39 @@ const VENDOR: [(&str, &str); 16] = [
     ("/vendor/uplot.mjs", "uplot/dist/uPlot.esm.js"),
     ("/vendor/uplot.css", "uplot/dist/uPlot.min.css"),
     // The Program tab's editor: CodeMirror 6 and what its modules import.
-    ("/vendor/@codemirror/state.js", "@codemirror/state/dist/index.js"),
-    ("/vendor/@codemirror/view.js", "@codemirror/view/dist/index.js"),
-    ("/vendor/@codemirror/commands.js", "@codemirror/commands/dist/index.js"),
-    ("/vendor/@codemirror/language.js", "@codemirror/language/dist/index.js"),
-    ("/vendor/@codemirror/lint.js", "@codemirror/lint/dist/index.js"),
-    ("/vendor/@codemirror/streamparser.js", "@codemirror/streamparser/dist/index.js"),
+    (
+        "/vendor/@codemirror/state.js",
+        "@codemirror/state/dist/index.js",
+    ),
+    (
+        "/vendor/@codemirror/view.js",
+        "@codemirror/view/dist/index.js",
+    ),
+    (
+        "/vendor/@codemirror/commands.js",
+        "@codemirror/commands/dist/index.js",
+    ),
+    (
+        "/vendor/@codemirror/language.js",
+        "@codemirror/language/dist/index.js",
+    ),
+    (
+        "/vendor/@codemirror/lint.js",
+        "@codemirror/lint/dist/index.js",
+    ),
+    (
+        "/vendor/@codemirror/streamparser.js",
+        "@codemirror/streamparser/dist/index.js",
+    ),
     ("/vendor/@lezer/common.js", "@lezer/common/dist/index.js"),
-    ("/vendor/@lezer/highlight.js", "@lezer/highlight/dist/index.js"),
-    ("/vendor/@marijn/find-cluster-break.js", "@marijn/find-cluster-break/src/index.js"),
+    (
+        "/vendor/@lezer/highlight.js",
+        "@lezer/highlight/dist/index.js",
+    ),
+    (
+        "/vendor/@marijn/find-cluster-break.js",
+        "@marijn/find-cluster-break/src/index.js",
+    ),
     ("/vendor/crelt.js", "crelt/index.js"),
     ("/vendor/style-mod.js", "style-mod/src/style-mod.js"),
     ("/vendor/w3c-keyname.js", "w3c-keyname/index.js"),

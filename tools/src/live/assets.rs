@@ -71,7 +71,10 @@ mod tests {
         for (name, url) in &map {
             let url = url.as_str().expect("a URL");
             let (kind, _) = get(url).unwrap_or_else(|| panic!("{name} maps to {url}: not served"));
-            assert!(kind.starts_with("text/javascript"), "{url} is served as {kind}");
+            assert!(
+                kind.starts_with("text/javascript"),
+                "{url} is served as {kind}"
+            );
         }
         let mut used = std::collections::BTreeSet::new();
         for (path, kind, body) in ASSETS {
@@ -83,13 +86,19 @@ mod tests {
                 if spec.starts_with('/') {
                     assert!(get(spec).is_some(), "{path} imports {spec}: not served");
                 } else {
-                    assert!(map.contains_key(spec), "{path} imports {spec}: not in the import map");
+                    assert!(
+                        map.contains_key(spec),
+                        "{path} imports {spec}: not in the import map"
+                    );
                     used.insert(spec);
                 }
             }
         }
         let unused: Vec<_> = map.keys().filter(|k| !used.contains(k.as_str())).collect();
-        assert!(unused.is_empty(), "mapped but imported by no module: {unused:?}");
+        assert!(
+            unused.is_empty(),
+            "mapped but imported by no module: {unused:?}"
+        );
         assert!(used.contains("@codemirror/view"), "{used:?}");
     }
 
