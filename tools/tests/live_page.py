@@ -383,6 +383,35 @@ def edit_and_check(p, unit, program):
     p.tab("plant")
 
 
+def editor_without_library(p, unit):
+    """A browser that cannot load CodeMirror (its view module answered 404): Edit says why
+    under its buttons, and the program view and the card go on working."""
+    step(f"uTile {unit}: CodeMirror not loaded: Edit says why, the rest of the page works")
+    other = p.page.context.browser.new_page()
+    errors = []
+    other.on("pageerror", lambda e: errors.append(str(e)))
+    other.route("**/vendor/@codemirror/view.js", lambda route: route.fulfill(status=404, body="no such page"))
+    other.goto(p.url)
+    prog = f'.program[data-unit="{unit}"]'
+    other.click("#tab-program")
+    other.wait_for_selector(f'{prog} td.op >> text="END"', timeout=T)
+    other.click(f'{prog} button[data-action="edit"]')
+    status = f'{prog} .check-status'
+    try:
+        other.wait_for_function(
+            "([s, t]) => { const e = document.querySelector(s); return e && e.textContent.includes(t); }",
+            arg=[status, "the editor cannot start: its library (CodeMirror) did not load"], timeout=T)
+    except Exception:
+        fail(f"the editor does not say it cannot start: {other.text_content(status)!r}")
+    if not other.query_selector(f'{prog} .editor[data-editor="missing"]') or other.query_selector(f"{prog} .cm-content"):
+        fail("the editor without its library is not marked missing")
+    other.click("#tab-plant")
+    other.wait_for_selector(f'.card[data-unit="{unit}"] [data-signal="online"][data-value="1"]', timeout=T)
+    if errors:
+        fail(f"the page's scripts failed without CodeMirror: {errors}")
+    other.close()
+
+
 def send_program(p, unit):
     """Send in the Program tab: a listing with a mistake sends nothing; the corrected one,
     confirmed, runs, with the fingerprint of utile asm's image shown."""
@@ -606,6 +635,7 @@ def single(p, a):
     api_failures(p, 1)
     hold_and_step(p, 1)
     edit_and_check(p, 1, a.program)
+    editor_without_library(p, 1)
     phone(p, 1)
 
     step("D8 removed and reset: uTile starts in EDIT mode and the page says so")
