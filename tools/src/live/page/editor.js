@@ -54,7 +54,8 @@ export class Editor {
     this.root.hidden = !this.root.hidden;
     if (this.root.hidden || !(await this.start())) return;
     if (this.value() === "") this.fromUtile();
-    this.view.focus();
+    // The cursor in the text at once, but not on a phone, whose keyboard would cover it.
+    if (window.matchMedia("(pointer: fine)").matches) this.view.focus();
   }
 
   // Loads cm.js and makes the editor, once; false (with the reason shown) when it cannot.
