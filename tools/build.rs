@@ -1,5 +1,5 @@
 //! Builds `utile live`'s page into the binary: every file of `src/live/page/` (HTML, CSS, JS
-//! modules) and the two libraries `./x setup` fetches from the npm registry into
+//! modules) and the libraries `./x setup` fetches from the npm registry into
 //! `src/live/page/node_modules/` (`npm ci`, from the committed lock file). Without them the
 //! build still succeeds (so `cargo fw` and the other tools never depend on npm), and
 //! `utile live` says to run `./x setup` instead of serving a page that cannot work.
@@ -7,12 +7,51 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-/// The libraries the page loads: (URL path, file under node_modules).
-const VENDOR: [(&str, &str); 4] = [
+/// The libraries the page loads, and nothing else of node_modules: (URL path, file under
+/// node_modules). CodeMirror's modules import each other by their npm names; the import map
+/// of `index.html` maps each name to its URL here (`/vendor/NAME.js`).
+const VENDOR: [(&str, &str); 16] = [
     ("/vendor/xterm.mjs", "@xterm/xterm/lib/xterm.mjs"),
     ("/vendor/xterm.css", "@xterm/xterm/css/xterm.css"),
     ("/vendor/uplot.mjs", "uplot/dist/uPlot.esm.js"),
     ("/vendor/uplot.css", "uplot/dist/uPlot.min.css"),
+    // The Program tab's editor: CodeMirror 6 and what its modules import.
+    (
+        "/vendor/@codemirror/state.js",
+        "@codemirror/state/dist/index.js",
+    ),
+    (
+        "/vendor/@codemirror/view.js",
+        "@codemirror/view/dist/index.js",
+    ),
+    (
+        "/vendor/@codemirror/commands.js",
+        "@codemirror/commands/dist/index.js",
+    ),
+    (
+        "/vendor/@codemirror/language.js",
+        "@codemirror/language/dist/index.js",
+    ),
+    (
+        "/vendor/@codemirror/lint.js",
+        "@codemirror/lint/dist/index.js",
+    ),
+    (
+        "/vendor/@codemirror/streamparser.js",
+        "@codemirror/streamparser/dist/index.js",
+    ),
+    ("/vendor/@lezer/common.js", "@lezer/common/dist/index.js"),
+    (
+        "/vendor/@lezer/highlight.js",
+        "@lezer/highlight/dist/index.js",
+    ),
+    (
+        "/vendor/@marijn/find-cluster-break.js",
+        "@marijn/find-cluster-break/src/index.js",
+    ),
+    ("/vendor/crelt.js", "crelt/index.js"),
+    ("/vendor/style-mod.js", "style-mod/src/style-mod.js"),
+    ("/vendor/w3c-keyname.js", "w3c-keyname/index.js"),
 ];
 
 fn content_type(name: &str) -> &'static str {

@@ -307,36 +307,109 @@ def hold_and_step(p, unit):
         fail("the cursor stays after Run")
 
 
-def edit_and_check(p, unit):
-    """Edit in the Program tab: a listing with mistakes shows each on its line (the messages of
-    utile asm), the corrected one none; nothing is sent while editing."""
+# The listing editor (CodeMirror 6): its editable element, its text line by line, the line
+# numbers marked with a problem and the lines whose text is underlined as wrong.
+EDITOR_LINES = "s => [...document.querySelectorAll(s + ' .cm-line')].map(l => l.textContent).join('\\n')"
+HOLDS = f"([s, t]) => ({EDITOR_LINES})(s) === t"
+MARKED = """s => ({
+  numbers: [...document.querySelectorAll(s + ' .cm-lineNumbers .cm-gutterElement.cm-problem')]
+    .map(e => e.textContent),
+  lines: [...document.querySelectorAll(s + ' .cm-line')]
+    .filter(l => l.querySelector('.cm-lintRange-error')).map(l => l.textContent),
+})"""
+
+
+def type_listing(p, prog, text):
+    """Types `text` into the editor of `prog` as a user would: a click, Ctrl+A, the keys."""
+    p.page.click(f'{prog} .cm-content[data-editor="listing"]')
+    p.page.keyboard.press("Control+a")
+    p.page.keyboard.type(text)
+    try:
+        p.page.wait_for_function(HOLDS, arg=[prog, text], timeout=T)
+    except Exception:
+        fail(f"the editor holds {p.page.evaluate(EDITOR_LINES, prog)!r}, not what was typed: {text!r}")
+
+
+def edit_and_check(p, unit, program):
+    """Edit in the Program tab (CodeMirror): a listing with mistakes typed in shows each on its
+    line (the line number marked, the text underlined, the messages of utile asm listed), the
+    corrected one none; Open puts a .utl file of the PC in the editor, Save gives it back
+    byte for byte; nothing is sent while editing."""
     prog = f'.program[data-unit="{unit}"]'
     p.tab("program")
     step(f"uTile {unit}: Edit opens the running program's listing in the editor")
     p.page.click(f'{prog} button[data-action="edit"]')
-    area = f'{prog} textarea[data-editor="listing"]'
     p.page.wait_for_function(
-        "s => { const t = document.querySelector(s); return t && t.value.includes('H6.'); }",
-        arg=area, timeout=T)
+        "s => { const t = document.querySelector(s); return t && t.textContent.includes('H6.'); }",
+        arg=f'{prog} .cm-content[data-editor="listing"]', timeout=T)
     status = f'{prog} .check-status'
     p.wait_text(status, "no problems")
     writes = api(p.url, "/api/state")["line"]["writes"]
-    step(f"uTile {unit}: a listing with mistakes: each shown on its line")
-    p.page.fill(area, "A0.\n.Y0\nBLAH\nT0 = 999\nEND\n")
+    step(f"uTile {unit}: a listing with mistakes typed in: each shown on its line")
+    type_listing(p, prog, "A0.\n.Y0\nBLAH\nT0 = 999\nEND\n")
     p.page.wait_for_selector(f'{prog} li[data-problem-line="3"]', timeout=T)
     p.wait_text(f'{prog} li[data-problem-line="3"]', "unknown word 'BLAH'")
-    p.page.wait_for_selector(f'{prog} li[data-problem-line="4"]', timeout=T)
-    p.page.wait_for_selector(f'{prog} .gutter div.bad[data-gutter-line="3"]', timeout=T)
-    if p.page.query_selector(f'{prog} .gutter div.bad[data-gutter-line="1"]'):
-        fail("a good line is marked")
+    p.wait_text(f'{prog} li[data-problem-line="4"]', "preset T0 = 999 is past 255")
+    marked = p.page.evaluate(MARKED, prog)
+    if marked != {"numbers": ["3", "4"], "lines": ["BLAH", "T0 = 999"]}:
+        fail(f"the problems are not shown on lines 3 and 4 (and only there): {marked}")
     step(f"uTile {unit}: corrected, the listing has no problems")
-    p.page.fill(area, "A0.\n.Y0\nEND\nT0 = 99\n")
+    type_listing(p, prog, "A0.\n.Y0\nEND\nT0 = 99\n")
     p.wait_text(status, "no problems")
     if p.page.query_selector(f'{prog} li[data-problem-line]'):
         fail("problems stay after the correction")
+    marked = p.page.evaluate(MARKED, prog)
+    if marked["numbers"] or marked["lines"]:
+        fail(f"lines stay marked after the correction: {marked}")
+    step(f"uTile {unit}: Open {program} from the PC, Save it back")
+    with open(program) as f:
+        text = f.read()
+    p.page.set_input_files(f'{prog} .editor-box input[type="file"]', program)
+    try:
+        p.page.wait_for_function(HOLDS, arg=[prog, text], timeout=T)
+    except Exception:
+        fail(f"Open: the editor holds {p.page.evaluate(EDITOR_LINES, prog)!r}, not {program}")
+    p.wait_text(status, "no problems")
+    with p.page.expect_download(timeout=T) as saving:
+        p.page.click(f'{prog} button[data-action="save"]')
+    saved = saving.value
+    with open(saved.path()) as f:
+        if f.read() != text:
+            fail("Save does not give back the listing Open put in the editor")
+    if saved.suggested_filename != program.rsplit("/", 1)[-1]:
+        fail(f"Save names the file {saved.suggested_filename!r}")
     if api(p.url, "/api/state")["line"]["writes"] != writes:
         fail("editing sent something to the uTile")
     p.tab("plant")
+
+
+def editor_without_library(p, unit):
+    """A browser that cannot load CodeMirror (its view module answered 404): Edit says why
+    under its buttons, and the program view and the card go on working."""
+    step(f"uTile {unit}: CodeMirror not loaded: Edit says why, the rest of the page works")
+    other = p.page.context.browser.new_page()
+    errors = []
+    other.on("pageerror", lambda e: errors.append(str(e)))
+    other.route("**/vendor/@codemirror/view.js", lambda route: route.fulfill(status=404, body="no such page"))
+    other.goto(p.url)
+    prog = f'.program[data-unit="{unit}"]'
+    other.click("#tab-program")
+    other.wait_for_selector(f'{prog} td.op >> text="END"', timeout=T)
+    other.click(f'{prog} button[data-action="edit"]')
+    status = f'{prog} .check-status'
+    try:
+        other.wait_for_function(
+            "([s, t]) => { const e = document.querySelector(s); return e && e.textContent.includes(t); }",
+            arg=[status, "the editor cannot start: its library (CodeMirror) did not load"], timeout=T)
+    except Exception:
+        fail(f"the editor does not say it cannot start: {other.text_content(status)!r}")
+    if not other.query_selector(f'{prog} .editor[data-editor="missing"]') or other.query_selector(f"{prog} .cm-content"):
+        fail("the editor without its library is not marked missing")
+    other.click("#tab-plant")
+    other.wait_for_selector(f'.card[data-unit="{unit}"] [data-signal="online"][data-value="1"]', timeout=T)
+    if errors:
+        fail(f"the page's scripts failed without CodeMirror: {errors}")
+    other.close()
 
 
 def send_program(p, unit):
@@ -344,24 +417,28 @@ def send_program(p, unit):
     confirmed, runs, with the fingerprint of utile asm's image shown."""
     prog = f'.program[data-unit="{unit}"]'
     p.tab("program")
-    area = f'{prog} textarea[data-editor="listing"]'
+    area = f'{prog} .cm-content[data-editor="listing"]'
     if not p.page.is_visible(area):
         p.page.click(f'{prog} button[data-action="edit"]')
     p.page.on("dialog", lambda d: d.accept())
     state = api(p.url, "/api/state")
     writes, old = state["line"]["writes"], state["units"][0]["program"]["fingerprint"]
     step(f"uTile {unit}: Send with a mistake in the listing: refused, nothing sent")
-    p.page.fill(area, "A1.\n.Y4\nBLAH\nKEY\nEND\n")
+    type_listing(p, prog, "A1.\n.Y4\nBLAH\nKEY\nEND\n")
     p.page.click(f'{prog} button[data-action="send"]')
     p.page.wait_for_selector(f'{prog} .send-status[data-send="error"]', timeout=T)
     p.wait_text(f'{prog} .send-status', "line 3")
+    p.wait_text(f'{prog} li[data-problem-line="3"]', "unknown word 'BLAH'")
+    marked = p.page.evaluate(MARKED, prog)
+    if marked != {"numbers": ["3"], "lines": ["BLAH"]}:
+        fail(f"the mistake is not shown on line 3 (and only there): {marked}")
     state = api(p.url, "/api/state")
     if state["line"]["writes"] != writes or state["units"][0]["program"]["fingerprint"] != old:
         fail("a listing with a mistake was sent")
     step(f"uTile {unit}: the corrected listing sent: running, utile asm's fingerprint shown")
     good = "A1.\n.Y4\nKEY\nEND\n"
     fp = ask_value("fp " + good.replace("\n", "|"))
-    p.page.fill(area, good)
+    type_listing(p, prog, good)
     p.wait_text(f'{prog} .check-status', "no problems")
     p.page.click(f'{prog} button[data-action="send"]')
     p.page.wait_for_selector(f'{prog} .send-status[data-send="ok"][data-fingerprint="{fp}"]',
@@ -418,7 +495,7 @@ def phone(p, unit):
         phone.click(f"#tab-{tab}")
         if tab == "program":
             phone.click(f'.program[data-unit="{unit}"] button[data-action="edit"]')
-            phone.wait_for_selector(f'.program[data-unit="{unit}"] .editor', timeout=T)
+            phone.wait_for_selector(f'.program[data-unit="{unit}"] .editor .cm-content', timeout=T)
             phone.wait_for_selector(f'.program[data-unit="{unit}"] td.op', timeout=T)
         got = phone.evaluate(LAYOUT, CELLS)
         if got["cells"] < (100 if tab == "plant" else 5):
@@ -557,7 +634,8 @@ def single(p, a):
     gateway(p, a.tcp, 1)
     api_failures(p, 1)
     hold_and_step(p, 1)
-    edit_and_check(p, 1)
+    edit_and_check(p, 1, a.program)
+    editor_without_library(p, 1)
     phone(p, 1)
 
     step("D8 removed and reset: uTile starts in EDIT mode and the page says so")

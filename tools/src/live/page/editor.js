@@ -1,8 +1,9 @@
-// Edit in the Program tab: the listing in a text area with a line-number gutter, checked as
-// you type by the core's own parser (POST /api/check: the messages `utile asm` gives, each on
-// its line), Open a .utl file from the PC, Save the listing, Send it to the uTile
-// (POST /api/units/{addr}/program: stop, READ, read back, STORE if ticked, EX0). A plain
-// textarea: no editor library, so nothing beyond the page's own files is served.
+// Edit in the Program tab: the listing in CodeMirror 6 (cm.js: line numbers, uTile's words
+// coloured, each problem on its line), checked as you type by the core's own parser
+// (POST /api/check: the messages `utile asm` gives, also listed below in words), Open a .utl
+// file from the PC, Save the listing, Send it to the uTile (POST /api/units/{addr}/program:
+// stop, READ, read back, STORE if ticked, EX0). CodeMirror is loaded the first time Edit
+// opens; if it cannot be, the editor says why and the rest of the page goes on.
 
 import { el, errorText } from "/dom.js";
 
@@ -17,11 +18,10 @@ export class Editor {
     this.listing = listing;
     this.timer = null;
     this.asked = 0;
-    this.gutter = el("div", { class: "gutter", "aria-hidden": "true" });
-    this.text = el("textarea", { class: "code", spellcheck: "false", wrap: "off",
-      "data-unit": addr, "data-editor": "listing", "aria-label": `listing for uTile ${addr}` });
-    this.text.addEventListener("input", () => this.changed());
-    this.text.addEventListener("scroll", () => { this.gutter.scrollTop = this.text.scrollTop; });
+    this.cm = null; // cm.js, once loaded
+    this.view = null; // its editor, once loaded
+    this.loading = null;
+    this.box = el("div", { class: "editor", "data-unit": addr });
     this.status = el("div", { class: "check-status", "data-unit": addr });
     this.problems = el("ul", { class: "problems" });
     this.store = el("input", { type: "checkbox", "data-unit": addr, "data-option": "store",
@@ -44,15 +44,40 @@ export class Editor {
         button("send", "Send", "load the listing into the uTile and start it", () => this.send()),
         el("label", { class: "store" }, this.store, " STORE"),
         this.file),
-      this.sent,
-      el("div", { class: "editor" }, this.gutter, this.text), this.status, this.problems);
+      this.sent, this.box, this.status, this.problems);
     this.root.hidden = true;
   }
 
-  // Shows or hides the editor; the first time, with the program the uTile runs.
-  toggle() {
+  // Shows or hides the editor; the first time, CodeMirror is loaded (shown, so that it can
+  // measure itself) with the program the uTile runs.
+  async toggle() {
     this.root.hidden = !this.root.hidden;
-    if (!this.root.hidden && this.text.value === "") this.fromUtile();
+    if (this.root.hidden || !(await this.start())) return;
+    if (this.value() === "") this.fromUtile();
+    // The cursor in the text at once, but not on a phone, whose keyboard would cover it.
+    if (window.matchMedia("(pointer: fine)").matches) this.view.focus();
+  }
+
+  // Loads cm.js and makes the editor, once; false (with the reason shown) when it cannot.
+  start() {
+    this.loading ??= import("/cm.js").then((cm) => {
+      this.cm = cm;
+      this.view = cm.listingEditor(this.box, () => this.changed(), {
+        "data-unit": String(this.addr), "data-editor": "listing",
+        "aria-label": `listing for uTile ${this.addr}` });
+      return true;
+    }, (e) => {
+      this.box.dataset.editor = "missing";
+      this.status.textContent = "the editor cannot start: its library (CodeMirror) did not load " +
+        `(${e.message || e}); run ./x setup, then build utile again`;
+      return false;
+    });
+    return this.loading;
+  }
+
+  // The listing's text ("" before the editor has started).
+  value() {
+    return this.view ? this.cm.text(this.view) : "";
   }
 
   fromUtile() {
@@ -62,9 +87,9 @@ export class Editor {
       .map((l) => `${String(l.n).padStart(3, "0")} ${l.name}`)].join("\n") + "\n");
   }
 
+  // The whole text replaced (checked like typing).
   set(text) {
-    this.text.value = text;
-    this.changed();
+    if (this.view) this.cm.setText(this.view, text);
   }
 
   async open() {
@@ -76,7 +101,7 @@ export class Editor {
   }
 
   save() {
-    const blob = new Blob([this.text.value], { type: "text/plain" });
+    const blob = new Blob([this.value()], { type: "text/plain" });
     const a = el("a", { href: URL.createObjectURL(blob), download: this.name || `utile-${this.addr}.utl` });
     a.click();
     URL.revokeObjectURL(a.href);
@@ -96,7 +121,7 @@ export class Editor {
       res = await fetch(`/api/units/${this.addr}/program`, {
         method: "POST",
         headers: { "content-type": "application/json" },
-        body: JSON.stringify({ listing: this.text.value, store: this.store.checked, run: true }),
+        body: JSON.stringify({ listing: this.value(), store: this.store.checked, run: true }),
       });
     } catch (e) {
       this.sent.dataset.send = "error";
@@ -116,38 +141,23 @@ export class Editor {
       `(${Math.round(done.ms)} ms)`;
   }
 
-  // The gutter follows the text; the check runs once typing pauses.
+  // The check runs once typing pauses; the problems shown stay on their lines until then.
   changed() {
-    this.numbers([]);
     this.status.textContent = "checking…";
     this.status.dataset.value = "";
     clearTimeout(this.timer);
     this.timer = setTimeout(() => this.check(), CHECK_AFTER_MS);
   }
 
-  // Line numbers 1..n, those with a problem marked (with the message as their title).
-  numbers(problems) {
-    const bad = new Map(problems.map((p) => [p.line, p.message]));
-    const n = Math.max(1, this.text.value.split("\n").length);
-    this.gutter.replaceChildren(...Array.from({ length: n }, (_, i) => {
-      const d = el("div", { text: String(i + 1), "data-gutter-line": i + 1 });
-      if (bad.has(i + 1)) {
-        d.className = "bad";
-        d.title = bad.get(i + 1);
-      }
-      return d;
-    }));
-    this.gutter.scrollTop = this.text.scrollTop;
-  }
-
   async check() {
     const asked = ++this.asked;
+    const doc = this.view.state.doc;
     let problems;
     try {
       const res = await fetch("/api/check", {
         method: "POST",
         headers: { "content-type": "application/json" },
-        body: JSON.stringify({ listing: this.text.value }),
+        body: JSON.stringify({ listing: doc.toString() }),
       });
       if (!res.ok) {
         this.status.textContent = `cannot check: ${await errorText(res)}`;
@@ -158,8 +168,8 @@ export class Editor {
       this.status.textContent = `cannot check: the server did not answer (${e})`;
       return;
     }
-    if (asked !== this.asked) return; // a newer check is on its way
-    this.numbers(problems);
+    // A newer check is on its way when the text changed meanwhile.
+    if (asked !== this.asked || !this.cm.showProblems(this.view, doc, problems)) return;
     this.problems.replaceChildren(...problems.map((p) =>
       el("li", { "data-problem-line": p.line, text: `line ${p.line}: ${p.message}` })));
     this.status.dataset.value = String(problems.length);
