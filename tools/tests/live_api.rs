@@ -535,7 +535,11 @@ fn asm_fingerprint(name: &str, text: &str) -> u16 {
 fn a_program_without_key_running_is_refused_and_nothing_is_sent() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let (_nano, live) = tank_live("live-send-no-key", &[]);
-    let fp = live.unit(1)["program"]["fingerprint"].clone();
+    // The running program's fingerprint, once the line has read it (null until then).
+    let s = live.wait("the tank's program read", T, |s| {
+        !s["units"][0]["program"]["fingerprint"].is_null()
+    });
+    let fp = s["units"][0]["program"]["fingerprint"].clone();
     let (code, body) = live.post(
         "/api/units/1/program",
         &json!({"listing": "A0.\n.Y0\nKEY\nEND\n", "store": false, "run": true}),
