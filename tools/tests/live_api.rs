@@ -773,7 +773,9 @@ fn the_ladder_of_the_running_program() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let (_nano, live) = tank_live("live-ladder-api", &[]);
     let s = live.wait("the tank's program read", T, |s| {
-        s["units"][0]["program"]["values"].as_str().is_some_and(|v| !v.is_empty())
+        s["units"][0]["program"]["values"]
+            .as_str()
+            .is_some_and(|v| !v.is_empty())
     });
     let (code, doc) = live.get("/api/units/1/ladder");
     assert_eq!(code, 200, "{doc}");
@@ -783,7 +785,10 @@ fn the_ladder_of_the_running_program() {
     let svg = doc["svg"].as_str().unwrap();
     assert!(svg.starts_with("<svg"), "{svg}");
     for signal in ["H6", "R0", "H7", "S0", "Q0", "Y0", "Y1"] {
-        assert!(svg.contains(&format!("data-signal=\"{signal}\"")), "{signal}: {svg}");
+        assert!(
+            svg.contains(&format!("data-signal=\"{signal}\"")),
+            "{signal}: {svg}"
+        );
     }
     // The tank's lines 005 Q0. 006 .Y0: the coil's power is line 5's value, the bit the pop
     // on line 6 takes, in every picture.

@@ -13,6 +13,8 @@ const cards = new Map();
 const table = new Map();
 const programs = new Map();
 const ladders = new Map();
+// The Ladder tab's views by address, for the browser test's redraw measure.
+window.utileLadders = ladders;
 const rigs = new Map();
 let terminalOpen = false;
 
