@@ -808,6 +808,8 @@ def ladder(p, a):
     if box["scroll"] > box["client"] and box["overflow"] not in ("auto", "scroll"):
         fail(f"the ladder is cut off at 390 px: {box}")
     print(f"at 390 px the ladder's box is {box['client']} px wide, the ladder {box['scroll']} px", flush=True)
+    if a.screenshot:
+        phone.screenshot(path=a.screenshot.replace(".png", "-390.png"))
     context.close()
 
 
