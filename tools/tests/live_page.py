@@ -811,6 +811,28 @@ def ladder(p, a):
     if a.screenshot:
         phone.screenshot(path=a.screenshot.replace(".png", "-390.png"))
     context.close()
+    step("another program sent: its ladder is fetched and lit; a preset written is drawn")
+    sent = p.page.evaluate("""async (listing) => {
+      const r = await fetch("/api/units/1/program", { method: "POST",
+        headers: { "content-type": "application/json" },
+        body: JSON.stringify({ listing, store: false, run: true }) });
+      return [r.status, await r.text()];
+    }""", "A1.\n.TK0\nTQ0.\n.Y4\nKEY\nEND\nT0 = 5\n")
+    if sent[0] != 200:
+        fail(f"the new program was not sent: {sent}")
+    wait_ladder(p, 1, 'g.coil[data-signal="Y4"][data-lines="3"]', "data-powered", 1)
+    wait_ladder(p, 1, 'g.contact[data-signal="A1"][data-lines="0"]', "data-closed", 1)
+    if p.page.query_selector(f'.ladder-view[data-unit="1"] {a0}'):
+        fail("the old program's rungs stay in the Ladder tab")
+    tof = '.ladder-view[data-unit="1"] g.coil[data-signal="TK0"]'
+    p.wait_text(tof, "TQ0 0.5 s")
+    wrote = p.page.evaluate("""() => fetch("/api/units/1/write", { method: "POST",
+      headers: { "content-type": "application/json" },
+      body: JSON.stringify({ signal: "T0", value: 20 }) }).then((r) => r.status)""")
+    if wrote != 200:
+        fail(f"T0 = 20 not written: {wrote}")
+    p.wait_text(tof, "TQ0 2 s")
+    ladder_consistent(p, 1, 6)
 
 
 def main():
