@@ -767,3 +767,53 @@ fn read_only_refuses_the_rig_and_without_rig_there_is_none() {
     assert_eq!(code, 404, "{body}");
     assert!(body["error"].as_str().unwrap().contains("--rig"), "{body}");
 }
+
+/// `GET /api/units/{addr}/ladder` (the Ladder tab's drawing): the running tank's rungs by the
+/// kit's drawer, its fingerprint the state's, each element with the lines of its power; the
+/// tank's `Q0. .Y0` coil lit from the state's line values shows the bit its pop takes; an
+/// address with no uTile or none at all is answered as JSON.
+#[test]
+fn the_ladder_of_the_running_program() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let (_nano, live) = tank_live("live-ladder-api", &[]);
+    let s = live.wait("the tank's program read", T, |s| {
+        s["units"][0]["program"]["values"]
+            .as_str()
+            .is_some_and(|v| !v.is_empty())
+    });
+    let (code, doc) = live.get("/api/units/1/ladder");
+    assert_eq!(code, 200, "{doc}");
+    assert_eq!(doc["fingerprint"], s["units"][0]["program"]["fingerprint"]);
+    assert_eq!(doc["consistent"], true);
+    assert_eq!(doc["counter_presets"].as_array().map(Vec::len), Some(8));
+    let svg = doc["svg"].as_str().unwrap();
+    assert!(svg.starts_with("<svg"), "{svg}");
+    for signal in ["H6", "R0", "H7", "S0", "Q0", "Y0", "Y1"] {
+        assert!(
+            svg.contains(&format!("data-signal=\"{signal}\"")),
+            "{signal}: {svg}"
+        );
+    }
+    // The tank's lines 005 Q0. 006 .Y0: the coil's power is line 5's value, the bit the pop
+    // on line 6 takes, in every picture.
+    assert!(
+        svg.contains("<g class=\"coil\" data-rung=\"2\" data-signal=\"Y0\" data-lines=\"6\" data-power-lines=\"5\">"),
+        "{svg}"
+    );
+    let values = live.state()["units"][0]["program"]["values"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    assert_eq!(values.as_bytes()[5], values.as_bytes()[6], "{values}");
+    let error = |path: &str| {
+        let (code, json) = request(live.http, "GET", path, None);
+        (code, json["error"].as_str().unwrap_or_default().to_string())
+    };
+    assert_eq!(
+        error("/api/units/9/ladder"),
+        (404, "no uTile 9 on this line".to_string())
+    );
+    let (code, why) = error("/api/units/300/ladder");
+    assert_eq!(code, 400, "{why}");
+    assert!(why.contains("\"300\""), "{why}");
+}

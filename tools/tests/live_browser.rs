@@ -152,3 +152,45 @@ fn three_utiles_on_a_bus_in_the_browser() {
     let spec = NanoSpec::bus("live-bus", 3, &tank_with_remote());
     drive("bus", &spec, &["--units", "1,2,3"], &["--units", "1,2,3"]);
 }
+
+/// A program of 256 lines (KEY on line 254, so the page may send another, and END on 255)
+/// whose rungs nearly all read A0: rung 0 is `A0. .Y0`, rung 1 `A0. ! .Y1`; then series,
+/// parallel, XOR, a split, a block (SWAP).
+fn ladder_program() -> utile_core::engine::Program {
+    let rungs: [&[&str]; 5] = [
+        &["A0.", "U0.", "AND", "V0.", "OR", ".U1"],
+        &["A0.", "!", "A1.", "OR", "DUP", ".V1", ".V2"],
+        &["A0.", "A2.", "!", "AND", "U1.", "XOR", ".U2"],
+        &["A0.", "DUP", ".U3", "A1.", "AND", ".V3"],
+        &["A0.", "A1.", "SWAP", "AND", ".U4"],
+    ];
+    let mut words = vec!["A0.", ".Y0", "A0.", "!", ".Y1"];
+    let mut k = 0;
+    while words.len() + rungs[k % rungs.len()].len() < 254 {
+        words.extend(rungs[k % rungs.len()]);
+        k += 1;
+    }
+    while words.len() < 254 {
+        words.push("NOP");
+    }
+    words.extend(["KEY", "END"]);
+    utile_kit::listing::commands(&words)
+}
+
+/// The Ladder tab (issue 29): the running program's rungs lit from each picture, the same
+/// values as the Program tab's; a rig press of A0 turns its contact and the coil Y0 off and
+/// Y1's on, the release back; the 256-line program redrawn with new power flow (its
+/// `ladder-redraw` measures, BENCHMARKS.md); at 390 px only the ladder's box scrolls; a
+/// program sent and a preset written are drawn again.
+#[test]
+fn the_ladder_tab_in_the_browser() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let (spec, rig) = NanoSpec::single("live-ladder", &ladder_program(), true).with_rig();
+    let shot = Path::new(env!("CARGO_MANIFEST_DIR")).join("../out/live-ladder.png");
+    drive(
+        "ladder",
+        &spec,
+        &["--rig", rig.to_str().unwrap()],
+        &["--screenshot", shot.to_str().unwrap()],
+    );
+}

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The real browser against `utile live` on the virtual Nano, for tools/tests/live_browser.rs.
 
-    live_page.py single|bus --url URL --tcp HOST:PORT [--units 1,2,3] [--program FILE]
+    live_page.py single|bus|ladder --url URL --tcp HOST:PORT [--units 1,2,3] [--program FILE]
                  [--screenshot PNG]
 
 Drives Debian's chromium through Playwright (headless) as a user would: reads the cards by
@@ -723,9 +723,199 @@ def bus(p, a):
         p.wait(u, "online", 1, timeout=60_000)
 
 
+# Every lit element of the Ladder tab of `unit`: data-unit, data-rung, data-powered 0/1/?,
+# a signal on each contact, coil, function and block line, and its power the AND of the
+# Program tab's values of its data-power-lines (the same picture: both are set in one event).
+LADDER_CHECK = """unit => {
+  const v = [];
+  for (const c of document.querySelectorAll(`.program[data-unit="${unit}"] td.v`)) {
+    v[Number(c.dataset.line)] = c.dataset.value || " ";
+  }
+  const els = document.querySelectorAll(`.ladder-view[data-unit="${unit}"] [data-power-lines]`);
+  const bad = [];
+  const kinds = {};
+  for (const e of els) {
+    const kind = e.getAttribute("class");
+    kinds[kind] = (kinds[kind] || 0) + 1;
+    let p = "1";
+    for (const l of e.dataset.powerLines ? e.dataset.powerLines.split(",") : []) {
+      const x = v[Number(l)];
+      if (x === "0") { p = "0"; break; }
+      if (x !== "1") p = "?";
+    }
+    const what = `${kind} ${e.dataset.signal || ""} lines ${e.dataset.lines || ""} power ${e.dataset.powerLines}`;
+    if (e.dataset.powered !== p) bad.push(`${what}: data-powered ${e.dataset.powered}, the values give ${p}`);
+    if (e.dataset.unit !== String(unit) || e.dataset.rung === undefined) bad.push(`${what}: no data-unit/data-rung`);
+    if (kind !== "wire" && !e.dataset.signal) bad.push(`${what}: no data-signal`);
+  }
+  return { n: els.length, lines: v.length, kinds, bad: bad.slice(0, 5) };
+}"""
+
+
+def ladder_attr(p, unit, selector, name):
+    e = p.page.query_selector(f'.ladder-view[data-unit="{unit}"] {selector}')
+    return e.get_attribute(name) if e else None
+
+
+def wait_ladder(p, unit, selector, name, want):
+    """Waits until the Ladder tab's element `selector` of `unit` has `name` = `want`."""
+    try:
+        p.page.wait_for_function(
+            "([s, n, w]) => { const e = document.querySelector(s); return e && e.getAttribute(n) === w; }",
+            arg=[f'.ladder-view[data-unit="{unit}"] {selector}', name, str(want)],
+            timeout=T,
+        )
+    except Exception:
+        fail(f"uTile {unit}: the ladder's {selector} has {name}={ladder_attr(p, unit, selector, name)!r}, "
+             f"not {want!r}")
+
+
+def ladder_consistent(p, unit, lines):
+    got = p.page.evaluate(LADDER_CHECK, unit)
+    if got["bad"] or got["lines"] != lines:
+        fail(f"the Ladder tab against the Program tab's values: {got}")
+    return got
+
+
+REDRAWS = """() => {
+  window.utileRedraws = [];
+  new PerformanceObserver((list) => {
+    for (const e of list.getEntries()) {
+      if (e.name === "ladder-redraw") window.utileRedraws.push(e.duration);
+    }
+  }).observe({ type: "measure" });
+}"""
+
+
+def ladder(p, a):
+    """The Ladder tab on a 256-line program whose rung 0 is `A0. .Y0` and rung 1 `A0. ! .Y1`."""
+    step("the page: one card, the program running")
+    p.wait(1, "online", 1)
+    p.page.wait_for_selector('#mode[data-value="run"]', timeout=T)
+    p.tab("program")
+    p.page.wait_for_selector('.program[data-unit="1"] td.v[data-line="255"]', timeout=T)
+    step("the Ladder tab: the running program's rungs, lit")
+    p.tab("ladder")
+    a0 = 'g.contact[data-signal="A0"][data-lines="0"]'
+    y0 = 'g.coil[data-signal="Y0"][data-lines="1"]'
+    y1 = 'g.coil[data-signal="Y1"]'
+    p.page.wait_for_selector(f'.ladder-view[data-unit="1"] svg.ladder {y1}', timeout=T)
+    p.wait(1, "A0", 1)
+    wait_ladder(p, 1, a0, "data-powered", 1)
+    wait_ladder(p, 1, a0, "data-closed", 1)
+    wait_ladder(p, 1, y0, "data-powered", 1)
+    wait_ladder(p, 1, y1, "data-powered", 0)
+    got = ladder_consistent(p, 1, 256)
+    print(f"the ladder of 256 lines: {got['n']} lit elements {got['kinds']}", flush=True)
+    if got["kinds"].get("line", 0) < 10 or got["kinds"].get("function", 0) < 5:
+        fail(f"the ladder lacks instruction blocks or function boxes: {got['kinds']}")
+    step("a rig press of A0: its contact opens, Y0's coil loses power, Y1's gets it")
+    ask("rig 0")
+    p.wait(1, "A0", 0)
+    wait_ladder(p, 1, a0, "data-powered", 0)
+    wait_ladder(p, 1, a0, "data-closed", 0)
+    wait_ladder(p, 1, y0, "data-powered", 0)
+    wait_ladder(p, 1, y1, "data-powered", 1)
+    p.wait(1, "Y0", 0)
+    ladder_consistent(p, 1, 256)
+    step("released: back")
+    ask("rig 0")
+    p.wait(1, "A0", 1)
+    wait_ladder(p, 1, a0, "data-powered", 1)
+    wait_ladder(p, 1, y0, "data-powered", 1)
+    wait_ladder(p, 1, y1, "data-powered", 0)
+    ladder_consistent(p, 1, 256)
+    step("20 pictures with new power flow: the redraw of 256 lines, ms (BENCHMARKS.md)")
+    p.page.evaluate(REDRAWS)
+    seen = set()
+    for i in range(20):
+        ask("rig 0")
+        want = "0" if i % 2 == 0 else "1"
+        wait_ladder(p, 1, a0, "data-powered", want)
+        wait_ladder(p, 1, y0, "data-powered", want)
+        seen.add(p.page.evaluate("() => window.utileLadders.get(1).values"))
+    ms = sorted(p.page.evaluate("() => window.utileRedraws"))
+    if len(ms) < 20:
+        fail(f"only {len(ms)} redraws measured for 20 changes")
+    print(f"ladder redraw, 256 lines, {got['n']} elements, new power flow from the events: "
+          f"min {ms[0]:.2f} ms, median {ms[len(ms) // 2]:.2f} ms, max {ms[-1]:.2f} ms over {len(ms)} refreshes",
+          flush=True)
+    # The same two pictures (A0 pressed, released) lit 200 times more, one after the other:
+    # on a loaded machine the fastest and the median say what a redraw costs.
+    if len(seen) < 2:
+        fail(f"A0 pressed and released gave {len(seen)} sets of line values")
+    pair = sorted(seen)[:2]
+    # Chromium's own account of its main thread (thread time: what the CPU spent, whatever
+    # else the machine runs) around the same redraws.
+    cdp = p.page.context.new_cdp_session(p.page)
+    cdp.send("Performance.enable", {"timeDomain": "threadTicks"})
+    metric = lambda: {m["name"]: m["value"] for m in cdp.send("Performance.getMetrics")["metrics"]}
+    m0 = metric()
+    ms = sorted(p.page.evaluate("""async ([a, b]) => {
+      const v = window.utileLadders.get(1);
+      const before = window.utileRedraws.length;
+      for (let i = 0; i < 100; i++) { v.light(a); v.light(b); }
+      // The observer hears of the measures after this task.
+      for (let t = 0; t < 300 && window.utileRedraws.length < before + 200; t++) {
+        await new Promise((done) => setTimeout(done, 100));
+      }
+      return window.utileRedraws.slice(before, before + 200);
+    }""", pair))
+    m1 = metric()
+    if len(ms) < 200:
+        fail(f"only {len(ms)} of 200 redraws measured")
+    cpu = {k: (m1[k] - m0[k]) * 1000 / 200 for k in ["ThreadTime", "ScriptDuration", "RecalcStyleDuration", "LayoutDuration"]}
+    print("ladder redraw, 256 lines, main thread's CPU per redraw (the 200, with the waits for the observer): "
+          + ", ".join(f"{k} {v:.2f} ms" for k, v in cpu.items()), flush=True)
+    print(f"ladder redraw, 256 lines, the two pictures again: min {ms[0]:.2f} ms, median {ms[len(ms) // 2]:.2f} ms, "
+          f"90th {ms[len(ms) * 9 // 10]:.2f} ms, max {ms[-1]:.2f} ms over {len(ms)} redraws", flush=True)
+    if a.screenshot:
+        p.page.screenshot(path=a.screenshot)
+    step("the Ladder tab at 390 x 844: the page does not scroll sideways, the ladder's box does")
+    context = p.page.context.browser.new_context(viewport={"width": 390, "height": 844})
+    phone = context.new_page()
+    phone.goto(p.url)
+    phone.wait_for_selector('.card[data-unit="1"] [data-signal="online"][data-value="1"]', timeout=T)
+    phone.click("#tab-ladder")
+    phone.wait_for_selector(f'.ladder-view[data-unit="1"] {a0}[data-powered="1"]', timeout=T)
+    got = phone.evaluate(LAYOUT, ".tabs button, .ladder-view, .ladder-box, .ladder-view h2")
+    if got["scroll"] > got["width"] or got["wide"] or got["overlaps"] or got["small"]:
+        fail(f"the Ladder tab at 390 px: {got}")
+    box = phone.evaluate("""() => { const b = document.querySelector('.ladder-box');
+        return { scroll: b.scrollWidth, client: b.clientWidth, overflow: getComputedStyle(b).overflowX }; }""")
+    if box["scroll"] > box["client"] and box["overflow"] not in ("auto", "scroll"):
+        fail(f"the ladder is cut off at 390 px: {box}")
+    print(f"at 390 px the ladder's box is {box['client']} px wide, the ladder {box['scroll']} px", flush=True)
+    if a.screenshot:
+        phone.screenshot(path=a.screenshot.replace(".png", "-390.png"))
+    context.close()
+    step("another program sent: its ladder is fetched and lit; a preset written is drawn")
+    sent = p.page.evaluate("""async (listing) => {
+      const r = await fetch("/api/units/1/program", { method: "POST",
+        headers: { "content-type": "application/json" },
+        body: JSON.stringify({ listing, store: false, run: true }) });
+      return [r.status, await r.text()];
+    }""", "A1.\n.TK0\nTQ0.\n.Y4\nKEY\nEND\nT0 = 5\n")
+    if sent[0] != 200:
+        fail(f"the new program was not sent: {sent}")
+    wait_ladder(p, 1, 'g.coil[data-signal="Y4"][data-lines="3"]', "data-powered", 1)
+    wait_ladder(p, 1, 'g.contact[data-signal="A1"][data-lines="0"]', "data-closed", 1)
+    if p.page.query_selector(f'.ladder-view[data-unit="1"] {a0}'):
+        fail("the old program's rungs stay in the Ladder tab")
+    tof = '.ladder-view[data-unit="1"] g.coil[data-signal="TK0"]'
+    p.wait_text(tof, "TQ0 0.5 s")
+    wrote = p.page.evaluate("""() => fetch("/api/units/1/write", { method: "POST",
+      headers: { "content-type": "application/json" },
+      body: JSON.stringify({ signal: "T0", value: 20 }) }).then((r) => r.status)""")
+    if wrote != 200:
+        fail(f"T0 = 20 not written: {wrote}")
+    p.wait_text(tof, "TQ0 2 s")
+    ladder_consistent(p, 1, 6)
+
+
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("scenario", choices=["single", "bus"])
+    ap.add_argument("scenario", choices=["single", "bus", "ladder"])
     ap.add_argument("--url", required=True)
     ap.add_argument("--tcp", required=True)
     ap.add_argument("--units", default="1,2,3")
@@ -740,7 +930,7 @@ def main():
         page.on("pageerror", lambda e: errors.append(str(e)))
         page.goto(a.url)
         p = Page(page, a.url.rstrip("/"))
-        (single if a.scenario == "single" else bus)(p, a)
+        {"single": single, "bus": bus, "ladder": ladder}[a.scenario](p, a)
         if errors:
             fail(f"the page's scripts failed: {errors}")
         browser.close()

@@ -1,6 +1,11 @@
 //! The ladder model drawn as SVG: one `<g class="rung" data-rung="N">` per rung or block,
 //! each element a `<g>` with `data-rung`, `data-signal` (the listing's name) and
 //! `data-lines` (its listing lines), so a page can light it from the lines' values.
+//!
+//! Every element and every wire also carries `data-power-lines`: the lines whose values,
+//! ANDed, are the power it shows (docs/LADDER.md, "Power flow"); empty is the left rail.
+//! A network's power from the rail is the value of its last line (the core's engine
+//! computes it); deeper in a rung it is the power arriving ANDed with that value.
 
 use std::fmt::Write;
 use std::string::String;
@@ -33,13 +38,14 @@ pub fn svg(ladder: &Ladder, title: &str) -> String {
                     ladder,
                 };
                 // A dry run finds the coils' column, then the drawing.
-                let (coil_col, hf) = d.flow(&r.flow, wn, 0, 0);
+                let power = [net_last(&r.net)];
+                let (coil_col, hf) = d.flow(&r.flow, wn, 0, 0, &power);
                 d.out.clear();
                 let cols = coil_col + 1;
                 let rows = hn.max(hf);
                 width = width.max(cols);
-                d.net(&r.net, 0, 0);
-                d.flow(&r.flow, wn, 0, coil_col);
+                d.net(&r.net, 0, 0, &[]);
+                d.flow(&r.flow, wn, 0, coil_col, &power);
                 let lines = rung_lines(r);
                 let _ = write!(
                     body,
@@ -72,7 +78,7 @@ pub fn svg(ladder: &Ladder, title: &str) -> String {
                 for (k, &(line, op)) in b.lines.iter().enumerate() {
                     let _ = write!(
                         body,
-                        "<text class=\"line\" data-lines=\"{line}\" data-signal=\"{}\" x=\"{}\" y=\"{}\">{line:03} {}</text>",
+                        "<text class=\"line\" data-lines=\"{line}\" data-power-lines=\"{line}\" data-rung=\"{rung_no}\" data-signal=\"{}\" x=\"{}\" y=\"{}\">{line:03} {}</text>",
                         esc(op_word(op).trim_matches('.')),
                         LEFT + 8,
                         y + 18 + k as i32 * TEXT_ROW,
@@ -158,6 +164,21 @@ fn step_lines(s: &Step, v: &mut Vec<u8>) {
     }
 }
 
+/// The line that leaves a network's value on the stack (its last).
+fn net_last(n: &Net) -> u8 {
+    match n {
+        Net::Contact(c) => c.lines.last().copied().unwrap_or(0),
+        Net::Series(_, _, l) | Net::Parallel(_, _, l) | Net::Xor(_, _, l) | Net::Not(_, l) => *l,
+    }
+}
+
+/// The power `power` ANDed with the value of `line`.
+fn then(power: &[u8], line: u8) -> Vec<u8> {
+    let mut p = power.to_vec();
+    p.push(line);
+    p
+}
+
 /// A network's size in cells (columns, rows).
 fn net_size(n: &Net) -> (i32, i32) {
     match n {
@@ -212,39 +233,49 @@ impl Draw<'_> {
         self.top + row * H + H / 2
     }
 
-    fn wire(&mut self, c0: i32, c1: i32, row: i32) {
+    /// A wire from (`c0`, `row`) to (`c1`, `row`) carrying `power`.
+    fn wire(&mut self, c0: i32, c1: i32, row: i32, power: &[u8]) {
         if c1 > c0 {
             let (x0, x1, y) = (self.px(c0), self.px(c1), self.py(row));
-            let _ = write!(
-                self.out,
-                "<line class=\"wire\" x1=\"{x0}\" y1=\"{y}\" x2=\"{x1}\" y2=\"{y}\"/>"
-            );
+            self.line(x0, y, x1, y, power);
         }
     }
 
-    fn vwire(&mut self, col: i32, r0: i32, r1: i32) {
+    /// A wire down column `col` from row `r0` to `r1` carrying `power`.
+    fn vwire(&mut self, col: i32, r0: i32, r1: i32, power: &[u8]) {
         let (x, y0, y1) = (self.px(col), self.py(r0), self.py(r1));
+        self.line(x, y0, x, y1, power);
+    }
+
+    fn line(&mut self, x0: i32, y0: i32, x1: i32, y1: i32, power: &[u8]) {
         let _ = write!(
             self.out,
-            "<line class=\"wire\" x1=\"{x}\" y1=\"{y0}\" x2=\"{x}\" y2=\"{y1}\"/>"
+            "<line class=\"wire\" data-rung=\"{}\" data-power-lines=\"{}\" \
+             x1=\"{x0}\" y1=\"{y0}\" x2=\"{x1}\" y2=\"{y1}\"/>",
+            self.rung,
+            join(power)
         );
     }
 
-    /// A group's opening tag.
-    fn open(&mut self, class: &str, signal: &str, lines: &[u8]) {
+    /// A group's opening tag; `power`: the lines of its power.
+    fn open(&mut self, class: &str, signal: &str, lines: &[u8], power: &[u8]) {
         let _ = write!(
             self.out,
-            "<g class=\"{class}\" data-rung=\"{}\" data-signal=\"{}\" data-lines=\"{}\">",
+            "<g class=\"{class}\" data-rung=\"{}\" data-signal=\"{}\" data-lines=\"{}\" \
+             data-power-lines=\"{}\">",
             self.rung,
             esc(signal),
-            join(lines)
+            join(lines),
+            join(power)
         );
     }
 
-    fn contact(&mut self, c: &Contact, col: i32, row: i32) {
+    /// A contact whose left side has `power`: the power on its right side.
+    fn contact(&mut self, c: &Contact, col: i32, row: i32, power: &[u8]) -> Vec<u8> {
         let (x, y) = (self.px(col), self.py(row));
         let cx = x + W / 2;
-        self.open("contact", &c.signal(), &c.lines);
+        let out = then(power, c.lines.last().copied().unwrap_or(0));
+        self.open("contact", &c.signal(), &c.lines, &out);
         match c.kind() {
             ContactKind::Short => {
                 let _ = write!(
@@ -303,12 +334,14 @@ impl Draw<'_> {
             y - 16,
             esc(&c.signal())
         );
+        out
     }
 
-    /// A function box (NOT, OR, XOR) in column `col` from row `r0` to `r1`.
-    fn function(&mut self, name: &str, line: u8, col: i32, r0: i32, r1: i32) {
+    /// A function box (NOT, OR, XOR) in column `col` from row `r0` to `r1`, passing `power`
+    /// on.
+    fn function(&mut self, name: &str, line: u8, col: i32, r0: i32, r1: i32, power: &[u8]) {
         let (x, y0, y1) = (self.px(col), self.py(r0), self.py(r1));
-        self.open("function", name, &[line]);
+        self.open("function", name, &[line], power);
         let _ = write!(
             self.out,
             "<rect x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\"/>\
@@ -329,82 +362,92 @@ impl Draw<'_> {
         );
     }
 
-    fn net(&mut self, n: &Net, col: i32, row: i32) {
+    /// A network whose power arrives at (`col`, `row`) as `power`: the power leaving it.
+    fn net(&mut self, n: &Net, col: i32, row: i32, power: &[u8]) -> Vec<u8> {
         match n {
-            Net::Contact(c) => self.contact(c, col, row),
-            Net::Series(a, b, _) => {
+            Net::Contact(c) => self.contact(c, col, row, power),
+            Net::Series(a, b, line) => {
                 let (wa, _) = net_size(a);
-                self.net(a, col, row);
-                self.net(b, col + wa, row);
+                let pa = self.net(a, col, row, power);
+                self.net(b, col + wa, row, &pa);
+                then(power, *line)
             }
-            Net::Parallel(a, b, _) => {
+            Net::Parallel(a, b, line) => {
                 let (wa, ha) = net_size(a);
                 let (wb, _) = net_size(b);
                 let w = wa.max(wb);
-                self.net(a, col, row);
-                self.wire(col + wa, col + w, row);
-                self.net(b, col, row + ha);
-                self.wire(col + wb, col + w, row + ha);
-                self.vwire(col, row, row + ha);
-                self.vwire(col + w, row, row + ha);
+                let out = then(power, *line);
+                let pa = self.net(a, col, row, power);
+                self.wire(col + wa, col + w, row, &pa);
+                let pb = self.net(b, col, row + ha, power);
+                self.wire(col + wb, col + w, row + ha, &pb);
+                self.vwire(col, row, row + ha, power);
+                self.vwire(col + w, row, row + ha, &out);
+                out
             }
             Net::Xor(a, b, line) => {
                 let (wa, ha) = net_size(a);
                 let (wb, _) = net_size(b);
                 let w = wa.max(wb);
-                self.net(a, col, row);
-                self.wire(col + wa, col + w, row);
-                self.net(b, col, row + ha);
-                self.wire(col + wb, col + w, row + ha);
-                self.function("XOR", *line, col + w, row, row + ha);
+                let out = then(power, *line);
+                let pa = self.net(a, col, row, power);
+                self.wire(col + wa, col + w, row, &pa);
+                let pb = self.net(b, col, row + ha, power);
+                self.wire(col + wb, col + w, row + ha, &pb);
+                self.function("XOR", *line, col + w, row, row + ha, &out);
+                out
             }
             Net::Not(a, line) => {
                 let (wa, _) = net_size(a);
-                self.net(a, col, row);
-                self.function("NOT", *line, col + wa, row, row);
+                let out = then(power, *line);
+                self.net(a, col, row, power);
+                self.function("NOT", *line, col + wa, row, row, &out);
+                out
             }
         }
     }
 
-    /// A flow whose power arrives at (`col`, `row`), its coils in column `cc`: the column
-    /// its coils need at least, and its rows.
-    fn flow(&mut self, f: &Flow, col: i32, row: i32, cc: i32) -> (i32, i32) {
+    /// A flow whose power arrives at (`col`, `row`) as `power`, its coils in column `cc`:
+    /// the column its coils need at least, and its rows.
+    fn flow(&mut self, f: &Flow, col: i32, row: i32, cc: i32, power: &[u8]) -> (i32, i32) {
         match f {
             Flow::Coil(c) => {
-                self.wire(col, cc, row);
-                self.coil(c, cc, row);
+                self.wire(col, cc, row, power);
+                self.coil(c, cc, row, power);
                 (col, 1)
             }
             Flow::Then(Step::Tap(tap, _), rest) => {
-                let (n1, h1) = self.flow(rest, col, row, cc);
-                let (n2, h2) = self.flow(tap, col, row + h1, cc);
-                self.vwire(col, row, row + h1);
+                let (n1, h1) = self.flow(rest, col, row, cc, power);
+                let (n2, h2) = self.flow(tap, col, row + h1, cc, power);
+                self.vwire(col, row, row + h1, power);
                 (n1.max(n2), h1 + h2)
             }
             Flow::Then(s, rest) => {
-                let (w, h) = self.step(s, col, row, cc);
-                let (n, hr) = self.flow(rest, col + w, row, cc);
+                let (w, h, out) = self.step(s, col, row, cc, power);
+                let (n, hr) = self.flow(rest, col + w, row, cc, &out);
                 (n, h.max(hr))
             }
             Flow::Split(a, b, _) => {
-                let (n1, h1) = self.flow(a, col, row, cc);
-                let (n2, h2) = self.flow(b, col, row + h1, cc);
-                self.vwire(col, row, row + h1);
+                let (n1, h1) = self.flow(a, col, row, cc, power);
+                let (n2, h2) = self.flow(b, col, row + h1, cc, power);
+                self.vwire(col, row, row + h1, power);
                 (n1.max(n2), h1 + h2)
             }
         }
     }
 
-    /// One step on the power at (`col`, `row`): its columns and rows.
-    fn step(&mut self, s: &Step, col: i32, row: i32, cc: i32) -> (i32, i32) {
+    /// One step on the power `power` at (`col`, `row`): its columns and rows, and the power
+    /// leaving it.
+    fn step(&mut self, s: &Step, col: i32, row: i32, cc: i32, power: &[u8]) -> (i32, i32, Vec<u8>) {
         match s {
-            Step::And(n, _) => {
-                self.net(n, col, row);
-                net_size(n)
+            Step::And(n, line) => {
+                self.net(n, col, row, power);
+                let (w, h) = net_size(n);
+                (w, h, vec![*line])
             }
             Step::Not(line) => {
-                self.function("NOT", *line, col, row, row);
-                (1, 1)
+                self.function("NOT", *line, col, row, row, &[*line]);
+                (1, 1, vec![*line])
             }
             Step::Or(n, line) | Step::Xor(n, line) => {
                 let name = if matches!(s, Step::Or(..)) {
@@ -413,19 +456,19 @@ impl Draw<'_> {
                     "XOR"
                 };
                 let (wn, hn) = net_size(n);
-                self.wire(col, col + wn, row);
+                self.wire(col, col + wn, row, power);
                 // The operand's contacts are powered from the left rail.
                 self.out.push_str("<g class=\"operand\">");
-                self.wire(0, col, row + 1);
-                self.net(n, col, row + 1);
+                self.wire(0, col, row + 1, &[]);
+                self.net(n, col, row + 1, &[]);
                 self.out.push_str("</g>");
-                self.function(name, *line, col + wn, row, row + 1);
-                (wn + 1, 1 + hn)
+                self.function(name, *line, col + wn, row, row + 1, &[*line]);
+                (wn + 1, 1 + hn, vec![*line])
             }
             Step::Tap(f, _) => {
-                let (_, h) = self.flow(f, col, row + 1, cc);
-                self.vwire(col, row, row + 1);
-                (0, 1 + h)
+                let (_, h) = self.flow(f, col, row + 1, cc, power);
+                self.vwire(col, row, row + 1, power);
+                (0, 1 + h, power.to_vec())
             }
             Step::Merge(steps, op, _, join) => {
                 let name = match *op {
@@ -433,44 +476,48 @@ impl Draw<'_> {
                     utile_core::opcodes::OR => "OR",
                     _ => "XOR",
                 };
-                let (wb, hb) = self.steps(steps, col, row + 1, cc);
-                self.wire(col, col + wb, row);
-                self.vwire(col, row, row + 1);
-                self.function(name, *join, col + wb, row, row + 1);
-                (wb + 1, 1 + hb)
+                let (wb, hb) = self.steps(steps, col, row + 1, cc, power);
+                self.wire(col, col + wb, row, power);
+                self.vwire(col, row, row + 1, power);
+                self.function(name, *join, col + wb, row, row + 1, &[*join]);
+                (wb + 1, 1 + hb, vec![*join])
             }
         }
     }
 
-    /// A chain of steps from (`col`, `row`), its taps drawn below it: columns and rows.
-    fn steps(&mut self, steps: &[Step], col: i32, row: i32, cc: i32) -> (i32, i32) {
+    /// A chain of steps from (`col`, `row`) on the power `power`, its taps drawn below it:
+    /// columns and rows.
+    fn steps(&mut self, steps: &[Step], col: i32, row: i32, cc: i32, power: &[u8]) -> (i32, i32) {
         let (mut c, mut h) = (col, 1);
+        let mut p = power.to_vec();
         let mut taps = Vec::new();
         for s in steps {
             if let Step::Tap(f, _) = s {
-                taps.push((f, c));
+                taps.push((f, c, p.clone()));
                 continue;
             }
-            let (w, hs) = self.step(s, c, row, cc);
+            let (w, hs, out) = self.step(s, c, row, cc, &p);
             c += w;
             h = h.max(hs);
+            p = out;
         }
         if c == col {
-            self.wire(col, col + 1, row);
+            self.wire(col, col + 1, row, &p);
             c += 1;
         }
-        for (f, tc) in taps {
-            let (_, hf) = self.flow(f, tc, row + h, cc);
-            self.vwire(tc, row, row + h);
+        for (f, tc, tp) in taps {
+            let (_, hf) = self.flow(f, tc, row + h, cc, &tp);
+            self.vwire(tc, row, row + h, &tp);
             h += hf;
         }
         (c - col, h)
     }
 
-    fn coil(&mut self, c: &Coil, col: i32, row: i32) {
+    /// A coil whose input has `power`.
+    fn coil(&mut self, c: &Coil, col: i32, row: i32, power: &[u8]) {
         let (x, y) = (self.px(col), self.py(row));
         let cx = x + W / 2;
-        self.open("coil", &c.signal(), &c.lines);
+        self.open("coil", &c.signal(), &c.lines, power);
         let m = usize::from(c.unit());
         let (mark, note) = match c.kind() {
             CoilKind::Plain => ("", String::new()),

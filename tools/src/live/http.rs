@@ -22,6 +22,7 @@ use super::api::{ApiError, KeysSent, TrendDoc, WriteBody, WriteDone};
 use super::assets;
 use super::check;
 use super::hub::{Hub, Input};
+use super::ladder;
 use super::queue::{Done, Job, Origin};
 use super::rig;
 use super::rtu;
@@ -48,6 +49,7 @@ pub fn router(hub: Arc<Hub>) -> Router {
         .route("/api/check", post(check::post))
         .route("/api/units/{addr}/program", get(program).post(send::post))
         .route("/api/units/{addr}/trend", get(trend))
+        .route("/api/units/{addr}/ladder", get(ladder::get))
         .route("/api/terminal", get(terminal).post(keys))
         .fallback(file)
         .method_not_allowed_fallback(wrong_method)

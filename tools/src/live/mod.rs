@@ -18,6 +18,7 @@
 //! | `unit.rs` | one uTile as the line's owner keeps it: snapshot, presets, program, back-off, link health, trend |
 //! | `signals.rs` | the signal table: each name, where it is read, how it is written, its range and unit |
 //! | `program.rs` | the program, live: listing and each line's value from the core's engine |
+//! | `ladder.rs` | the program drawn as ladder for the page's Ladder tab (`GET /api/units/{addr}/ladder`), lit from the line values |
 //! | `view.rs` | the immutable view the line publishes after each transaction (the API's state) |
 //! | `hub.rs` | where the parts meet: the line's inputs, the published view, the state's JSON, the terminal, the gateway's counters |
 //! | `api.rs` | the API's documents and its one error type (JSON `{"error": …}`) |
@@ -37,6 +38,7 @@ pub mod gateway;
 pub mod guard;
 pub mod http;
 pub mod hub;
+pub mod ladder;
 pub mod line;
 pub mod line_use;
 pub mod mqtt;

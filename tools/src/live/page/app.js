@@ -3,6 +3,7 @@
 // view and the terminal, and says in words what a user must do.
 
 import { Card } from "/card.js";
+import { LadderView } from "/ladder.js";
 import { ProgramView } from "/program.js";
 import { RigPanel } from "/rig.js";
 import { openTerminal } from "/terminal.js";
@@ -11,6 +12,9 @@ const cards = new Map();
 // The signal table (/api/signals) by name.
 const table = new Map();
 const programs = new Map();
+const ladders = new Map();
+// The Ladder tab's views by address, for the browser test's redraw measure.
+window.utileLadders = ladders;
 const rigs = new Map();
 let terminalOpen = false;
 
@@ -23,6 +27,7 @@ function showTab(name) {
   for (const s of document.querySelectorAll(".tab-page")) {
     s.hidden = s.id !== name;
   }
+  if (name === "ladder") for (const v of ladders.values()) v.refresh();
   if (name === "terminal" && !terminalOpen) {
     terminalOpen = true;
     openTerminal($("xterm"));
@@ -84,10 +89,15 @@ function update(state) {
       const view = new ProgramView(u.addr);
       programs.set(u.addr, view);
       $("program").append(view.root);
+      const ladder = new LadderView(u.addr);
+      ladders.set(u.addr, ladder);
+      $("ladder").append(ladder.root);
     }
     card.update(u);
     rigs.get(u.addr).update(state.rig);
     programs.get(u.addr).update(u);
+    // Last: its redraw measure holds the style and layout of this refresh.
+    ladders.get(u.addr).update(u);
   }
 }
 
