@@ -31,12 +31,23 @@ const READ_ERROR: &[u8] = text::READ_ERROR.as_bytes();
 const FOR_MENU: &[u8] = text::FOR_MENU.as_bytes();
 /// WRITE's end-of-file record.
 const EOF_RECORD: &[u8] = b":00000001FF";
+/// READ's and WRITE's status line, the last text of their screens.
+const TRANSFER: &[u8] = text::TRANSFER.as_bytes();
+/// Where READ's screen leaves the cursor (its status line, column 2), after [`TRANSFER`].
+const READ_READY: &[u8] = b"\x1b[24;2H";
+/// Where WRITE's screen leaves the cursor (row 11), after [`TRANSFER`].
+const WRITE_READY: &[u8] = b"\x1b[11H";
+/// The cursor parked at the prompt (row 22; the column and `H` follow): the last bytes the
+/// editor sends when it has drawn its page or answered a command there.
+const PARK: &[u8] = b"\x1b[22;";
 /// STORE's results.
 const STORED: &[u8] = text::STORED.as_bytes();
 const STORE_FAILED: &[u8] = text::STORE_FAILED.as_bytes();
 
 /// Ctrl-L: the editor draws its whole screen again.
 const REDRAW: u8 = 0x0C;
+/// The longest wait for a whole screen (about 1,100 bytes, 0.6 s at 19200 baud).
+const DRAWN: Duration = Duration::from_secs(3);
 
 /// How a session starts.
 #[derive(Clone, Copy, Debug)]
@@ -204,9 +215,11 @@ impl Session {
             path: path.to_string(),
         };
         if running {
+            // `/` and a key leave the editor at its page: nothing to redraw.
             s.stop(progress)?;
+        } else {
+            s.find_page(Options::default(), progress)?;
         }
-        s.find_page(Options::default(), progress)?;
         Ok(s)
     }
 
@@ -218,10 +231,13 @@ impl Session {
     /// EX0: the program starts, and the RUN screen must say so.
     pub fn run(&mut self, progress: Progress) -> Result<(), LinkError> {
         progress("EX0");
-        self.command("EX0", RUNNING)
+        self.command("EX0", RUNNING)?;
+        progress("running");
+        Ok(())
     }
 
-    /// Ctrl-L, and the page must be what it draws.
+    /// Ctrl-L, and the page must be what it draws, to its end (the cursor parked at the
+    /// prompt).
     fn find_page(&mut self, opts: Options, progress: Progress) -> Result<(), LinkError> {
         let from = self.port.seen.len();
         self.port.send(&[REDRAW])?;
@@ -243,48 +259,68 @@ impl Session {
             }
             return Err(LinkError::NoAnswer(self.path.clone()));
         }
-        self.port
-            .settle(Duration::from_millis(300), Duration::from_secs(3))?;
-        let redraw = &self.port.seen[from..];
-        if find(redraw, PAGE).is_none() {
+        let page = self.port.wait_for(from, &[PAGE], DRAWN)?;
+        let parked = match page {
+            Some((_, end)) => self.wait_parked(end, DRAWN)?,
+            None => None,
+        };
+        if parked.is_none() {
             return Err(LinkError::NotAtPage {
                 path: self.path.clone(),
                 shows: shown(&self.port.seen, from),
             });
         }
+        progress("at the editor's page");
         Ok(())
     }
 
-    /// `/` stops the program; a key leaves `Strike any key`. [`Session::find_page`] follows.
+    /// Waits for the cursor parked at the prompt after offset `from` (the end of what the
+    /// editor draws for a key on its page); the offset past it, or `None` after `timeout`.
+    fn wait_parked(&mut self, from: usize, timeout: Duration) -> Result<Option<usize>, LinkError> {
+        let Some((_, at)) = self.port.wait_for(from, &[PARK], timeout)? else {
+            return Ok(None);
+        };
+        // The column's digits and `H`: a few bytes.
+        Ok(self
+            .port
+            .wait_for(at, &[b"H"], Duration::from_secs(1))?
+            .map(|(_, end)| end))
+    }
+
+    /// `/` stops the program and the editor shows `Strike any key`; a key returns to the
+    /// page (its status line cleared, or the whole screen drawn when the RUN screen was still
+    /// behind), the cursor parked at the prompt.
     fn stop(&mut self, progress: Progress) -> Result<(), LinkError> {
         progress("stopping the running program (--stop)");
         let from = self.port.seen.len();
         self.port.send(b"/")?;
-        if self
+        let Some((_, struck)) = self
             .port
             .wait_for(from, &[STRIKE], Duration::from_secs(2))?
-            .is_none()
-        {
+        else {
             return Err(LinkError::DidNotStop(self.path.clone()));
-        }
-        self.port
-            .settle(Duration::from_millis(200), Duration::from_secs(2))?;
-        // The key returns to the page (redrawn by the Ctrl-L that follows).
+        };
         self.port.send(b" ")?;
-        self.port
-            .settle(Duration::from_millis(300), Duration::from_secs(3))?;
+        if self.wait_parked(struck, DRAWN)?.is_none() {
+            return Err(LinkError::NoAnswerTo {
+                cmd: "a key after `/`",
+                shows: shown(&self.port.seen, from),
+            });
+        }
+        progress("stopped: at the editor's page");
         Ok(())
     }
 
-    /// Types `cmd` and CR on the page; waits for the screen `expect` (or an error).
-    fn command(&mut self, cmd: &'static str, expect: &[u8]) -> Result<(), LinkError> {
+    /// Types `cmd` and CR on the page; waits for the screen `expect` (or an error). The
+    /// offset just past `expect`.
+    fn command(&mut self, cmd: &'static str, expect: &[u8]) -> Result<usize, LinkError> {
         let from = self.port.seen.len();
         self.port.send(format!("{cmd}\r").as_bytes())?;
         match self
             .port
             .wait_for(from, &[expect, UNRECOGNIZED], Duration::from_secs(3))?
         {
-            Some((0, _)) => Ok(()),
+            Some((0, end)) => Ok(end),
             Some(_) => Err(LinkError::NotTaken(cmd)),
             None => Err(LinkError::NoAnswerTo {
                 cmd,
@@ -293,19 +329,31 @@ impl Session {
         }
     }
 
-    /// CR after a transfer: back to the page.
-    fn back_to_page(&mut self) -> Result<(), LinkError> {
+    /// The end of READ's or WRITE's screen after offset `from`: its status line, then the
+    /// cursor put at `ready`. Not seen within a second, the screen is taken as drawn: the
+    /// prompt already said the command was taken.
+    fn transfer_screen(&mut self, from: usize, ready: &[u8]) -> Result<(), LinkError> {
+        let wait = Duration::from_secs(1);
+        if let Some((_, end)) = self.port.wait_for(from, &[TRANSFER], wait)? {
+            self.port.wait_for(end, &[ready], wait)?;
+        }
+        Ok(())
+    }
+
+    /// CR after a transfer: back to the page, drawn whole (about 1,100 bytes) to its end.
+    fn back_to_page(&mut self, progress: Progress) -> Result<(), LinkError> {
         let from = self.port.seen.len();
         self.port.send(b"\r")?;
-        if self
-            .port
-            .wait_for(from, &[PAGE], Duration::from_secs(3))?
-            .is_none()
-        {
+        let Some((_, end)) = self.port.wait_for(from, &[PAGE], DRAWN)? else {
+            return Err(LinkError::NotBackToPage);
+        };
+        if self.wait_parked(end, DRAWN)?.is_none() {
             return Err(LinkError::NotBackToPage);
         }
-        self.port
-            .settle(Duration::from_millis(300), Duration::from_secs(3))?;
+        progress(&format!(
+            "back at the page ({} bytes drawn)",
+            self.port.seen.len() - from
+        ));
         Ok(())
     }
 
@@ -329,18 +377,22 @@ impl Session {
             .split(|&b| b == b'\n')
             .filter(|l| !l.is_empty())
             .collect();
-        self.command("READ", READ_PROMPT)?;
-        // The rest of READ's screen, then the records as fast as the line takes them.
-        self.port
-            .settle(Duration::from_millis(150), Duration::from_secs(2))?;
+        let prompt = self.command("READ", READ_PROMPT)?;
+        // The rest of READ's screen (its status line), then the records as fast as the line
+        // takes them: one write.
+        self.transfer_screen(prompt, READ_READY)?;
         let from = self.port.seen.len();
-        for (i, rec) in records.iter().enumerate() {
-            self.port.send(rec)?;
-            self.port.send(b"\n")?;
-            if (i + 1) % 5 == 0 || i + 1 == records.len() {
-                progress(&format!("sent record {}/{}", i + 1, records.len()));
-            }
+        let mut file = Vec::with_capacity(hex.len());
+        for rec in &records {
+            file.extend_from_slice(rec);
+            file.push(b'\n');
         }
+        self.port.send(&file)?;
+        progress(&format!(
+            "sent {} records ({} bytes)",
+            records.len(),
+            file.len()
+        ));
         // READ checks the file, drains 200 ms of quiet, then shows its result.
         let Some((_, end)) = self
             .port
@@ -350,6 +402,7 @@ impl Session {
         };
         let answer = &self.port.seen[from..end];
         let result = if find(answer, READ_DONE).is_some() {
+            progress("READ took the file");
             Ok(())
         } else if let Some(at) = find(answer, READ_ERROR) {
             let why = &answer[at + READ_ERROR.len()..answer.len() - FOR_MENU.len()];
@@ -359,7 +412,7 @@ impl Session {
         } else {
             Err(LinkError::StrangeAnswer(shown(answer, 0)))
         };
-        self.back_to_page()?;
+        self.back_to_page(progress)?;
         result?;
         Ok(hex)
     }
@@ -367,9 +420,8 @@ impl Session {
     /// The program through WRITE: the program and the records as uTile sent them. A file
     /// that does not check (record checksums, image CRC) is refused.
     pub fn pull(&mut self, progress: Progress) -> Result<(Program, Vec<u8>), LinkError> {
-        self.command("WRITE", WRITE_PROMPT)?;
-        self.port
-            .settle(Duration::from_millis(150), Duration::from_secs(2))?;
+        let prompt = self.command("WRITE", WRITE_PROMPT)?;
+        self.transfer_screen(prompt, WRITE_READY)?;
         let from = self.port.seen.len();
         self.port.send(b"\r")?;
         let Some((_, end)) = self
@@ -394,7 +446,7 @@ impl Session {
             hex.split(|&b| b == b'\n').count() - 1
         ));
         let prog = listing::from_hex(&hex).map_err(LinkError::BadFile)?;
-        self.back_to_page()?;
+        self.back_to_page(progress)?;
         Ok((prog, hex))
     }
 
@@ -408,7 +460,10 @@ impl Session {
             &[STORED, STORE_FAILED, UNRECOGNIZED],
             Duration::from_secs(5),
         )? {
-            Some((0, _)) => Ok(()),
+            Some((0, _)) => {
+                progress("stored");
+                Ok(())
+            }
             Some((1, _)) => Err(LinkError::StoreFailed),
             _ => Err(LinkError::StoreUnconfirmed(shown(&self.port.seen, from))),
         }
