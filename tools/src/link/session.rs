@@ -469,3 +469,96 @@ impl Session {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::link::port::find_last;
+    use utile_core::editor::{Editor, Mode};
+    use utile_core::engine::Engine;
+    use utile_kit::sim::SimBoard;
+
+    /// The core's editor on a host board: what the session talks to on a uTile.
+    struct Editing {
+        ed: Editor,
+        eng: Engine,
+        b: SimBoard,
+    }
+
+    impl Editing {
+        fn new() -> Self {
+            let mut e = Editing {
+                ed: Editor::new(),
+                eng: Engine::default(),
+                b: SimBoard::new(),
+            };
+            e.ed.boot(&e.eng, &mut e.b);
+            e
+        }
+
+        /// What the editor sends for `keys`; the mode it is left in.
+        fn keys(&mut self, keys: &[u8]) -> (Vec<u8>, Mode) {
+            let from = self.b.tx_log.len();
+            let mut mode = Mode::Edit;
+            for &k in keys {
+                mode = self.ed.key(k, &mut self.eng, &mut self.b);
+            }
+            (self.b.tx_log[from..].to_vec(), mode)
+        }
+
+        /// What the editor sends while nothing comes for `ms`.
+        fn quiet(&mut self, ms: u32) -> Vec<u8> {
+            let from = self.b.tx_log.len();
+            for _ in 0..ms {
+                self.b.advance_ms(1);
+                self.ed.idle(&mut self.eng, &mut self.b);
+            }
+            self.b.tx_log[from..].to_vec()
+        }
+    }
+
+    /// `out` ends with the cursor parked at the prompt (nothing after it), after `text`.
+    fn parked_after(out: &[u8], text: &[u8]) -> bool {
+        let (Some(t), Some(p)) = (find(out, text), find_last(out, PARK)) else {
+            return false;
+        };
+        t < p && out.ends_with(b"H") && out.len() - p <= PARK.len() + 3
+    }
+
+    #[test]
+    fn the_session_waits_for_where_the_editor_ends_each_screen() {
+        let mut e = Editing::new();
+        // Ctrl-L: the page, drawn whole, ends parked at the prompt.
+        let (page, _) = e.keys(&[REDRAW]);
+        assert!(find(&page, TITLE).is_some() && parked_after(&page, PAGE));
+        // READ's screen ends with its status line and the cursor at its start.
+        let (read, _) = e.keys(b"READ\r");
+        let ready = [TRANSFER, b"\x1b[K", READ_READY].concat();
+        assert!(find(&read, READ_PROMPT).is_some() && read.ends_with(&ready));
+        // A file, its answer after READ's quiet, and CR: the page again, parked.
+        let prog = utile_kit::listing::commands(&["A0.", ".Y0", "KEY", "END"]);
+        let (during, _) = e.keys(&listing::to_hex(&prog));
+        assert!(during.is_empty());
+        let answer = e.quiet(300);
+        assert!(find(&answer, READ_DONE).is_some() && answer.ends_with(b"\x1b[K"));
+        let (back, _) = e.keys(b"\r");
+        assert!(find(&back, TITLE).is_some() && parked_after(&back, PAGE));
+        // WRITE's screen ends with its status line and the cursor on row 11.
+        let (write, _) = e.keys(b"WRITE\r");
+        let ready = [TRANSFER, b"\x1b[K", WRITE_READY].concat();
+        assert!(find(&write, WRITE_PROMPT).is_some() && write.ends_with(&ready));
+        e.keys(b"/");
+        // EX0, `/` (KEY's break), a key: back at the page without a redraw, parked.
+        let (run, mode) = e.keys(b"EX0\r");
+        assert!(find(&run, RUNNING).is_some() && mode == Mode::Run);
+        let from = e.b.tx_log.len();
+        e.ed.on_break(&mut e.eng, &mut e.b);
+        assert!(find(&e.b.tx_log[from..], STRIKE).is_some());
+        let (key, mode) = e.keys(b" ");
+        assert!(mode == Mode::Edit && find(&key, TITLE).is_none());
+        assert!(key.starts_with(b"\x1b[24;") && parked_after(&key, b"\x1b[K"));
+        // The page is there: READ is taken.
+        let (read, _) = e.keys(b"READ\r");
+        assert!(find(&read, READ_PROMPT).is_some());
+    }
+}
