@@ -46,8 +46,9 @@ const STORE_FAILED: &[u8] = text::STORE_FAILED.as_bytes();
 
 /// Ctrl-L: the editor draws its whole screen again.
 const REDRAW: u8 = 0x0C;
-/// The longest wait for a whole screen (about 1,100 bytes, 0.6 s at 19200 baud).
-const DRAWN: Duration = Duration::from_secs(3);
+/// The longest wait for a whole screen (about 1,100 bytes, 0.6 s at 19200 baud; a time-out
+/// only, with room for a slow simulation).
+const DRAWN: Duration = Duration::from_secs(5);
 
 /// How a session starts.
 #[derive(Clone, Copy, Debug)]
