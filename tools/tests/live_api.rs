@@ -643,7 +643,8 @@ fn send_checks_stops_loads_verifies_stores_and_starts() {
     );
     std::thread::sleep(Duration::from_secs(3));
     let tl1 = live.unit(1)["values"]["TL0"].as_u64().unwrap();
-    let pace = (tl0 - tl1) as f64 / 10.0 / w0.elapsed().as_secs_f64();
+    // T0's time left counts down from 255 tenths and restarts.
+    let pace = ((tl0 + 255 - tl1) % 255) as f64 / 10.0 / w0.elapsed().as_secs_f64();
     eprintln!(
         "send of 256 lines: {} ms on the line; the simulation then ran at {pace:.2}× the clock",
         body["ms"]
