@@ -618,6 +618,41 @@ fn send_checks_stops_loads_verifies_stores_and_starts() {
             && s["units"][0]["values"]["scans"].as_u64() < Some(1_000_000)
             && s["units"][0]["program"]["fingerprint"] == u64::from(want)
     });
+    // A whole 256-line program (a free-running clock first: T0 = 25.5 s, its time left in
+    // the snapshot), not stored.
+    let mut long = String::from("TQ0.\n!\n.TK0\n");
+    for i in 0..252 {
+        long.push_str(&match i % 2 {
+            0 => format!("A{}.\n", i / 2 % 6),
+            _ => format!(".V{}\n", i / 2 % 8),
+        });
+    }
+    long.push_str("END\nT0 = 255\n");
+    assert_eq!(
+        utile_kit::listing::parse("long", &long).unwrap().uf[255],
+        utile_core::opcodes::END
+    );
+    let long_fp = asm_fingerprint("live-send-long", &long);
+    let (code, body) = send(&long, false);
+    assert_eq!(code, 200, "{body}");
+    assert_eq!(body["fingerprint"].as_u64(), Some(u64::from(long_fp)));
+    let s = live.wait("uTile 1 runs the 256-line program", T, |s| {
+        s["units"][0]["program"]["fingerprint"] == u64::from(long_fp)
+            && s["units"][0]["program"]["consistent"] == true
+    });
+    // The simulation's pace (its clock against the wall's), for the figure's meaning.
+    let (tl0, w0) = (
+        s["units"][0]["values"]["TL0"].as_u64().unwrap(),
+        Instant::now(),
+    );
+    std::thread::sleep(Duration::from_secs(3));
+    let tl1 = live.unit(1)["values"]["TL0"].as_u64().unwrap();
+    // T0's time left counts down from 255 tenths and restarts.
+    let pace = ((tl0 + 255 - tl1) % 255) as f64 / 10.0 / w0.elapsed().as_secs_f64();
+    eprintln!(
+        "send of 256 lines: {} ms on the line; the simulation then ran at {pace:.2}× the clock",
+        body["ms"]
+    );
     // Read-only refuses a send.
     drop(live);
     let live = Live::start(&spec.link, &["--read-only"]);
@@ -665,8 +700,9 @@ fn the_port_lost_mid_send_is_answered_with_what_happened() {
             .unwrap_or("")
             .starts_with("sending a program")
     });
-    // The stop and the READ command take about a second: then the records are on their way.
-    std::thread::sleep(Duration::from_millis(1500));
+    // The stop and READ's screen take about 0.2 s: then the records are on their way (0.45 s
+    // of them at 19200 baud). Wherever the port goes, the answer says so (504).
+    std::thread::sleep(Duration::from_millis(400));
     drop(nano);
     let (code, answer) = send.join().unwrap();
     assert_eq!(code, 504, "{answer}");

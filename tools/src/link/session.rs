@@ -31,12 +31,24 @@ const READ_ERROR: &[u8] = text::READ_ERROR.as_bytes();
 const FOR_MENU: &[u8] = text::FOR_MENU.as_bytes();
 /// WRITE's end-of-file record.
 const EOF_RECORD: &[u8] = b":00000001FF";
+/// READ's and WRITE's status line, the last text of their screens.
+const TRANSFER: &[u8] = text::TRANSFER.as_bytes();
+/// Where READ's screen leaves the cursor (its status line, column 2), after [`TRANSFER`].
+const READ_READY: &[u8] = b"\x1b[24;2H";
+/// Where WRITE's screen leaves the cursor (row 11), after [`TRANSFER`].
+const WRITE_READY: &[u8] = b"\x1b[11H";
+/// The cursor parked at the prompt (row 22; the column and `H` follow): the last bytes the
+/// editor sends when it has drawn its page or answered a command there.
+const PARK: &[u8] = b"\x1b[22;";
 /// STORE's results.
 const STORED: &[u8] = text::STORED.as_bytes();
 const STORE_FAILED: &[u8] = text::STORE_FAILED.as_bytes();
 
 /// Ctrl-L: the editor draws its whole screen again.
 const REDRAW: u8 = 0x0C;
+/// The longest wait for a whole screen (about 1,100 bytes, 0.6 s at 19200 baud; a time-out
+/// only, with room for a slow simulation).
+const DRAWN: Duration = Duration::from_secs(5);
 
 /// How a session starts.
 #[derive(Clone, Copy, Debug)]
@@ -204,9 +216,11 @@ impl Session {
             path: path.to_string(),
         };
         if running {
+            // `/` and a key leave the editor at its page: nothing to redraw.
             s.stop(progress)?;
+        } else {
+            s.find_page(Options::default(), progress)?;
         }
-        s.find_page(Options::default(), progress)?;
         Ok(s)
     }
 
@@ -218,10 +232,13 @@ impl Session {
     /// EX0: the program starts, and the RUN screen must say so.
     pub fn run(&mut self, progress: Progress) -> Result<(), LinkError> {
         progress("EX0");
-        self.command("EX0", RUNNING)
+        self.command("EX0", RUNNING)?;
+        progress("running");
+        Ok(())
     }
 
-    /// Ctrl-L, and the page must be what it draws.
+    /// Ctrl-L, and the page must be what it draws, to its end (the cursor parked at the
+    /// prompt).
     fn find_page(&mut self, opts: Options, progress: Progress) -> Result<(), LinkError> {
         let from = self.port.seen.len();
         self.port.send(&[REDRAW])?;
@@ -243,48 +260,68 @@ impl Session {
             }
             return Err(LinkError::NoAnswer(self.path.clone()));
         }
-        self.port
-            .settle(Duration::from_millis(300), Duration::from_secs(3))?;
-        let redraw = &self.port.seen[from..];
-        if find(redraw, PAGE).is_none() {
+        let page = self.port.wait_for(from, &[PAGE], DRAWN)?;
+        let parked = match page {
+            Some((_, end)) => self.wait_parked(end, DRAWN)?,
+            None => None,
+        };
+        if parked.is_none() {
             return Err(LinkError::NotAtPage {
                 path: self.path.clone(),
                 shows: shown(&self.port.seen, from),
             });
         }
+        progress("at the editor's page");
         Ok(())
     }
 
-    /// `/` stops the program; a key leaves `Strike any key`. [`Session::find_page`] follows.
+    /// Waits for the cursor parked at the prompt after offset `from` (the end of what the
+    /// editor draws for a key on its page); the offset past it, or `None` after `timeout`.
+    fn wait_parked(&mut self, from: usize, timeout: Duration) -> Result<Option<usize>, LinkError> {
+        let Some((_, at)) = self.port.wait_for(from, &[PARK], timeout)? else {
+            return Ok(None);
+        };
+        // The column's digits and `H`: a few bytes.
+        Ok(self
+            .port
+            .wait_for(at, &[b"H"], Duration::from_secs(1))?
+            .map(|(_, end)| end))
+    }
+
+    /// `/` stops the program and the editor shows `Strike any key`; a key returns to the
+    /// page (its status line cleared, or the whole screen drawn when the RUN screen was still
+    /// behind), the cursor parked at the prompt.
     fn stop(&mut self, progress: Progress) -> Result<(), LinkError> {
         progress("stopping the running program (--stop)");
         let from = self.port.seen.len();
         self.port.send(b"/")?;
-        if self
+        let Some((_, struck)) = self
             .port
             .wait_for(from, &[STRIKE], Duration::from_secs(2))?
-            .is_none()
-        {
+        else {
             return Err(LinkError::DidNotStop(self.path.clone()));
-        }
-        self.port
-            .settle(Duration::from_millis(200), Duration::from_secs(2))?;
-        // The key returns to the page (redrawn by the Ctrl-L that follows).
+        };
         self.port.send(b" ")?;
-        self.port
-            .settle(Duration::from_millis(300), Duration::from_secs(3))?;
+        if self.wait_parked(struck, DRAWN)?.is_none() {
+            return Err(LinkError::NoAnswerTo {
+                cmd: "a key after `/`",
+                shows: shown(&self.port.seen, from),
+            });
+        }
+        progress("stopped: at the editor's page");
         Ok(())
     }
 
-    /// Types `cmd` and CR on the page; waits for the screen `expect` (or an error).
-    fn command(&mut self, cmd: &'static str, expect: &[u8]) -> Result<(), LinkError> {
+    /// Types `cmd` and CR on the page; waits for the screen `expect` (or an error). The
+    /// offset just past `expect`.
+    fn command(&mut self, cmd: &'static str, expect: &[u8]) -> Result<usize, LinkError> {
         let from = self.port.seen.len();
         self.port.send(format!("{cmd}\r").as_bytes())?;
         match self
             .port
             .wait_for(from, &[expect, UNRECOGNIZED], Duration::from_secs(3))?
         {
-            Some((0, _)) => Ok(()),
+            Some((0, end)) => Ok(end),
             Some(_) => Err(LinkError::NotTaken(cmd)),
             None => Err(LinkError::NoAnswerTo {
                 cmd,
@@ -293,19 +330,31 @@ impl Session {
         }
     }
 
-    /// CR after a transfer: back to the page.
-    fn back_to_page(&mut self) -> Result<(), LinkError> {
+    /// The end of READ's or WRITE's screen after offset `from`: its status line, then the
+    /// cursor put at `ready`. Not seen within a second, the screen is taken as drawn: the
+    /// prompt already said the command was taken.
+    fn transfer_screen(&mut self, from: usize, ready: &[u8]) -> Result<(), LinkError> {
+        let wait = Duration::from_secs(1);
+        if let Some((_, end)) = self.port.wait_for(from, &[TRANSFER], wait)? {
+            self.port.wait_for(end, &[ready], wait)?;
+        }
+        Ok(())
+    }
+
+    /// CR after a transfer: back to the page, drawn whole (about 1,100 bytes) to its end.
+    fn back_to_page(&mut self, progress: Progress) -> Result<(), LinkError> {
         let from = self.port.seen.len();
         self.port.send(b"\r")?;
-        if self
-            .port
-            .wait_for(from, &[PAGE], Duration::from_secs(3))?
-            .is_none()
-        {
+        let Some((_, end)) = self.port.wait_for(from, &[PAGE], DRAWN)? else {
+            return Err(LinkError::NotBackToPage);
+        };
+        if self.wait_parked(end, DRAWN)?.is_none() {
             return Err(LinkError::NotBackToPage);
         }
-        self.port
-            .settle(Duration::from_millis(300), Duration::from_secs(3))?;
+        progress(&format!(
+            "back at the page ({} bytes drawn)",
+            self.port.seen.len() - from
+        ));
         Ok(())
     }
 
@@ -329,18 +378,22 @@ impl Session {
             .split(|&b| b == b'\n')
             .filter(|l| !l.is_empty())
             .collect();
-        self.command("READ", READ_PROMPT)?;
-        // The rest of READ's screen, then the records as fast as the line takes them.
-        self.port
-            .settle(Duration::from_millis(150), Duration::from_secs(2))?;
+        let prompt = self.command("READ", READ_PROMPT)?;
+        // The rest of READ's screen (its status line), then the records as fast as the line
+        // takes them: one write.
+        self.transfer_screen(prompt, READ_READY)?;
         let from = self.port.seen.len();
-        for (i, rec) in records.iter().enumerate() {
-            self.port.send(rec)?;
-            self.port.send(b"\n")?;
-            if (i + 1) % 5 == 0 || i + 1 == records.len() {
-                progress(&format!("sent record {}/{}", i + 1, records.len()));
-            }
+        let mut file = Vec::with_capacity(hex.len());
+        for rec in &records {
+            file.extend_from_slice(rec);
+            file.push(b'\n');
         }
+        self.port.send(&file)?;
+        progress(&format!(
+            "sent {} records ({} bytes)",
+            records.len(),
+            file.len()
+        ));
         // READ checks the file, drains 200 ms of quiet, then shows its result.
         let Some((_, end)) = self
             .port
@@ -350,6 +403,7 @@ impl Session {
         };
         let answer = &self.port.seen[from..end];
         let result = if find(answer, READ_DONE).is_some() {
+            progress("READ took the file");
             Ok(())
         } else if let Some(at) = find(answer, READ_ERROR) {
             let why = &answer[at + READ_ERROR.len()..answer.len() - FOR_MENU.len()];
@@ -359,7 +413,7 @@ impl Session {
         } else {
             Err(LinkError::StrangeAnswer(shown(answer, 0)))
         };
-        self.back_to_page()?;
+        self.back_to_page(progress)?;
         result?;
         Ok(hex)
     }
@@ -367,9 +421,8 @@ impl Session {
     /// The program through WRITE: the program and the records as uTile sent them. A file
     /// that does not check (record checksums, image CRC) is refused.
     pub fn pull(&mut self, progress: Progress) -> Result<(Program, Vec<u8>), LinkError> {
-        self.command("WRITE", WRITE_PROMPT)?;
-        self.port
-            .settle(Duration::from_millis(150), Duration::from_secs(2))?;
+        let prompt = self.command("WRITE", WRITE_PROMPT)?;
+        self.transfer_screen(prompt, WRITE_READY)?;
         let from = self.port.seen.len();
         self.port.send(b"\r")?;
         let Some((_, end)) = self
@@ -394,7 +447,7 @@ impl Session {
             hex.split(|&b| b == b'\n').count() - 1
         ));
         let prog = listing::from_hex(&hex).map_err(LinkError::BadFile)?;
-        self.back_to_page()?;
+        self.back_to_page(progress)?;
         Ok((prog, hex))
     }
 
@@ -408,9 +461,105 @@ impl Session {
             &[STORED, STORE_FAILED, UNRECOGNIZED],
             Duration::from_secs(5),
         )? {
-            Some((0, _)) => Ok(()),
+            Some((0, _)) => {
+                progress("stored");
+                Ok(())
+            }
             Some((1, _)) => Err(LinkError::StoreFailed),
             _ => Err(LinkError::StoreUnconfirmed(shown(&self.port.seen, from))),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::link::port::find_last;
+    use utile_core::editor::{Editor, Mode};
+    use utile_core::engine::Engine;
+    use utile_kit::sim::SimBoard;
+
+    /// The core's editor on a host board: what the session talks to on a uTile.
+    struct Editing {
+        ed: Editor,
+        eng: Engine,
+        b: SimBoard,
+    }
+
+    impl Editing {
+        fn new() -> Self {
+            let mut e = Editing {
+                ed: Editor::new(),
+                eng: Engine::default(),
+                b: SimBoard::new(),
+            };
+            e.ed.boot(&e.eng, &mut e.b);
+            e
+        }
+
+        /// What the editor sends for `keys`; the mode it is left in.
+        fn keys(&mut self, keys: &[u8]) -> (Vec<u8>, Mode) {
+            let from = self.b.tx_log.len();
+            let mut mode = Mode::Edit;
+            for &k in keys {
+                mode = self.ed.key(k, &mut self.eng, &mut self.b);
+            }
+            (self.b.tx_log[from..].to_vec(), mode)
+        }
+
+        /// What the editor sends while nothing comes for `ms`.
+        fn quiet(&mut self, ms: u32) -> Vec<u8> {
+            let from = self.b.tx_log.len();
+            for _ in 0..ms {
+                self.b.advance_ms(1);
+                self.ed.idle(&mut self.eng, &mut self.b);
+            }
+            self.b.tx_log[from..].to_vec()
+        }
+    }
+
+    /// `out` ends with the cursor parked at the prompt (nothing after it), after `text`.
+    fn parked_after(out: &[u8], text: &[u8]) -> bool {
+        let (Some(t), Some(p)) = (find(out, text), find_last(out, PARK)) else {
+            return false;
+        };
+        t < p && out.ends_with(b"H") && out.len() - p <= PARK.len() + 3
+    }
+
+    #[test]
+    fn the_session_waits_for_where_the_editor_ends_each_screen() {
+        let mut e = Editing::new();
+        // Ctrl-L: the page, drawn whole, ends parked at the prompt.
+        let (page, _) = e.keys(&[REDRAW]);
+        assert!(find(&page, TITLE).is_some() && parked_after(&page, PAGE));
+        // READ's screen ends with its status line and the cursor at its start.
+        let (read, _) = e.keys(b"READ\r");
+        let ready = [TRANSFER, b"\x1b[K", READ_READY].concat();
+        assert!(find(&read, READ_PROMPT).is_some() && read.ends_with(&ready));
+        // A file, its answer after READ's quiet, and CR: the page again, parked.
+        let prog = utile_kit::listing::commands(&["A0.", ".Y0", "KEY", "END"]);
+        let (during, _) = e.keys(&listing::to_hex(&prog));
+        assert!(during.is_empty());
+        let answer = e.quiet(300);
+        assert!(find(&answer, READ_DONE).is_some() && answer.ends_with(b"\x1b[K"));
+        let (back, _) = e.keys(b"\r");
+        assert!(find(&back, TITLE).is_some() && parked_after(&back, PAGE));
+        // WRITE's screen ends with its status line and the cursor on row 11.
+        let (write, _) = e.keys(b"WRITE\r");
+        let ready = [TRANSFER, b"\x1b[K", WRITE_READY].concat();
+        assert!(find(&write, WRITE_PROMPT).is_some() && write.ends_with(&ready));
+        e.keys(b"/");
+        // EX0, `/` (KEY's break), a key: back at the page without a redraw, parked.
+        let (run, mode) = e.keys(b"EX0\r");
+        assert!(find(&run, RUNNING).is_some() && mode == Mode::Run);
+        let from = e.b.tx_log.len();
+        e.ed.on_break(&mut e.eng, &mut e.b);
+        assert!(find(&e.b.tx_log[from..], STRIKE).is_some());
+        let (key, mode) = e.keys(b" ");
+        assert!(mode == Mode::Edit && find(&key, TITLE).is_none());
+        assert!(key.starts_with(b"\x1b[24;") && parked_after(&key, b"\x1b[K"));
+        // The page is there: READ is taken.
+        let (read, _) = e.keys(b"READ\r");
+        assert!(find(&read, READ_PROMPT).is_some());
     }
 }

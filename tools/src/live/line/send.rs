@@ -45,9 +45,17 @@ impl Owner {
                     u.due = now;
                 }
                 if let Err(why) = check {
-                    outcome = Err(SendError::Refused(format!(
-                        "the program was loaded and started, but {why}: send it again"
-                    )));
+                    outcome = Err(if self.port.is_none() {
+                        // The port went while the program was read back: say so (504).
+                        SendError::Lost(format!(
+                            "after EX0, while reading the program back: {}",
+                            self.message
+                        ))
+                    } else {
+                        SendError::Refused(format!(
+                            "the program was loaded and started, but {why}: send it again"
+                        ))
+                    });
                 }
             }
         }
