@@ -701,7 +701,7 @@ fn tank_live_with_rig(name: &str, extra: &[&str]) -> (support::vnano::PtyNano, L
 fn the_rig_through_the_api_presses_a0_and_moves_a6() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let (_nano, live) = tank_live_with_rig("live-rig", &[]);
-    assert_eq!(live.state()["rig"]["state"]["switches"][0], false);
+    assert_eq!(live.state()["rig"]["nanos"][0]["switches"][0], false);
     assert_eq!(live.unit(1)["values"]["A0"], 1);
     let (code, body) = live.post("/api/units/1/rig", &json!({"press": 0}));
     assert_eq!(code, 200, "{body}");
@@ -712,7 +712,7 @@ fn the_rig_through_the_api_presses_a0_and_moves_a6() {
     );
     live.wait_value(1, "A0", 0);
     live.wait("the state's rig with A0 pressed", T, |s| {
-        s["rig"]["state"]["switches"][0] == true
+        s["rig"]["nanos"][0]["switches"][0] == true
     });
     let (code, body) = live.post("/api/units/1/rig", &json!({"release": 0}));
     assert_eq!((code, &body["switches"][0]), (200, &json!(false)), "{body}");
@@ -754,7 +754,7 @@ fn read_only_refuses_the_rig_and_without_rig_there_is_none() {
         let (code, body) = live.post("/api/units/1/rig", &json!({"press": 0}));
         assert_eq!(code, 403, "{body}");
         assert!(body["error"].as_str().unwrap().starts_with("read-only"));
-        assert_eq!(live.state()["rig"]["state"]["switches"][0], false);
+        assert_eq!(live.state()["rig"]["nanos"][0]["switches"][0], false);
         assert_eq!(live.unit(1)["values"]["A0"], 1);
     }
     let (_nano, live) = tank_live("live-no-rig", &[]);

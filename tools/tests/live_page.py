@@ -18,6 +18,7 @@ import json
 import subprocess
 import sys
 import time
+import urllib.error
 import urllib.request
 
 from playwright.sync_api import sync_playwright
@@ -645,9 +646,55 @@ def bus(p, a):
         p.wait(u, "online", 1, timeout=60_000)
 
 
+def bus_rig(p, a):
+    """A bus of Nanos with their rigs (cargo nano --bus 3 --control): each card works the Nano
+    at its own address."""
+    units = [int(u) for u in a.units.split(",")]
+    step(f"the page: a card for each of {units}, each with its rig panel")
+    for u in units:
+        p.wait(u, "online", 1)
+        for name in ["A0", "A5", "A6", "A7", "D8", "reset"]:
+            p.page.wait_for_selector(f'.card[data-unit="{u}"] [data-rig="{name}"][data-unit="{u}"]',
+                                     state="visible", timeout=T)
+        wait_rig(p, u, "A6", "2.00")
+    step("A0 held on card 2's rig: only uTile 2's A0 goes low")
+    p.page.locator('[data-rig="A0"][data-unit="2"]').hover()
+    p.page.mouse.down()
+    wait_rig(p, 2, "A0", 1)
+    p.wait(2, "A0", 0)
+    for u in (1, 3):
+        p.fresh(u)
+        if p.value(u, "A0") != "1" or rig_value(p, u, "A0") != "0":
+            fail(f"card 2's rig pressed uTile {u}'s A0")
+    p.page.mouse.up()
+    wait_rig(p, 2, "A0", 0)
+    p.wait(2, "A0", 1)
+    step("card 3's A6/A7 sliders at 1.0 V: uTile 3's level and alarm only")
+    slide(p, 3, "A6", 1.0)
+    slide(p, 3, "A7", 1.0)
+    wait_rig(p, 3, "A6", "1.00")
+    p.wait(3, "Y1", 1)
+    for u in (1, 2):
+        p.fresh(u)
+        if p.value(u, "A6") != "409" or rig_value(p, u, "A6") != "2.00":
+            fail(f"card 3's slider moved uTile {u}'s A6")
+    slide(p, 3, "A6", 2.0)
+    slide(p, 3, "A7", 2.0)
+    p.wait(3, "A6", 409)
+    step("the API: the card's address picks its Nano")
+    req = urllib.request.Request(p.url + "/api/units/1/rig", data=b'{"nano": 2, "press": 0}',
+                                 headers={"content-type": "application/json"}, method="POST")
+    try:
+        urllib.request.urlopen(req, timeout=10)
+        fail("a request naming its Nano was taken")
+    except urllib.error.HTTPError as e:
+        if e.code != 400 or "leave" not in json.load(e)["error"]:
+            fail(f"a request naming its Nano: {e.code}")
+
+
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("scenario", choices=["single", "bus"])
+    ap.add_argument("scenario", choices=["single", "bus", "bus-rig"])
     ap.add_argument("--url", required=True)
     ap.add_argument("--tcp", required=True)
     ap.add_argument("--units", default="1,2,3")
@@ -662,7 +709,7 @@ def main():
         page.on("pageerror", lambda e: errors.append(str(e)))
         page.goto(a.url)
         p = Page(page, a.url.rstrip("/"))
-        (single if a.scenario == "single" else bus)(p, a)
+        {"single": single, "bus": bus, "bus-rig": bus_rig}[a.scenario](p, a)
         if errors:
             fail(f"the page's scripts failed: {errors}")
         browser.close()
