@@ -4,7 +4,8 @@
 //! others, values out of range refused with the reason and nothing sent (on the page's
 //! API, and by the uTile through the gateway), `--read-only`, every failure answered as JSON
 //! (axum's rejections too); and on a pty of the test's own, a line that answers with noise or
-//! damaged frames: only a damaged frame counts as a CRC error.
+//! damaged frames: only a damaged frame counts as a CRC error. A uTile held from the page
+//! runs freely again within the 10 s lease (simulated) once `utile live` is killed.
 
 mod support;
 
@@ -762,4 +763,78 @@ fn read_only_refuses_the_rig_and_without_rig_there_is_none() {
     let (code, body) = live.post("/api/units/1/rig", &json!({"press": 0}));
     assert_eq!(code, 404, "{body}");
     assert!(body["error"].as_str().unwrap().contains("--rig"), "{body}");
+}
+
+/// The rig's state from the virtual Nano's control socket: no Modbus frame (which would
+/// renew the hold's lease).
+fn rig_state(socket: &std::path::Path) -> serde_json::Value {
+    use std::io::{BufRead, BufReader};
+    let mut stream = std::os::unix::net::UnixStream::connect(socket).expect("the rig's socket");
+    stream.write_all(b"{}\n").expect("ask the rig");
+    let mut line = String::new();
+    BufReader::new(stream)
+        .read_line(&mut line)
+        .expect("the rig's answer");
+    serde_json::from_str(&line).unwrap_or_else(|e| panic!("{e}: {line}"))
+}
+
+#[test]
+fn utile_live_killed_while_held_the_lease_frees_the_utile_within_10_s() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    // tests/data/scan_counter.utl: Y0..Y7 count the scans, so the outputs stand still
+    // exactly while the scan is held.
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/scan_counter.utl");
+    let text = std::fs::read_to_string(&path).expect("scan_counter.utl");
+    let prog = utile_kit::listing::parse("scan_counter", &text).expect("the listing");
+    let (spec, socket) = NanoSpec::single("live-lease", &prog, false).with_rig();
+    let _nano = spec.start();
+    let mut live = Live::start(&spec.link, &[]);
+    live.wait("uTile 1 online", T, |s| s["units"][0]["state"] == "online");
+    let (code, body) = live.post("/api/units/1/scan", &json!({"action": "hold"}));
+    assert_eq!(code, 200, "{body}");
+    live.wait("uTile 1 held", T, |s| s["units"][0]["state"] == "held");
+    let held = rig_state(&socket)["outputs"].clone();
+    // Held for 2 s while utile live polls (and so keeps the lease).
+    let t = rig_state(&socket)["seconds"].as_f64().unwrap();
+    while rig_state(&socket)["seconds"].as_f64().unwrap() < t + 2.0 {
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    assert_eq!(rig_state(&socket)["outputs"], held, "held while utile live polls");
+
+    // utile live killed (SIGKILL: no goodbye on the line).
+    let before = rig_state(&socket)["seconds"].as_f64().unwrap();
+    live.child.kill().expect("kill utile live");
+    live.child.wait().expect("utile live ended");
+    let after = rig_state(&socket)["seconds"].as_f64().unwrap();
+    // Its last frame came before `after`: the lease ends the hold at most 10 s later.
+    let start = Instant::now();
+    let mut last_held = after;
+    let freed_at = loop {
+        let s = rig_state(&socket);
+        let now = s["seconds"].as_f64().unwrap();
+        if s["outputs"] != held {
+            break now;
+        }
+        last_held = now;
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "still held {:.1} s (simulated) after utile live was killed",
+            now - after
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    eprintln!(
+        "killed at {before:.2}..{after:.2} s, last seen held at {last_held:.2} s, \
+         running at {freed_at:.2} s (simulated)"
+    );
+    assert!(
+        last_held >= before + 9.0,
+        "the hold ended {:.2} s after the kill, before its 10 s lease",
+        last_held - before
+    );
+    assert!(
+        freed_at <= after + 10.5,
+        "the hold outlived its lease: still held at {last_held:.2} s, {:.2} s after the kill",
+        last_held - after
+    );
 }

@@ -4,8 +4,9 @@
 //! 0..5), `{"d8": true}` / `{"d9": false}` (jumper fitted), `{"reset": true}`, or `{}` to
 //! ask — and every request is answered with the rig's state after it:
 //! `{"switches": [..6], "pins": [..6], "d8": .., "d9": .., "a6": V, "a7": V, "outputs":
-//! [..8]}` (switches and jumpers `true` when pressed or fitted, the chip's A0..A5 pins as it
-//! reads them, a pressed switch pulling its pin low; outputs Y0..Y7 as the pins show them), with
+//! [..8], "seconds": S}` (switches and jumpers `true` when pressed or fitted, the chip's A0..A5
+//! pins as it reads them, a pressed switch pulling its pin low; outputs Y0..Y7 as the pins
+//! show them; the simulated time since power-up, so a client can time what it sees), with
 //! `"error"` naming what was refused, and `"nano"` (which Nano) and `"nanos"` (how many).
 //!
 //! On a bus (`--bus N`) a request may name its Nano: `{"nano": 2, "press": 0}`. Nanos are
@@ -245,5 +246,6 @@ pub fn state(nano: &Chip, analog_mv: &[u32; 2]) -> Value {    let switches: Vec<
         "a6": f64::from(analog_mv[0]) / 1000.0,
         "a7": f64::from(analog_mv[1]) / 1000.0,
         "outputs": leds,
+        "seconds": nano.seconds(),
     })
 }
