@@ -534,6 +534,28 @@ def rig_panel(p, unit):
           flush=True)
 
 
+def picture(p, unit, path):
+    """The README's picture (docs/live-page.png): the tank's card at its own set-points, held
+    from the page (the Hold button: its state and advice in words), its rig panel beside
+    the inputs; then set back as tank() left it, and running."""
+    step(f"the README's picture: uTile {unit} held, its rig panel beside")
+    card = f'.card[data-unit="{unit}"]'
+    for signal, value in (("S6", 800), ("S7", 300)):
+        p.set(unit, signal, value)
+        p.wait(unit, signal, value)
+    time.sleep(3)  # a few seconds of trend
+    p.page.click(f'{card} button[data-action="hold"][data-unit="{unit}"]')
+    p.page.wait_for_selector(f'{card} .state[data-state="held"]', timeout=T)
+    time.sleep(1)  # the pictures after the hold on the card
+    p.page.evaluate("() => { document.activeElement.blur(); window.scrollTo(0, 0); }")
+    p.page.screenshot(path=path, full_page=True)
+    p.page.click(f'{card} button[data-action="run"][data-unit="{unit}"]')
+    p.page.wait_for_selector(f'{card} .state[data-state="online"]', timeout=T)
+    for signal, value in (("S6", 400), ("S7", 500)):
+        p.set(unit, signal, value)
+        p.wait(unit, signal, value)
+
+
 def single(p, a):
     step("the page: one card, the program running")
     p.wait(1, "online", 1)
@@ -546,9 +568,7 @@ def single(p, a):
     p.tab("plant")
     tank(p, 1)
     if a.screenshot:
-        time.sleep(2)  # a few seconds of trend
-        p.page.evaluate("window.scrollTo(0, 0)")  # the field typed into scrolled the page
-        p.page.screenshot(path=a.screenshot, full_page=True)
+        picture(p, 1, a.screenshot)
     step("a rig switch shows on the page")
     ask("rig 0")
     p.wait(1, "A0", 0)
