@@ -783,7 +783,8 @@ fn utile_live_killed_while_held_the_lease_frees_the_utile_within_10_s() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     // tests/data/scan_counter.utl: Y0..Y7 count the scans, so the outputs stand still
     // exactly while the scan is held.
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/scan_counter.utl");
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/scan_counter.utl");
     let text = std::fs::read_to_string(&path).expect("scan_counter.utl");
     let prog = utile_kit::listing::parse("scan_counter", &text).expect("the listing");
     let (spec, socket) = NanoSpec::single("live-lease", &prog, false).with_rig();
@@ -799,7 +800,11 @@ fn utile_live_killed_while_held_the_lease_frees_the_utile_within_10_s() {
     while rig_state(&socket)["seconds"].as_f64().unwrap() < t + 2.0 {
         std::thread::sleep(Duration::from_millis(100));
     }
-    assert_eq!(rig_state(&socket)["outputs"], held, "held while utile live polls");
+    assert_eq!(
+        rig_state(&socket)["outputs"],
+        held,
+        "held while utile live polls"
+    );
 
     // utile live killed (SIGKILL: no goodbye on the line).
     let before = rig_state(&socket)["seconds"].as_f64().unwrap();

@@ -111,7 +111,10 @@ fn a_client_presses_a0_and_the_pin_and_the_program_follow() {
     assert_eq!(set["a6"], 2.5);
     let bad = ask(&mut stream, &mut reader, r#"{"nano": 2, "press": 0}"#);
     assert!(
-        bad["error"].as_str().unwrap().contains("one Nano runs here"),
+        bad["error"]
+            .as_str()
+            .unwrap()
+            .contains("one Nano runs here"),
         "{bad}"
     );
     assert!(bad.get("switches").is_none(), "{bad}");
@@ -161,7 +164,10 @@ fn on_a_bus_a_press_on_nano_2_changes_only_nano_2() {
     assert_eq!((&first["nano"], &first["nanos"]), (&1.into(), &3.into()));
     let pressed = ask(&mut stream, &mut reader, r#"{"nano": 2, "press": 0}"#);
     assert!(pressed.get("error").is_none(), "{pressed}");
-    assert_eq!((&pressed["nano"], &pressed["nanos"]), (&2.into(), &3.into()));
+    assert_eq!(
+        (&pressed["nano"], &pressed["nanos"]),
+        (&2.into(), &3.into())
+    );
     assert_eq!(pressed["switches"][0], true, "{pressed}");
     for nano in [1, 3] {
         let other = ask(&mut stream, &mut reader, &format!(r#"{{"nano": {nano}}}"#));
@@ -170,7 +176,11 @@ fn on_a_bus_a_press_on_nano_2_changes_only_nano_2() {
         assert_eq!(other["pins"][0], true, "Nano {nano}: {other}");
     }
     // A Nano that is not there: refused in words, nothing pressed anywhere else.
-    for bad in [r#"{"nano": 4, "press": 1}"#, r#"{"nano": 0, "press": 1}"#, r#"{"nano": "two"}"#] {
+    for bad in [
+        r#"{"nano": 4, "press": 1}"#,
+        r#"{"nano": 0, "press": 1}"#,
+        r#"{"nano": "two"}"#,
+    ] {
         let answer = ask(&mut stream, &mut reader, bad);
         let why = answer["error"].as_str().unwrap_or_default();
         assert!(why.contains("nano is 1..3"), "{bad}: {answer}");
@@ -202,7 +212,10 @@ fn on_a_bus_a_press_on_nano_2_changes_only_nano_2() {
     ask(&mut stream, &mut reader, r#"{"nano": 2, "release": 0}"#);
     let start = Instant::now();
     while inputs_over_modbus(&n.path, 2).unwrap() != "1 1 1 1 1 1" {
-        assert!(start.elapsed() < Duration::from_secs(20), "slave 2 released");
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "slave 2 released"
+        );
         std::thread::sleep(Duration::from_millis(200));
     }
 }

@@ -284,12 +284,7 @@ async fn serve(
                 None => return "utile live is stopping".into(),
             },
             // Each Nano in turn (`{}` until the first answer tells how many there are).
-            _ = tick.tick() => (1..=nanos.len().max(1))
-                .map(|k| {
-                    let ask = if nanos.len() > 1 { serde_json::json!({"nano": k}) } else { serde_json::json!({}) };
-                    (ask, None)
-                })
-                .collect(),
+            _ = tick.tick() => (1..=nanos.len().max(1)).map(|k| (ask_of(k, nanos.len()), None)).collect(),
         };
         for (request, reply) in asks {
             let line = match socket.exchange(&request).await {
@@ -324,6 +319,16 @@ async fn serve(
                 let _ = reply.send(got);
             }
         }
+    }
+}
+
+/// The periodic request for Nano `k` of `count`: `{}` for a single one (or before the first
+/// answer), `{"nano": k}` on a bus.
+fn ask_of(k: usize, count: usize) -> Value {
+    if count > 1 {
+        serde_json::json!({ "nano": k })
+    } else {
+        serde_json::json!({})
     }
 }
 

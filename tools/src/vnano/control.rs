@@ -177,7 +177,11 @@ fn which(nano: Option<&Value>, count: usize) -> Result<usize, String> {
 type Change = Box<dyn FnOnce(&mut Chip, &mut [u32; 2])>;
 
 /// The request's fields on the rig, checked first: nothing changes when one is wrong.
-fn apply(fields: &Map<String, Value>, nano: &mut Chip, analog_mv: &mut [u32; 2]) -> Result<(), String> {
+fn apply(
+    fields: &Map<String, Value>,
+    nano: &mut Chip,
+    analog_mv: &mut [u32; 2],
+) -> Result<(), String> {
     let mut changes: Vec<Change> = Vec::new();
     for (key, value) in fields {
         match key.as_str() {
@@ -231,7 +235,8 @@ fn apply(fields: &Map<String, Value>, nano: &mut Chip, analog_mv: &mut [u32; 2])
 }
 
 /// The rig's state of one Nano as the answers give it.
-pub fn state(nano: &Chip, analog_mv: &[u32; 2]) -> Value {    let switches: Vec<bool> = (0..6)
+pub fn state(nano: &Chip, analog_mv: &[u32; 2]) -> Value {
+    let switches: Vec<bool> = (0..6)
         .map(|n| nano.is_held_low(RigPin::Switch(n)))
         .collect();
     let outputs = nano.outputs();
