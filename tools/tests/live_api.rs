@@ -5,7 +5,8 @@
 //! API, and by the uTile through the gateway), `--read-only`, every failure answered as JSON
 //! (axum's rejections too); and on a pty of the test's own, a line that answers with noise or
 //! damaged frames: only a damaged frame counts as a CRC error. A uTile held from the page
-//! runs freely again within the 10 s lease (simulated) once `utile live` is killed.
+//! runs freely again within the 10 s lease (simulated) once `utile live` is killed, and
+//! 10 s after the last page following the events closed.
 
 mod support;
 
@@ -406,6 +407,8 @@ fn settled_scans(live: &Live, pictures: u64) -> u64 {
 fn hold_run_and_step_through_the_api() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let (_nano, live) = tank_live("live-hold", &[]);
+    // A page open: utile live keeps a hold from the page while one is (unwatched.rs).
+    let _page = open_page(&live);
     let scan = |body: serde_json::Value| live.post("/api/units/1/scan", &body);
     // The line asked the firmware once whether it holds (SPEC §18): it does.
     live.wait("§18 known", T, |s| {
@@ -778,23 +781,89 @@ fn rig_state(socket: &std::path::Path) -> serde_json::Value {
     serde_json::from_str(&line).unwrap_or_else(|e| panic!("{e}: {line}"))
 }
 
-#[test]
-fn utile_live_killed_while_held_the_lease_frees_the_utile_within_10_s() {
-    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
-    // tests/data/scan_counter.utl: Y0..Y7 count the scans, so the outputs stand still
-    // exactly while the scan is held.
+/// A page following the events (`GET /api/events`), open while the stream lives.
+fn open_page(live: &Live) -> TcpStream {
+    use std::io::Read;
+    let mut s = TcpStream::connect(live.http).expect("connect to the page's server");
+    write!(
+        s,
+        "GET /api/events HTTP/1.1\r\nHost: test\r\nAccept: text/event-stream\r\n\r\n"
+    )
+    .expect("ask for the events");
+    let mut head = [0u8; 512];
+    let n = s.read(&mut head).expect("the events' head");
+    assert!(
+        head[..n].starts_with(b"HTTP/1.1 200"),
+        "{}",
+        String::from_utf8_lossy(&head[..n])
+    );
+    s
+}
+
+/// tests/data/scan_counter.utl on one virtual Nano with its rig's socket, `utile live` on
+/// it (uTile 1 online), a page open and uTile 1 held from the API: the Nano, `utile live`,
+/// the page, the socket and the outputs as held.
+fn scan_counter_held(
+    name: &str,
+) -> (
+    support::vnano::PtyNano,
+    Live,
+    TcpStream,
+    std::path::PathBuf,
+    serde_json::Value,
+) {
+    // Y0..Y7 count the scans, so the outputs stand still exactly while the scan is held.
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/scan_counter.utl");
     let text = std::fs::read_to_string(&path).expect("scan_counter.utl");
     let prog = utile_kit::listing::parse("scan_counter", &text).expect("the listing");
-    let (spec, socket) = NanoSpec::single("live-lease", &prog, false).with_rig();
-    let _nano = spec.start();
-    let mut live = Live::start(&spec.link, &[]);
+    let (spec, socket) = NanoSpec::single(name, &prog, false).with_rig();
+    let nano = spec.start();
+    let live = Live::start(&spec.link, &[]);
     live.wait("uTile 1 online", T, |s| s["units"][0]["state"] == "online");
+    let page = open_page(&live);
     let (code, body) = live.post("/api/units/1/scan", &json!({"action": "hold"}));
     assert_eq!(code, 200, "{body}");
     live.wait("uTile 1 held", T, |s| s["units"][0]["state"] == "held");
     let held = rig_state(&socket)["outputs"].clone();
+    (nano, live, page, socket, held)
+}
+
+#[test]
+fn a_hold_from_the_page_ends_10_s_after_the_last_page_closed() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let (_nano, live, page, socket, held) = scan_counter_held("live-unwatched");
+    // Past the lease with the page open: still held (utile live's polls keep the firmware's
+    // lease, the open page keeps utile live's).
+    std::thread::sleep(Duration::from_secs(12));
+    assert_eq!(live.unit(1)["state"], "held");
+    assert_eq!(
+        rig_state(&socket)["outputs"],
+        held,
+        "held while a page is open"
+    );
+    drop(page);
+    let closed = Instant::now();
+    assert_eq!(
+        rig_state(&socket)["outputs"],
+        held,
+        "held as the page closes"
+    );
+    live.wait("uTile 1 runs again after its page closed", T * 2, |s| {
+        s["units"][0]["state"] == "online"
+    });
+    assert!(
+        closed.elapsed() >= Duration::from_secs(9),
+        "the hold ended {:?} after the page closed, before its 10 s",
+        closed.elapsed()
+    );
+    assert_ne!(rig_state(&socket)["outputs"], held, "the scan runs");
+}
+
+#[test]
+fn utile_live_killed_while_held_the_lease_frees_the_utile_within_10_s() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let (_nano, mut live, _page, socket, held) = scan_counter_held("live-lease");
     // Held for 2 s while utile live polls (and so keeps the lease).
     let t = rig_state(&socket)["seconds"].as_f64().unwrap();
     while rig_state(&socket)["seconds"].as_f64().unwrap() < t + 2.0 {

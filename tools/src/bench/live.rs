@@ -308,6 +308,8 @@ fn run(nano: &mut Child, link: &Path, units: usize, secs: u32) -> Result<LiveFig
 fn step_to_shown(running: &Running, pace: f64) -> Result<Vec<f64>, String> {
     let scans = || value(running, 1, "scans");
     let snapshots = || running.hub.view().unit(1).map_or(0, |u| u.snapshots);
+    // A page following the events: utile live keeps a hold from the page while one is open.
+    let _page = running.hub.state_json.subscribe();
     post(running.http, "/api/units/1/scan", r#"{"action": "hold"}"#)?;
     // Two pictures read after the hold: the count shown has stopped.
     let seen = snapshots();
