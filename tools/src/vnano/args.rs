@@ -109,7 +109,8 @@ pub struct Args {
     pub plant: Option<super::plant::Kind>,
     /// Work the rig from another program over a Unix socket at PATH: one JSON object a line
     /// ({"press": 0}, {"release": 0}, {"a6": 2.5}, {"d8": true}, {"reset": true}, {} to ask),
-    /// each answered with the rig's state: switches, jumpers, A6/A7 in volts, outputs Y0..Y7.
+    /// each answered with the rig's state: switches, jumpers, A6/A7 in volts, outputs Y0..Y7,
+    /// the simulated seconds.
     /// With --bus a request names its Nano, {"nano": 2, "press": 0}: Nanos are 1..N as their
     /// slave addresses (Nano 1 when left out)
     #[arg(long, value_name = "PATH")]
