@@ -6,7 +6,8 @@
 //! stops, the terminal tab types a program and runs it, offline and back; mbpoll -m tcp and
 //! pymodbus's TCP client through the gateway while the page polls; on a bus with its rigs
 //! (`cargo nano --bus 3 --control`), each card's rig panel works the Nano at the card's
-//! address and no other. `./x setup` installs
+//! address and no other, and a card held from the page runs again 10 s after the page is
+//! closed. `./x setup` installs
 //! chromium, Playwright, pymodbus and mbpoll: without them these tests fail, they never skip.
 
 mod support;

@@ -710,6 +710,21 @@ def bus_rig(p, a):
     except urllib.error.HTTPError as e:
         if e.code != 400 or "leave" not in json.load(e)["error"]:
             fail(f"a request naming its Nano: {e.code}")
+    step("Hold on card 1, then the page closed: uTile 1 runs again 10 s later (utile live's lease)")
+    card = '.card[data-unit="1"]'
+    p.page.click(f'{card} button[data-action="hold"][data-unit="1"]')
+    p.page.wait_for_selector(f'{card} .state[data-state="held"]', timeout=T)
+    p.page.close()
+    closed = time.time()
+    unit1 = lambda: [u for u in api(p.url, "/api/state")["units"] if u["addr"] == 1][0]
+    if unit1()["state"] != "held":
+        fail("uTile 1 ran as soon as the page closed")
+    while unit1()["state"] != "online":
+        if time.time() - closed > 60:
+            fail(f"uTile 1 still {unit1()['state']} 60 s after its page closed")
+        time.sleep(0.5)
+    if time.time() - closed < 9:
+        fail(f"uTile 1 ran {time.time() - closed:.1f} s after its page closed, before 10 s")
 
 
 def main():
