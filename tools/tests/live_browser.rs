@@ -4,7 +4,10 @@
 //! panel (`--rig`: A0 held and latched, the A6/A7 sliders; none without it), clicking U0
 //! drives an output through the program, editing S6 changes when the tank example's pump
 //! stops, the terminal tab types a program and runs it, offline and back; mbpoll -m tcp and
-//! pymodbus's TCP client through the gateway while the page polls. `./x setup` installs
+//! pymodbus's TCP client through the gateway while the page polls; on a bus with its rigs
+//! (`cargo nano --bus 3 --control`), each card's rig panel works the Nano at the card's
+//! address and no other, and a card held from the page runs again 10 s after the page is
+//! closed. `./x setup` installs
 //! chromium, Playwright, pymodbus and mbpoll: without them these tests fail, they never skip.
 
 mod support;
@@ -192,5 +195,17 @@ fn the_ladder_tab_in_the_browser() {
         &spec,
         &["--rig", rig.to_str().unwrap()],
         &["--screenshot", shot.to_str().unwrap()],
+    );
+}
+
+#[test]
+fn three_utiles_on_a_bus_each_card_works_its_own_rig() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let (spec, rig) = NanoSpec::bus("live-bus-rig", 3, &tank_with_remote()).with_rig();
+    drive(
+        "bus-rig",
+        &spec,
+        &["--units", "1,2,3", "--rig", rig.to_str().unwrap()],
+        &["--units", "1,2,3"],
     );
 }

@@ -18,6 +18,7 @@ import json
 import subprocess
 import sys
 import time
+import urllib.error
 import urllib.request
 
 from playwright.sync_api import sync_playwright
@@ -610,6 +611,28 @@ def rig_panel(p, unit):
           flush=True)
 
 
+def picture(p, unit, path):
+    """The README's picture (docs/live-page.png): the tank's card at its own set-points, held
+    from the page (the Hold button: its state and advice in words), its rig panel beside
+    the inputs; then set back as tank() left it, and running."""
+    step(f"the README's picture: uTile {unit} held, its rig panel beside")
+    card = f'.card[data-unit="{unit}"]'
+    for signal, value in (("S6", 800), ("S7", 300)):
+        p.set(unit, signal, value)
+        p.wait(unit, signal, value)
+    time.sleep(3)  # a few seconds of trend
+    p.page.click(f'{card} button[data-action="hold"][data-unit="{unit}"]')
+    p.page.wait_for_selector(f'{card} .state[data-state="held"]', timeout=T)
+    time.sleep(1)  # the pictures after the hold on the card
+    p.page.evaluate("() => { document.activeElement.blur(); window.scrollTo(0, 0); }")
+    p.page.screenshot(path=path, full_page=True)
+    p.page.click(f'{card} button[data-action="run"][data-unit="{unit}"]')
+    p.page.wait_for_selector(f'{card} .state[data-state="online"]', timeout=T)
+    for signal, value in (("S6", 400), ("S7", 500)):
+        p.set(unit, signal, value)
+        p.wait(unit, signal, value)
+
+
 def single(p, a):
     step("the page: one card, the program running")
     p.wait(1, "online", 1)
@@ -622,9 +645,7 @@ def single(p, a):
     p.tab("plant")
     tank(p, 1)
     if a.screenshot:
-        time.sleep(2)  # a few seconds of trend
-        p.page.evaluate("window.scrollTo(0, 0)")  # the field typed into scrolled the page
-        p.page.screenshot(path=a.screenshot, full_page=True)
+        picture(p, 1, a.screenshot)
     step("a rig switch shows on the page")
     ask("rig 0")
     p.wait(1, "A0", 0)
@@ -913,9 +934,70 @@ def ladder(p, a):
     ladder_consistent(p, 1, 6)
 
 
+def bus_rig(p, a):
+    """A bus of Nanos with their rigs (cargo nano --bus 3 --control): each card works the Nano
+    at its own address."""
+    units = [int(u) for u in a.units.split(",")]
+    step(f"the page: a card for each of {units}, each with its rig panel")
+    for u in units:
+        p.wait(u, "online", 1)
+        for name in ["A0", "A5", "A6", "A7", "D8", "reset"]:
+            p.page.wait_for_selector(f'.card[data-unit="{u}"] [data-rig="{name}"][data-unit="{u}"]',
+                                     state="visible", timeout=T)
+        wait_rig(p, u, "A6", "2.00")
+    step("A0 held on card 2's rig: only uTile 2's A0 goes low")
+    p.page.locator('[data-rig="A0"][data-unit="2"]').hover()
+    p.page.mouse.down()
+    wait_rig(p, 2, "A0", 1)
+    p.wait(2, "A0", 0)
+    for u in (1, 3):
+        p.fresh(u)
+        if p.value(u, "A0") != "1" or rig_value(p, u, "A0") != "0":
+            fail(f"card 2's rig pressed uTile {u}'s A0")
+    p.page.mouse.up()
+    wait_rig(p, 2, "A0", 0)
+    p.wait(2, "A0", 1)
+    step("card 3's A6/A7 sliders at 1.0 V: uTile 3's level and alarm only")
+    slide(p, 3, "A6", 1.0)
+    slide(p, 3, "A7", 1.0)
+    wait_rig(p, 3, "A6", "1.00")
+    p.wait(3, "Y1", 1)
+    for u in (1, 2):
+        p.fresh(u)
+        if p.value(u, "A6") != "409" or rig_value(p, u, "A6") != "2.00":
+            fail(f"card 3's slider moved uTile {u}'s A6")
+    slide(p, 3, "A6", 2.0)
+    slide(p, 3, "A7", 2.0)
+    p.wait(3, "A6", 409)
+    step("the API: the card's address picks its Nano")
+    req = urllib.request.Request(p.url + "/api/units/1/rig", data=b'{"nano": 2, "press": 0}',
+                                 headers={"content-type": "application/json"}, method="POST")
+    try:
+        urllib.request.urlopen(req, timeout=10)
+        fail("a request naming its Nano was taken")
+    except urllib.error.HTTPError as e:
+        if e.code != 400 or "leave" not in json.load(e)["error"]:
+            fail(f"a request naming its Nano: {e.code}")
+    step("Hold on card 1, then the page closed: uTile 1 runs again 10 s later (utile live's lease)")
+    card = '.card[data-unit="1"]'
+    p.page.click(f'{card} button[data-action="hold"][data-unit="1"]')
+    p.page.wait_for_selector(f'{card} .state[data-state="held"]', timeout=T)
+    p.page.close()
+    closed = time.time()
+    unit1 = lambda: [u for u in api(p.url, "/api/state")["units"] if u["addr"] == 1][0]
+    if unit1()["state"] != "held":
+        fail("uTile 1 ran as soon as the page closed")
+    while unit1()["state"] != "online":
+        if time.time() - closed > 60:
+            fail(f"uTile 1 still {unit1()['state']} 60 s after its page closed")
+        time.sleep(0.5)
+    if time.time() - closed < 9:
+        fail(f"uTile 1 ran {time.time() - closed:.1f} s after its page closed, before 10 s")
+
+
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("scenario", choices=["single", "bus", "ladder"])
+    ap.add_argument("scenario", choices=["single", "bus", "ladder", "bus-rig"])
     ap.add_argument("--url", required=True)
     ap.add_argument("--tcp", required=True)
     ap.add_argument("--units", default="1,2,3")
@@ -930,7 +1012,7 @@ def main():
         page.on("pageerror", lambda e: errors.append(str(e)))
         page.goto(a.url)
         p = Page(page, a.url.rstrip("/"))
-        {"single": single, "bus": bus, "ladder": ladder}[a.scenario](p, a)
+        {"single": single, "bus": bus, "ladder": ladder, "bus-rig": bus_rig}[a.scenario](p, a)
         if errors:
             fail(f"the page's scripts failed: {errors}")
         browser.close()

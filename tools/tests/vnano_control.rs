@@ -1,12 +1,16 @@
 //! `cargo nano --control PATH` (`tools/src/vnano/control.rs`) against the real image: a
 //! client on the Unix socket presses A0, and the chip's pin goes low and the program's
 //! output follows; releases it, and both come back; a bad request is refused with its
-//! reason and changes nothing; A6 is set in volts.
+//! reason and changes nothing; A6 is set in volts. On a bus of three, a press on Nano 2
+//! (`{"nano": 2, ...}`) changes only Nano 2's A0, as pymodbus reads it at slave address 2,
+//! and a Nano that is not there is refused in words.
 
 mod support;
 
 use std::io::{BufRead, BufReader, Write};
 use std::os::unix::net::UnixStream;
+use std::path::Path;
+use std::process::Command;
 use std::time::{Duration, Instant};
 
 use serde_json::Value;
@@ -42,6 +46,22 @@ fn until(
     }
 }
 
+/// Connects to the control socket at `socket` once the virtual Nano has opened it.
+fn connect(socket: &Path) -> (UnixStream, BufReader<UnixStream>) {
+    let start = Instant::now();
+    let stream = loop {
+        match UnixStream::connect(socket) {
+            Ok(s) => break s,
+            Err(e) => {
+                assert!(start.elapsed() < Duration::from_secs(10), "connect: {e}");
+                std::thread::sleep(Duration::from_millis(50));
+            }
+        }
+    };
+    let reader = BufReader::new(stream.try_clone().expect("clone"));
+    (stream, reader)
+}
+
 #[test]
 fn a_client_presses_a0_and_the_pin_and_the_program_follow() {
     // Y0 is A0 as the program reads it: a pressed switch pulls its pin low.
@@ -58,23 +78,14 @@ fn a_client_presses_a0_and_the_pin_and_the_program_follow() {
         "--control",
         socket.to_str().unwrap(),
     ]);
-    let start = Instant::now();
-    let mut stream = loop {
-        match UnixStream::connect(&socket) {
-            Ok(s) => break s,
-            Err(e) => {
-                assert!(start.elapsed() < Duration::from_secs(10), "connect: {e}");
-                std::thread::sleep(Duration::from_millis(50));
-            }
-        }
-    };
-    let mut reader = BufReader::new(stream.try_clone().expect("clone"));
+    let (mut stream, mut reader) = connect(&socket);
     let free = until(&mut stream, &mut reader, "running", |s| {
         s["outputs"][0] != s["outputs"][1]
     });
     assert_eq!(free["switches"][0], false);
     assert_eq!(free["pins"][0], true, "an open switch leaves A0 high");
     assert_eq!(free["d8"], true);
+    assert_eq!((&free["nano"], &free["nanos"]), (&1.into(), &1.into()));
     let y0_open = free["outputs"][0].clone();
 
     let pressed = ask(&mut stream, &mut reader, r#"{"press": 0}"#);
@@ -98,4 +109,113 @@ fn a_client_presses_a0_and_the_pin_and_the_program_follow() {
     assert!(bad["error"].as_str().unwrap().contains("not JSON"), "{bad}");
     let set = ask(&mut stream, &mut reader, r#"{"a6": 2.5}"#);
     assert_eq!(set["a6"], 2.5);
+    let bad = ask(&mut stream, &mut reader, r#"{"nano": 2, "press": 0}"#);
+    assert!(
+        bad["error"]
+            .as_str()
+            .unwrap()
+            .contains("one Nano runs here"),
+        "{bad}"
+    );
+    assert!(bad.get("switches").is_none(), "{bad}");
+}
+
+/// A0..A5 of slave `slave` as pymodbus reads them (discrete inputs 0..5, 1 = high), or
+/// `None` when pymodbus is not installed here.
+fn inputs_over_modbus(port: &Path, slave: u8) -> Option<String> {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/modbus_master.py");
+    let have = Command::new("python3")
+        .args(["-c", "import pymodbus, serial"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !utile_kit::setup::installed("pymodbus", have) {
+        return None;
+    }
+    let out = Command::new("python3")
+        .arg(&script)
+        .arg(port)
+        .args(["slave", &slave.to_string(), "read", "di", "0", "6"])
+        .output()
+        .expect("run python3");
+    assert!(
+        out.status.success(),
+        "modbus_master.py slave {slave}: {}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    Some(String::from_utf8_lossy(&out.stdout).trim().to_string())
+}
+
+#[test]
+fn on_a_bus_a_press_on_nano_2_changes_only_nano_2() {
+    let socket = scratch("control-bus").join("rig.sock");
+    let elf = firmware_elf();
+    let n = PtyNano::start(&[
+        "--elf",
+        elf.to_str().unwrap(),
+        "--bus",
+        "3",
+        "--control",
+        socket.to_str().unwrap(),
+    ]);
+    let (mut stream, mut reader) = connect(&socket);
+    // Without "nano": Nano 1, and the count of the bus.
+    let first = ask(&mut stream, &mut reader, "{}");
+    assert_eq!((&first["nano"], &first["nanos"]), (&1.into(), &3.into()));
+    let pressed = ask(&mut stream, &mut reader, r#"{"nano": 2, "press": 0}"#);
+    assert!(pressed.get("error").is_none(), "{pressed}");
+    assert_eq!(
+        (&pressed["nano"], &pressed["nanos"]),
+        (&2.into(), &3.into())
+    );
+    assert_eq!(pressed["switches"][0], true, "{pressed}");
+    for nano in [1, 3] {
+        let other = ask(&mut stream, &mut reader, &format!(r#"{{"nano": {nano}}}"#));
+        assert_eq!(other["nano"], nano);
+        assert_eq!(other["switches"][0], false, "Nano {nano}: {other}");
+        assert_eq!(other["pins"][0], true, "Nano {nano}: {other}");
+    }
+    // A Nano that is not there: refused in words, nothing pressed anywhere else.
+    for bad in [
+        r#"{"nano": 4, "press": 1}"#,
+        r#"{"nano": 0, "press": 1}"#,
+        r#"{"nano": "two"}"#,
+    ] {
+        let answer = ask(&mut stream, &mut reader, bad);
+        let why = answer["error"].as_str().unwrap_or_default();
+        assert!(why.contains("nano is 1..3"), "{bad}: {answer}");
+        assert_eq!(answer["nanos"], 3, "{answer}");
+    }
+    for nano in 1..=3 {
+        let s = ask(&mut stream, &mut reader, &format!(r#"{{"nano": {nano}}}"#));
+        assert_eq!(s["switches"][1], false, "Nano {nano}: {s}");
+    }
+    // Over Modbus, each at its own address: only slave 2's A0 is low (debounced).
+    let start = Instant::now();
+    loop {
+        let Some(two) = inputs_over_modbus(&n.path, 2) else {
+            return;
+        };
+        if two == "0 1 1 1 1 1" {
+            break;
+        }
+        assert!(start.elapsed() < Duration::from_secs(20), "slave 2: {two}");
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    for slave in [1, 3] {
+        assert_eq!(
+            inputs_over_modbus(&n.path, slave).unwrap(),
+            "1 1 1 1 1 1",
+            "slave {slave}"
+        );
+    }
+    ask(&mut stream, &mut reader, r#"{"nano": 2, "release": 0}"#);
+    let start = Instant::now();
+    while inputs_over_modbus(&n.path, 2).unwrap() != "1 1 1 1 1 1" {
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "slave 2 released"
+        );
+        std::thread::sleep(Duration::from_millis(200));
+    }
 }

@@ -1,6 +1,6 @@
 //! `utile live`'s budgets (issue 25) on the virtual Nano: refreshes per second of one uTile
-//! and of three on a bus, the line's use while polling, click → shown and rig switch →
-//! shown, and what the Modbus TCP gateway adds to a request. The virtual Nano (the release
+//! and of three on a bus, the line's use while polling, click → shown, rig switch →
+//! shown, the page's Step → the new scan count shown, and what the Modbus TCP gateway adds to a request. The virtual Nano (the release
 //! `vnano` binary beside this one) runs on a pty; `utile live` runs in this process on it.
 //!
 //! The simulation may run slower than the wall clock; its own time is read from the
@@ -39,6 +39,10 @@ pub struct LiveFigures {
     /// The page's rig button (`POST /api/units/1/rig`, `--rig`) → the A0 input shown, ms of
     /// simulated time (one uTile only).
     pub rig_page_ms: Option<Spread>,
+    /// The page's Step (`POST /api/units/1/scan` `{"action": "step", "n": 1}` on a held
+    /// uTile) → the new scan count in the state the page's events carry, ms of simulated
+    /// time (one uTile only).
+    pub step_page_ms: Option<Spread>,
     /// What the gateway adds to a TCP request beyond its wait for the line and its time
     /// on it: mean and largest, ms.
     pub gateway_ms: (f64, f64),
@@ -260,6 +264,14 @@ fn run(nano: &mut Child, link: &Path, units: usize, secs: u32) -> Result<LiveFig
         }
     }
 
+    // The page's Step → the new scan count shown: the uTile held, then stepped one scan
+    // at a time.
+    let step_page = if units == 1 {
+        step_to_shown(&running, pace)?
+    } else {
+        Vec::new()
+    };
+
     // The gateway: FC03 requests from one TCP client while the page polls.
     let tcp = running.tcp.ok_or("no gateway")?;
     let mut s = TcpStream::connect(tcp).map_err(|e| e.to_string())?;
@@ -284,9 +296,40 @@ fn run(nano: &mut Child, link: &Path, units: usize, secs: u32) -> Result<LiveFig
         click_ms: Spread::of(&click).ok_or("no click was shown")?,
         rig_ms: Spread::of(&rig).ok_or("no rig switch was shown")?,
         rig_page_ms: Spread::of(&rig_page),
+        step_page_ms: Spread::of(&step_page),
         gateway_ms,
         tcp_rtt_ms: Spread::of(&rtts).ok_or("no TCP reply")?,
     })
+}
+
+/// Holds uTile 1, steps it 20 times one scan each (`POST …/scan`, as the page's Step 1), and
+/// runs it again: each step's time from the request to the scan count one higher in the
+/// view, ms of simulated time (`pace`: simulated / wall).
+fn step_to_shown(running: &Running, pace: f64) -> Result<Vec<f64>, String> {
+    let scans = || value(running, 1, "scans");
+    let snapshots = || running.hub.view().unit(1).map_or(0, |u| u.snapshots);
+    // A page following the events: utile live keeps a hold from the page while one is open.
+    let _page = running.hub.state_json.subscribe();
+    post(running.http, "/api/units/1/scan", r#"{"action": "hold"}"#)?;
+    // Two pictures read after the hold: the count shown has stopped.
+    let seen = snapshots();
+    until(Duration::from_secs(10), || snapshots() >= seen + 2).ok_or("no picture after Hold")?;
+    let mut shown = Vec::new();
+    for i in 0..20u32 {
+        std::thread::sleep(Duration::from_millis(113 + u64::from(i * 13 % 60)));
+        let before = scans().ok_or("no scan count")?;
+        let t0 = Instant::now();
+        post(
+            running.http,
+            "/api/units/1/scan",
+            r#"{"action": "step", "n": 1}"#,
+        )?;
+        if until(Duration::from_secs(5), || scans() == Some(before + 1)).is_some() {
+            shown.push(t0.elapsed().as_secs_f64() * 1e3 * pace);
+        }
+    }
+    post(running.http, "/api/units/1/scan", r#"{"action": "run"}"#)?;
+    Ok(shown)
 }
 
 /// `POST path` with the JSON `body` to the page's server; an error unless it answers 200.

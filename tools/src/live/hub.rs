@@ -114,6 +114,8 @@ pub struct Hub {
     pub stop: AtomicBool,
     /// `--rig`: the virtual Nano's rig.
     pub rig: Option<Rig>,
+    /// The uTiles held from the page, run once no page is open (`unwatched.rs`).
+    pub holds: super::unwatched::Holds,
 }
 
 impl Hub {
@@ -131,6 +133,7 @@ impl Hub {
             tcp: GatewayCounters::default(),
             stop: AtomicBool::new(false),
             rig,
+            holds: Default::default(),
         };
         (
             Arc::new(hub),

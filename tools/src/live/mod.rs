@@ -13,6 +13,7 @@
 //! | `send.rs` | a program sent from the page (`POST /api/units/{addr}/program`): checked, then `utile push --stop`'s steps as a job of the line |
 //! | `rig.rs` | `--rig`: the virtual Nano's rig over its control socket, the API's route for the page's rig panel |
 //! | `scan_control.rs` | hold, run and step (SPEC §18): the API's route, whether a uTile's firmware has them |
+//! | `unwatched.rs` | a hold from the page ends with the page: no page open for 10 s, the uTiles held from it run |
 //! | `queue.rs` | the queue in front of the line: writes first, reads and polls in turn |
 //! | `screen.rs` | EDIT or RUN, told from the terminal's output |
 //! | `unit.rs` | one uTile as the line's owner keeps it: snapshot, presets, program, back-off, link health, trend |
@@ -53,6 +54,7 @@ pub mod send;
 pub mod signals;
 pub mod terminal;
 pub mod unit;
+pub mod unwatched;
 pub mod view;
 
 use std::net::SocketAddr;
@@ -206,6 +208,7 @@ pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Ru
         None => None,
     };
     tokio::spawn(http::serialize_views(hub.clone()));
+    tokio::spawn(unwatched::watch(hub.clone()));
     let token_url = guard.url(&http_addr, &mqtt::options::host_name());
     let router = guard::layer(http::router(hub.clone()), guard);
     tokio::spawn(async move {

@@ -5,6 +5,11 @@
 //! `{"release": 0}`, `{"a6": 2.5}`, `{"d8": true}`, `{"reset": true}`, `{}`) and answers the
 //! rig's state after it. The line's owner publishes the latest [`RigView`] with its view
 //! (`/api/state`'s `rig`), so the page shows its rig panel only while a rig answers.
+//!
+//! On a bus (`cargo nano --bus N --control PATH`) the socket serves N Nanos, Nano k being
+//! the one at slave address k: each is asked in turn, the view holds each one's state, and
+//! the card of uTile k works Nano k (the route adds `"nano": k` to the page's request). A
+//! single Nano's rig is on every card.
 
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -50,6 +55,17 @@ pub struct RigState {
     pub a7: f64,
     /// Outputs Y0..Y7 as the pins show them.
     pub outputs: [bool; 8],
+    /// Which Nano of the socket (1..`nanos`, its slave address on a bus).
+    #[serde(default = "one")]
+    pub nano: u8,
+    /// How many Nanos the socket serves (1 without a bus).
+    #[serde(default = "one")]
+    pub nanos: u8,
+}
+
+/// A single Nano's `nano` and `nanos`.
+fn one() -> u8 {
+    1
 }
 
 /// `/api/state`'s `rig`: the socket, whether it answers, its state.
@@ -59,8 +75,8 @@ pub struct RigView {
     pub path: String,
     /// The rig answers (the page shows its panel).
     pub connected: bool,
-    /// Its latest state.
-    pub state: Option<RigState>,
+    /// Each Nano's latest state, Nano 1 first (one without a bus; empty until it answers).
+    pub nanos: Vec<RigState>,
     /// Why it does not answer, in words.
     pub error: Option<String>,
 }
@@ -73,6 +89,18 @@ pub struct Rig {
     requests: mpsc::UnboundedSender<Request>,
     view: watch::Receiver<RigView>,
     changes: Arc<AtomicU64>,
+}
+
+impl RigView {
+    /// The Nano (1..) that uTile `addr`'s card works: the one Nano without a bus, else the
+    /// one at that slave address; `None` when the rig has none there.
+    pub fn nano_of(&self, addr: u8) -> Option<u8> {
+        match self.nanos.len() {
+            0 => None,
+            1 => Some(1),
+            n => (1..=n).contains(&usize::from(addr)).then_some(addr),
+        }
+    }
 }
 
 impl Rig {
@@ -145,6 +173,17 @@ pub enum RigError {
     /// The body is no JSON object.
     #[error("a rig request is one JSON object, e.g. {{\"press\": 0}}")]
     NotAnObject,
+    /// The page named the Nano itself.
+    #[error("the uTile's address picks its Nano: leave \"nano\" out")]
+    NanoGiven,
+    /// The bus has no Nano at the uTile's address.
+    #[error("the rig's bus has no Nano at address {addr} (Nanos 1..{nanos})")]
+    NoNano {
+        /// The uTile's address.
+        addr: u8,
+        /// How many Nanos the rig has.
+        nanos: usize,
+    },
     /// The rig refused the request (nothing changed).
     #[error("the rig refused it: {0}")]
     Refused(String),
@@ -157,9 +196,11 @@ impl IntoResponse for RigError {
     fn into_response(self) -> Response {
         let status = match &self {
             RigError::Api(e) => e.status(),
-            RigError::NoRig => StatusCode::NOT_FOUND,
+            RigError::NoRig | RigError::NoNano { .. } => StatusCode::NOT_FOUND,
             RigError::NotConnected(_) => StatusCode::SERVICE_UNAVAILABLE,
-            RigError::NotAnObject | RigError::Refused(_) => StatusCode::BAD_REQUEST,
+            RigError::NotAnObject | RigError::NanoGiven | RigError::Refused(_) => {
+                StatusCode::BAD_REQUEST
+            }
             RigError::NoAnswer => StatusCode::GATEWAY_TIMEOUT,
         };
         (
@@ -201,7 +242,7 @@ async fn run(
         view.send_if_modified(|v| {
             let was = v.clone();
             v.connected = false;
-            v.state = None;
+            v.nanos.clear();
             v.error = Some(why.clone());
             *v != was
         });
@@ -228,55 +269,93 @@ async fn serve(
     view: &watch::Sender<RigView>,
     name: &str,
 ) -> String {
-    let (read, mut write) = stream.into_split();
-    let mut lines = BufReader::new(read).lines();
-    let ask = |request: Value| {
-        let mut text = request.to_string();
-        text.push('\n');
-        text
+    let (read, write) = stream.into_split();
+    let mut socket = Socket {
+        lines: BufReader::new(read).lines(),
+        write,
+        name,
     };
+    let mut nanos: Vec<RigState> = Vec::new();
     let mut tick = tokio::time::interval(ASK_EVERY);
     loop {
-        let (request, reply) = tokio::select! {
+        let asks: Vec<(Value, Option<_>)> = tokio::select! {
             r = rx.recv() => match r {
-                Some((request, reply)) => (request, Some(reply)),
+                Some((request, reply)) => vec![(request, Some(reply))],
                 None => return "utile live is stopping".into(),
             },
-            _ = tick.tick() => (Value::Object(Default::default()), None),
+            // Each Nano in turn (`{}` until the first answer tells how many there are).
+            _ = tick.tick() => (1..=nanos.len().max(1)).map(|k| (ask_of(k, nanos.len()), None)).collect(),
         };
-        if let Err(e) = write.write_all(ask(request).as_bytes()).await {
-            return format!("{name}: {e}");
-        }
-        let line = match tokio::time::timeout(ANSWER_WAIT, lines.next_line()).await {
-            Ok(Ok(Some(line))) => line,
-            Ok(Ok(None)) => return format!("{name}: the virtual Nano closed the socket"),
-            Ok(Err(e)) => return format!("{name}: {e}"),
-            Err(_) => {
-                if let Some(reply) = reply {
-                    let _ = reply.send(Err(RigError::NoAnswer));
+        for (request, reply) in asks {
+            let line = match socket.exchange(&request).await {
+                Ok(line) => line,
+                Err(why) => {
+                    if let Some(reply) = reply {
+                        let _ = reply.send(Err(RigError::NotConnected(why.clone())));
+                    }
+                    return why;
                 }
-                return format!("{name}: no answer within {} s", ANSWER_WAIT.as_secs());
-            }
-        };
-        let got = answer(&line);
-        let state = match &got {
-            Ok(s) => Some(s.clone()),
-            // A refusal still tells nothing new: the state stays the last one.
-            Err(_) => view.borrow().state.clone(),
-        };
-        view.send_if_modified(|v| {
-            let now = RigView {
-                path: name.to_string(),
-                connected: true,
-                state: state.clone(),
-                error: None,
             };
-            let changed = *v != now;
-            *v = now;
-            changed
-        });
-        if let Some(reply) = reply {
-            let _ = reply.send(got);
+            let got = answer(&line);
+            // A refusal tells nothing new: the states stay the last ones.
+            if let Ok(s) = &got {
+                nanos.resize(usize::from(s.nanos.max(1)), RigState::default());
+                if let Some(slot) = nanos.get_mut(usize::from(s.nano.max(1)) - 1) {
+                    *slot = s.clone();
+                }
+            }
+            view.send_if_modified(|v| {
+                let now = RigView {
+                    path: name.to_string(),
+                    connected: true,
+                    nanos: nanos.clone(),
+                    error: None,
+                };
+                let changed = *v != now;
+                *v = now;
+                changed
+            });
+            if let Some(reply) = reply {
+                let _ = reply.send(got);
+            }
+        }
+    }
+}
+
+/// The periodic request for Nano `k` of `count`: `{}` for a single one (or before the first
+/// answer), `{"nano": k}` on a bus.
+fn ask_of(k: usize, count: usize) -> Value {
+    if count > 1 {
+        serde_json::json!({ "nano": k })
+    } else {
+        serde_json::json!({})
+    }
+}
+
+/// The socket's two ends.
+struct Socket<'a> {
+    lines: tokio::io::Lines<BufReader<tokio::net::unix::OwnedReadHalf>>,
+    write: tokio::net::unix::OwnedWriteHalf,
+    name: &'a str,
+}
+
+impl Socket<'_> {
+    /// Sends one request line and reads its answer; why not, in words.
+    async fn exchange(&mut self, request: &Value) -> Result<String, String> {
+        let name = self.name;
+        let mut text = request.to_string();
+        text.push('\n');
+        if let Err(e) = self.write.write_all(text.as_bytes()).await {
+            return Err(format!("{name}: {e}"));
+        }
+        match tokio::time::timeout(ANSWER_WAIT, self.lines.next_line()).await {
+            Ok(Ok(Some(line))) => Ok(line),
+            Ok(Ok(None)) => Err(format!("{name}: the virtual Nano closed the socket")),
+            Ok(Err(e)) => Err(format!("{name}: {e}")),
+            Err(_) => Err(format!(
+                "{name}: no answer within {} s",
+                ANSWER_WAIT.as_secs()
+            )),
         }
     }
 }
@@ -294,14 +373,24 @@ pub async fn post(
         return Err(ApiError::ReadOnly.into());
     }
     let rig = hub.rig.as_ref().ok_or(RigError::NoRig)?;
-    if !body.is_object() {
+    let Value::Object(mut request) = body else {
         return Err(RigError::NotAnObject);
+    };
+    if request.contains_key("nano") {
+        return Err(RigError::NanoGiven);
     }
     let view = rig.view();
     if !view.connected {
         return Err(RigError::NotConnected(view.error.unwrap_or_default()));
     }
-    Ok(Json(rig.ask(body).await?))
+    let nano = view.nano_of(addr).ok_or(RigError::NoNano {
+        addr,
+        nanos: view.nanos.len(),
+    })?;
+    if view.nanos.len() > 1 {
+        request.insert("nano".into(), nano.into());
+    }
+    Ok(Json(rig.ask(Value::Object(request)).await?))
 }
 
 #[cfg(test)]
@@ -317,8 +406,30 @@ mod tests {
         .unwrap();
         assert!(s.switches[0] && !s.pins[0] && s.d8 && s.outputs[0]);
         assert_eq!(s.a6, 2.5);
+        assert_eq!((s.nano, s.nanos), (1, 1), "a single Nano's answer");
         let e = answer(r#"{"error":"press: switches are 0..5 (A0..A5), not 9","switches":[]}"#);
         assert!(matches!(e, Err(RigError::Refused(w)) if w.contains("0..5")));
         assert!(matches!(answer("nonsense"), Err(RigError::NotConnected(_))));
+        let e = answer(r#"{"error":"no Nano 4 here: nano is 1..3","nanos":3}"#);
+        assert!(matches!(e, Err(RigError::Refused(w)) if w.contains("1..3")));
+    }
+
+    #[test]
+    fn a_card_works_the_only_nano_or_the_one_at_its_address() {
+        let of = |n: u8| RigView {
+            nanos: (1..=n)
+                .map(|k| RigState {
+                    nano: k,
+                    nanos: n,
+                    ..RigState::default()
+                })
+                .collect(),
+            connected: true,
+            ..RigView::default()
+        };
+        assert_eq!(of(0).nano_of(1), None, "no answer yet");
+        assert_eq!((of(1).nano_of(1), of(1).nano_of(7)), (Some(1), Some(1)));
+        assert_eq!(of(3).nano_of(2), Some(2));
+        assert_eq!((of(3).nano_of(0), of(3).nano_of(4)), (None, None));
     }
 }

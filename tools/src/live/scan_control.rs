@@ -185,12 +185,19 @@ pub async fn post(
             action: body.action,
             code,
         }),
-        None => Ok(Json(ScanDone {
-            ok: true,
-            action: body.action,
-            n,
-            on_line_ms: done.on_line.as_secs_f64() * 1e3,
-        })),
+        None => {
+            if value == 0 && register == HR_SCAN_CONTROL {
+                hub.holds.ran(addr);
+            } else {
+                hub.holds.held(addr);
+            }
+            Ok(Json(ScanDone {
+                ok: true,
+                action: body.action,
+                n,
+                on_line_ms: done.on_line.as_secs_f64() * 1e3,
+            }))
+        }
     }
 }
 

@@ -1,36 +1,31 @@
 //! One uTile on the line, owned by the line's owner: what was last read from it (the
 //! snapshot, the presets, the program), whether it answers, when it is next polled (a dead
 //! address backs off to one poll a second), the link's health, the trend; and its part of
-//! the published view.
+//! the published view. Its rooms: `unit/read.rs` (the reads and their PDUs),
+//! `unit/legacy.rs` (the picture of a firmware without §17, in five reads) and `unit/card.rs`
+//! (the card's state, its advice and its part of the view).
 
 use std::collections::VecDeque;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use utile_core::engine::LINES;
-use utile_core::modbus::hold::{STATUS_HELD, STATUS_LAPSED};
-use utile_core::modbus::plc::STATUS_RUNNING;
-use utile_core::modbus::snapshot::{self, Snapshot, PROGRAM, PROGRAM_LEN, SNAPSHOT, SNAPSHOT_LEN};
-use utile_core::modbus::{
-    Exception, READ_COILS, READ_DISCRETE_INPUTS, READ_HOLDING_REGISTERS, READ_INPUT_REGISTERS,
-};
+use utile_core::modbus::snapshot::{self, Snapshot, PROGRAM_LEN, SNAPSHOT_LEN};
+use utile_core::modbus::Exception;
 use utile_kit::modbus::registers;
 
-use super::hub::ProgramFile;
 use super::line_use::LineUse;
 use super::program;
 use super::rtu;
-use super::scan_control::{self, ScanControl};
-use super::screen::Mode;
-use super::signals::{self, Holdings, HOLDINGS};
-use super::view::{CardState, FileMatch, Listing, ProgramView, Trend, UnitView, EDIT_ADVICE};
+use super::scan_control::ScanControl;
+use super::signals::Holdings;
+use super::view::{Listing, Trend};
 
-/// A held card's advice (SPEC §18).
-const HELD_ADVICE: &str = "Held: the scan stopped at its END, the outputs stay as they are. Run \
-                           lets it run freely, Step runs 1 or 10 scans. Without a Modbus frame \
-                           for 10 s the hold ends by itself.";
-/// A running card's advice after a hold ended by itself.
-const LAPSED_ADVICE: &str = "A hold ended by itself since RUN (no Modbus frame came for 10 s).";
+mod card;
+mod legacy;
+mod read;
+
+pub use read::Read;
 
 /// Misses in a row after which a uTile is shown offline.
 const OFFLINE_AFTER: u32 = 3;
@@ -44,44 +39,6 @@ pub const TREND_STEP: Duration = Duration::from_millis(250);
 pub const TREND_POINTS: usize = 2_400;
 /// The window over which refreshes per second and the line's share are counted.
 const WINDOW: Duration = Duration::from_secs(2);
-
-/// A read the live view makes of one uTile.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Read {
-    /// SPEC §17's snapshot: FC04, input registers 64–103.
-    Snapshot,
-    /// Firmware without §17 (version 2): the same picture from §13's map in five reads.
-    Legacy(u8),
-    /// Presets and set-points: FC03, holding registers 0–25.
-    Holdings,
-    /// Half of the program window (FC04 256–319, 320–383).
-    Program(u8),
-    /// Whether the firmware holds and steps (SPEC §18): FC03 32–33, once.
-    ScanControl,
-}
-
-impl Read {
-    /// The request's PDU.
-    pub fn pdu(self) -> Vec<u8> {
-        let read = |f: u8, start: u16, n: u16| {
-            let [s0, s1] = start.to_be_bytes();
-            let [n0, n1] = n.to_be_bytes();
-            vec![f, s0, s1, n0, n1]
-        };
-        let half = PROGRAM_LEN / 2;
-        match self {
-            Read::Snapshot => read(READ_INPUT_REGISTERS, SNAPSHOT, SNAPSHOT_LEN),
-            Read::Legacy(0) => read(READ_INPUT_REGISTERS, 0, 18),
-            Read::Legacy(1) => read(READ_INPUT_REGISTERS, 32, 16),
-            Read::Legacy(2) => read(READ_COILS, 0, 24),
-            Read::Legacy(3) => read(READ_DISCRETE_INPUTS, 0, 6),
-            Read::Legacy(_) => read(READ_DISCRETE_INPUTS, 8, 42),
-            Read::Holdings => read(READ_HOLDING_REGISTERS, 0, HOLDINGS as u16),
-            Read::Program(h) => read(READ_INPUT_REGISTERS, PROGRAM + u16::from(h) * half, half),
-            Read::ScanControl => scan_control::PROBE.to_vec(),
-        }
-    }
-}
 
 /// The link's health, as counted by the master.
 #[derive(Clone, Debug, Default, serde::Serialize)]
@@ -314,51 +271,6 @@ impl Unit {
         }
     }
 
-    /// One of the five legacy reads; the last completes a snapshot.
-    fn legacy_step(&mut self, step: u8, pdu: &[u8], regs: &[u16], now: Instant) -> bool {
-        use snapshot::at;
-        self.legacy_step = (step + 1) % 5;
-        let r = &mut self.legacy_regs;
-        let bits = pdu.get(2..).unwrap_or_default();
-        let byte = |i: usize| u16::from(bits.get(i).copied().unwrap_or(0));
-        match step {
-            0 if regs.len() == 18 => {
-                r[usize::from(at::STATUS)] = regs[0];
-                r[usize::from(at::SCAN_TIMES)..][..3].copy_from_slice(&regs[1..4]);
-                r[usize::from(at::SCANS)..][..2].copy_from_slice(&regs[4..6]);
-                r[usize::from(at::OVERRUNS)] = regs[6];
-                r[usize::from(at::DROPPED)] = regs[7];
-                r[usize::from(at::COUNTS)..][..10].copy_from_slice(&regs[8..18]);
-            }
-            1 if regs.len() == 16 => {
-                r[usize::from(at::TIME_LEFT)..][..16].copy_from_slice(regs);
-            }
-            2 => {
-                r[usize::from(at::INPUTS_OUTPUTS)] &= 0x00FF;
-                r[usize::from(at::INPUTS_OUTPUTS)] |= byte(0) << 8;
-                r[usize::from(at::VIRTUAL)] = byte(1) | byte(2) << 8;
-            }
-            3 => {
-                r[usize::from(at::INPUTS_OUTPUTS)] &= 0xFFC0;
-                r[usize::from(at::INPUTS_OUTPUTS)] |= byte(0) & 0x3F;
-            }
-            4 => {
-                // Discrete inputs 8..49: Q, TQ, CQ, then H6 and H7.
-                let h = (byte(5) & 3) << 6;
-                r[usize::from(at::INPUTS_OUTPUTS)] &= 0xFF3F;
-                r[usize::from(at::INPUTS_OUTPUTS)] |= h;
-                r[usize::from(at::FLIP_FLOPS)] = byte(0) | byte(1) << 8;
-                r[usize::from(at::TIMER_OUTPUTS)] = byte(2) | byte(3) << 8;
-                r[usize::from(at::COUNTER_OUTPUTS)] = byte(4);
-                let s = Snapshot::from_registers(r);
-                self.took_snapshot(s, now);
-                return true;
-            }
-            _ => {}
-        }
-        false
-    }
-
     /// Each program line's value in the latest snapshot (the core's engine: once per
     /// snapshot, presets or program, never per page).
     fn run_program(&mut self) {
@@ -439,88 +351,5 @@ impl Unit {
     /// Counts a request sent.
     pub fn sent(&mut self) {
         self.link.requests += 1;
-    }
-
-    /// A card's state: offline, edit (the editor has the line), stopped (answers, but its
-    /// status says the program is not running) or online.
-    pub fn card_state(&self, open: bool, mode: Mode) -> CardState {
-        if !open || !self.online && mode != Mode::Edit {
-            return CardState::Offline;
-        }
-        if mode == Mode::Edit {
-            return CardState::Edit;
-        }
-        match &self.snap {
-            Some((s, _)) if s.status & STATUS_RUNNING == 0 => CardState::Stopped,
-            Some((s, _)) if s.status & STATUS_HELD != 0 => CardState::Held,
-            _ => CardState::Online,
-        }
-    }
-
-    /// Its part of the view published at `now`.
-    pub fn view(
-        &self,
-        open: bool,
-        mode: Mode,
-        file: Option<&ProgramFile>,
-        now: Instant,
-    ) -> UnitView {
-        let state = self.card_state(open, mode);
-        let advice = match state {
-            CardState::Offline => format!(
-                "No answer{}: check the cable, the power and the uTile's address (ADDR {}). \
-                 The values shown are the last ones read.",
-                self.reason
-                    .as_ref()
-                    .map(|r| format!(" ({r})"))
-                    .unwrap_or_default(),
-                self.addr
-            ),
-            CardState::Edit => format!("{EDIT_ADVICE}."),
-            CardState::Stopped => {
-                "uTile answers, but its program is not running: start it with RUN or EX0."
-                    .to_string()
-            }
-            CardState::Held => HELD_ADVICE.to_string(),
-            CardState::Online => match (&self.reason, &self.snap) {
-                (Some(r), _) => r.clone(),
-                (None, Some((s, _))) if s.status & STATUS_LAPSED != 0 => LAPSED_ADVICE.into(),
-                _ => String::new(),
-            },
-        };
-        let snap = self.snap.as_ref();
-        let program = match (&self.program, snap) {
-            (Some((fp, _, same)), Some((s, _))) => Some(ProgramView {
-                fingerprint: *fp,
-                consistent: *same,
-                values: self.program_values.clone(),
-                file: file.map(|f| FileMatch {
-                    name: f.name.clone(),
-                    fingerprint: f.fingerprint,
-                    matches: f.fingerprint == s.fingerprint,
-                }),
-            }),
-            _ => None,
-        };
-        UnitView {
-            addr: self.addr,
-            state,
-            online: state != CardState::Offline,
-            advice,
-            reason: self.reason.clone(),
-            legacy: self.legacy,
-            scan_control: self.scan_control.clone(),
-            age_ms: snap.map(|(_, t)| now.duration_since(*t).as_millis() as u64),
-            values: snap
-                .map(|(s, _)| signals::values(s, self.holdings.as_ref()))
-                .unwrap_or_default(),
-            refresh_per_s: self.refresh_rate(now),
-            scans_per_s: self.scans_per_s.round(),
-            link: self.link.clone(),
-            program,
-            snapshots: self.snapshots,
-            listing: self.listing.clone(),
-            trend: self.trend.clone(),
-        }
     }
 }

@@ -24,6 +24,7 @@ Examples:
   cargo nano --pty --link /tmp/utile-tty             connect minicom or `utile live` to it
   cargo nano --load examples/tank-fill.utl --a6 2.0 --a7 2.0 --persist
   cargo nano --bus 3                                 three Nanos on one RS-485 line
+  cargo nano --bus 3 --control /tmp/rig.sock         ... their rigs worked over a socket
   cargo nano --pty --link /tmp/nano --bootloader old --blank   avrdude -c arduino flashes it
 
 RUST_LOG selects what the log on standard error shows (e.g. RUST_LOG=debug).";
@@ -108,8 +109,11 @@ pub struct Args {
     pub plant: Option<super::plant::Kind>,
     /// Work the rig from another program over a Unix socket at PATH: one JSON object a line
     /// ({"press": 0}, {"release": 0}, {"a6": 2.5}, {"d8": true}, {"reset": true}, {} to ask),
-    /// each answered with the rig's state: switches, jumpers, A6/A7 in volts, outputs Y0..Y7
-    #[arg(long, value_name = "PATH", conflicts_with = "bus")]
+    /// each answered with the rig's state: switches, jumpers, A6/A7 in volts, outputs Y0..Y7,
+    /// the simulated seconds.
+    /// With --bus a request names its Nano, {"nano": 2, "press": 0}: Nanos are 1..N as their
+    /// slave addresses (Nano 1 when left out)
+    #[arg(long, value_name = "PATH")]
     pub control: Option<PathBuf>,
 }
 
@@ -314,6 +318,8 @@ mod tests {
         let o = p(&["--bus", "3"]).unwrap();
         assert_eq!(o.bus, Some(3));
         assert!(o.pty);
+        let o = p(&["--bus", "3", "--control", "/tmp/rig.sock"]).unwrap();
+        assert_eq!(o.control, Some(PathBuf::from("/tmp/rig.sock")));
     }
 
     #[test]

@@ -4,6 +4,8 @@
 //! (by default `PU. .PY KEY END`: outputs Y0..Y7 follow coils 8..15). `--a6`/`--a7` and
 //! `--press` set every Nano's rig at start; the console's rig keys (as with `--pty`) work the
 //! Nano that `@N` picked last (Nano 1 until then), and each change prints its status line.
+//! `--control PATH` works each Nano's rig from another program: a request names its Nano
+//! (`{"nano": 2, "press": 0}`, Nano N being the one at slave address N).
 
 use std::io::Write;
 use std::path::Path;
@@ -16,6 +18,7 @@ use utile_kit::simavr::{Bus, Chip, RigPin, F_CPU};
 
 use super::args::Options;
 use super::arrivals::Arrivals;
+use super::control::{Control, Nanos};
 use super::error::VnanoError;
 use super::io::{self, STDIN};
 use super::pty::Pty;
@@ -58,6 +61,10 @@ pub fn run(o: &Options, n: usize, elf: &Path) -> Result<(), VnanoError> {
         chips.push(c);
     }
     let mut bus = Bus::new(chips, 19_200).with_driver_enable();
+    let mut control = match &o.control {
+        Some(path) => Some(Control::bind(path)?),
+        None => None,
+    };
     let mut pty = Pty::open(o.link.as_deref()).map_err(VnanoError::Pty)?;
     let mut out = std::io::stdout();
     let _ = writeln!(
@@ -84,6 +91,9 @@ pub fn run(o: &Options, n: usize, elf: &Path) -> Result<(), VnanoError> {
         if keys.read(&mut bus, &mut out) {
             break;
         }
+        if let Some(control) = &mut control {
+            control.poll(&mut BusNanos(&mut bus, &mut keys.analog_mv));
+        }
         let mut bytes = Vec::new();
         if pty.read_into(&mut bytes) > 0 {
             arrivals.came(bytes, Instant::now(), bus.cycle());
@@ -99,6 +109,10 @@ pub fn run(o: &Options, n: usize, elf: &Path) -> Result<(), VnanoError> {
         };
         if let Some((i, state)) = bus.run_for(step) {
             return Err(VnanoError::BusNanoStopped { nano: i + 1, state });
+        }
+        // simavr drops an external level whenever the firmware writes the PORT register.
+        for i in 0..n {
+            bus.chip_mut(i).assert_pins();
         }
         let sent = bus.take_master();
         if let Some(last) = sent.last() {
@@ -126,6 +140,19 @@ pub fn run(o: &Options, n: usize, elf: &Path) -> Result<(), VnanoError> {
         bus.cycle() as f64 / F_CPU as f64
     );
     Ok(())
+}
+
+/// The bus's Nanos and their levels on A6 and A7 for the control socket.
+struct BusNanos<'a>(&'a mut Bus, &'a mut [[u32; 2]]);
+
+impl Nanos for BusNanos<'_> {
+    fn count(&self) -> usize {
+        self.0.len()
+    }
+
+    fn nano(&mut self, i: usize) -> (&mut Chip, &mut [u32; 2]) {
+        (self.0.chip_mut(i), &mut self.1[i])
+    }
 }
 
 /// The console's rig keys on a bus: `@N` picks Nano N, the rest work it as with `--pty`.

@@ -4,17 +4,22 @@
 //! 0..5), `{"d8": true}` / `{"d9": false}` (jumper fitted), `{"reset": true}`, or `{}` to
 //! ask — and every request is answered with the rig's state after it:
 //! `{"switches": [..6], "pins": [..6], "d8": .., "d9": .., "a6": V, "a7": V, "outputs":
-//! [..8]}` (switches and jumpers `true` when pressed or fitted, the chip's A0..A5 pins as it
-//! reads them, a pressed switch pulling its pin low; outputs Y0..Y7 as the pins show them), with
-//! `"error"` naming what was refused. The Nano of a single run only: `"nano"` other than 1
-//! is refused.
+//! [..8], "seconds": S}` (switches and jumpers `true` when pressed or fitted, the chip's A0..A5
+//! pins as it reads them, a pressed switch pulling its pin low; outputs Y0..Y7 as the pins
+//! show them; the simulated time since power-up, so a client can time what it sees), with
+//! `"error"` naming what was refused, and `"nano"` (which Nano) and `"nanos"` (how many).
+//!
+//! On a bus (`--bus N`) a request may name its Nano: `{"nano": 2, "press": 0}`. Nanos are
+//! numbered 1..N, as their slave addresses (Nano 2 answers Modbus at address 2); without
+//! `"nano"` a request works Nano 1 (the only one of a single run). A Nano that is not there
+//! is answered `{"error": "no Nano 5 here: …", "nanos": N}` and nothing changes.
 
 use std::io::{ErrorKind, Read, Write};
 use std::os::unix::net::{UnixListener, UnixStream};
 use std::path::{Path, PathBuf};
 
 use serde_json::{json, Map, Value};
-use utile_kit::simavr::{Chip, RigPin, VCC_MV};
+use utile_kit::simavr::{Chip, Reset, RigPin, VCC_MV};
 
 /// Longest request line kept (a longer one is refused whole).
 const MAX_LINE: usize = 1024;
@@ -32,13 +37,25 @@ struct Client {
     line: Vec<u8>,
 }
 
-/// What a request asks of the session besides the chip itself.
-#[derive(Debug, Default, PartialEq, Eq)]
-pub struct Asked {
-    /// Reset the chip (warm reset, as the rig's `r` key).
-    pub reset: bool,
-    /// A request came (the status line shows the change).
-    pub handled: bool,
+/// The Nanos a control socket works: the one of a single run, or each of a bus.
+pub trait Nanos {
+    /// How many (1 without a bus).
+    fn count(&self) -> usize;
+    /// Nano `i` (0-based) and its levels on A6 and A7, mV.
+    fn nano(&mut self, i: usize) -> (&mut Chip, &mut [u32; 2]);
+}
+
+/// The one Nano of a single run and its levels on A6 and A7 (mV).
+pub struct One<'a>(pub &'a mut Chip, pub &'a mut [u32; 2]);
+
+impl Nanos for One<'_> {
+    fn count(&self) -> usize {
+        1
+    }
+
+    fn nano(&mut self, _: usize) -> (&mut Chip, &mut [u32; 2]) {
+        (self.0, self.1)
+    }
 }
 
 impl Control {
@@ -60,9 +77,10 @@ impl Control {
         })
     }
 
-    /// Take new clients and their complete lines, carry each request out on `nano` and the
-    /// session's analog levels `analog_mv` (A6, A7), and answer it. Never waits.
-    pub fn poll(&mut self, nano: &mut Chip, analog_mv: &mut [u32; 2]) -> Asked {
+    /// Take new clients and their complete lines, carry each request out on the Nano of
+    /// `nanos` it names, and answer it. Never waits; true when a request came (the status
+    /// line shows the change).
+    pub fn poll(&mut self, nanos: &mut dyn Nanos) -> bool {
         while let Ok((stream, _)) = self.listener.accept() {
             if stream.set_nonblocking(true).is_ok() {
                 self.clients.push(Client {
@@ -71,7 +89,7 @@ impl Control {
                 });
             }
         }
-        let mut asked = Asked::default();
+        let mut handled = false;
         self.clients.retain_mut(|c| {
             let mut buf = [0u8; 512];
             loop {
@@ -85,8 +103,8 @@ impl Control {
             }
             while let Some(end) = c.line.iter().position(|&b| b == b'\n') {
                 let line: Vec<u8> = c.line.drain(..=end).collect();
-                asked.handled = true;
-                let answer = request(&line, nano, analog_mv, &mut asked);
+                handled = true;
+                let answer = request(&line, nanos);
                 let mut text = answer.to_string();
                 text.push('\n');
                 // The socket is non-blocking: a client that reads nothing loses answers.
@@ -99,7 +117,7 @@ impl Control {
             }
             true
         });
-        asked
+        handled
     }
 }
 
@@ -109,38 +127,66 @@ impl Drop for Control {
     }
 }
 
-/// One request line carried out; the rig's state (with `"error"` when refused).
-fn request(line: &[u8], nano: &mut Chip, analog_mv: &mut [u32; 2], asked: &mut Asked) -> Value {
-    let error = match serde_json::from_slice::<Value>(line) {
-        Ok(Value::Object(fields)) => apply(&fields, nano, analog_mv, asked).err(),
-        Ok(_) => Some("a request is one JSON object, e.g. {\"press\": 0}".to_string()),
-        Err(e) => Some(format!("not JSON: {e}")),
+/// One request line carried out; the state of the Nano it named (with `"error"` when
+/// refused).
+fn request(line: &[u8], nanos: &mut dyn Nanos) -> Value {
+    let fields = match serde_json::from_slice::<Value>(line) {
+        Ok(Value::Object(fields)) => Ok(fields),
+        Ok(_) => Err("a request is one JSON object, e.g. {\"press\": 0}".to_string()),
+        Err(e) => Err(format!("not JSON: {e}")),
     };
-    let mut state = state(nano, analog_mv);
-    if let (Some(why), Value::Object(m)) = (error, &mut state) {
-        m.insert("error".into(), Value::String(why));
+    let count = nanos.count();
+    let i = match fields.as_ref().map(|f| which(f.get("nano"), count)) {
+        Ok(Ok(i)) => i,
+        Ok(Err(why)) => return json!({"error": why, "nanos": count}),
+        Err(_) => 0,
+    };
+    let (chip, analog_mv) = nanos.nano(i);
+    let error = match fields {
+        Ok(fields) => apply(&fields, chip, analog_mv).err(),
+        Err(why) => Some(why),
+    };
+    let mut state = state(chip, analog_mv);
+    if let Value::Object(m) = &mut state {
+        m.insert("nano".into(), json!(i + 1));
+        m.insert("nanos".into(), json!(count));
+        if let Some(why) = error {
+            m.insert("error".into(), Value::String(why));
+        }
     }
     state
 }
 
+/// The Nano (0-based) a request's `"nano"` names among `count`: the first when left out.
+fn which(nano: Option<&Value>, count: usize) -> Result<usize, String> {
+    let Some(value) = nano else {
+        return Ok(0);
+    };
+    match value.as_u64() {
+        Some(n @ 1..) if n as usize <= count => Ok(n as usize - 1),
+        _ if count == 1 => Err(format!(
+            "one Nano runs here (nano 1, or leave nano out), not {value}"
+        )),
+        _ => Err(format!(
+            "no Nano {value} here: nano is 1..{count}, as their slave addresses on the bus"
+        )),
+    }
+}
+
 /// One checked change of a request, made once every field has been checked.
-type Change = Box<dyn FnOnce(&mut Chip, &mut [u32; 2], &mut Asked)>;
+type Change = Box<dyn FnOnce(&mut Chip, &mut [u32; 2])>;
 
 /// The request's fields on the rig, checked first: nothing changes when one is wrong.
 fn apply(
     fields: &Map<String, Value>,
     nano: &mut Chip,
     analog_mv: &mut [u32; 2],
-    asked: &mut Asked,
 ) -> Result<(), String> {
     let mut changes: Vec<Change> = Vec::new();
     for (key, value) in fields {
         match key.as_str() {
-            "nano" => {
-                if value.as_u64() != Some(1) {
-                    return Err(format!("one Nano runs here (nano 1), not {value}"));
-                }
-            }
+            // Checked by `which`.
+            "nano" => {}
             "press" | "release" => {
                 let n = value
                     .as_u64()
@@ -148,7 +194,7 @@ fn apply(
                     .ok_or_else(|| format!("{key}: switches are 0..5 (A0..A5), not {value}"))?
                     as u8;
                 let low = key == "press";
-                changes.push(Box::new(move |c, _, _| c.hold_low(RigPin::Switch(n), low)));
+                changes.push(Box::new(move |c, _| c.hold_low(RigPin::Switch(n), low)));
             }
             "a6" | "a7" => {
                 let volts = value
@@ -157,7 +203,7 @@ fn apply(
                     .ok_or_else(|| format!("{key}: a level is 0..5 volts, not {value}"))?;
                 let (pin, i) = if key == "a6" { (6u8, 0) } else { (7u8, 1) };
                 let mv = (volts * 1000.0).round() as u32;
-                changes.push(Box::new(move |c, a, _| {
+                changes.push(Box::new(move |c, a| {
                     a[i] = mv;
                     c.set_analog_mv(pin, mv);
                 }));
@@ -167,11 +213,12 @@ fn apply(
                     .as_bool()
                     .ok_or_else(|| format!("{key}: true (fitted) or false, not {value}"))?;
                 let pin = if key == "d8" { RigPin::D8 } else { RigPin::D9 };
-                changes.push(Box::new(move |c, _, _| c.hold_low(pin, fitted)));
+                changes.push(Box::new(move |c, _| c.hold_low(pin, fitted)));
             }
             "reset" => {
                 if value.as_bool() == Some(true) {
-                    changes.push(Box::new(|_, _, asked| asked.reset = true));
+                    // A warm reset, as the rig's `r` key.
+                    changes.push(Box::new(|c, _| c.reset(Reset::External)));
                 }
             }
             other => {
@@ -182,12 +229,12 @@ fn apply(
         }
     }
     for change in changes {
-        change(nano, analog_mv, asked);
+        change(nano, analog_mv);
     }
     Ok(())
 }
 
-/// The rig's state as the answers give it.
+/// The rig's state of one Nano as the answers give it.
 pub fn state(nano: &Chip, analog_mv: &[u32; 2]) -> Value {
     let switches: Vec<bool> = (0..6)
         .map(|n| nano.is_held_low(RigPin::Switch(n)))
@@ -204,5 +251,6 @@ pub fn state(nano: &Chip, analog_mv: &[u32; 2]) -> Value {
         "a6": f64::from(analog_mv[0]) / 1000.0,
         "a7": f64::from(analog_mv[1]) / 1000.0,
         "outputs": leds,
+        "seconds": nano.seconds(),
     })
 }

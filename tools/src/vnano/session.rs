@@ -9,7 +9,7 @@ use utile_kit::simavr::{self as nano, Chip, CpuState, Reset, RxPacing};
 
 use super::args::Options;
 use super::arrivals::Arrivals;
-use super::control::Control;
+use super::control::{Control, One};
 use super::error::VnanoError;
 use super::io::{self, STDIN, STDOUT};
 use super::load::{Loader, Step};
@@ -188,9 +188,7 @@ impl Session {
                 self.deliver(nano);
             }
             if let Some(control) = &mut self.control {
-                let asked = control.poll(nano, &mut self.analog_mv);
-                self.reset |= asked.reset;
-                if asked.handled {
+                if control.poll(&mut One(nano, &mut self.analog_mv)) {
                     self.drawn = None;
                 }
             }

@@ -98,6 +98,17 @@ pub fn live_rows(rows: &mut Report, secs: u32) {
                         "≤ 150 ms",
                     );
                 }
+                if let Some(r) = &f.step_page_ms {
+                    rows.row(
+                        format!(
+                            "live view, {what}: the page's Step (held) → the new scan count \
+                             (min / median / max)"
+                        ),
+                        ms(r),
+                        "—",
+                        "≤ 150 ms",
+                    );
+                }
                 rows.row(
                     format!("live view, {what}: gateway overhead (mean / max)"),
                     format!(

@@ -4,7 +4,20 @@ use std::time::{Duration, Instant};
 
 use super::super::queue::{Done, Failure, Job, Origin};
 use super::super::rtu;
+use super::super::signals::HOLDINGS;
 use super::{Miss, Owner, BUSY_WINDOW, DEAD_FOR, SLACK_MAX};
+
+/// Whether a write reaches the presets and set-points the card shows (holding registers
+/// 0..HOLDINGS): they are read again before the next picture. Hold, run and step (registers
+/// 32–33) are not, so a step shows one picture later, without the presets' read between.
+fn writes_holdings(pdu: &[u8]) -> bool {
+    match pdu {
+        [f, a0, a1, ..] if !rtu::writes_coils(*f) => {
+            usize::from(u16::from_be_bytes([*a0, *a1])) < HOLDINGS
+        }
+        _ => false,
+    }
+}
 
 impl Owner {
     /// The unit whose poll is due first, if any is due.
@@ -107,7 +120,7 @@ impl Owner {
                 let first = first.checked_sub(Duration::from_micros(1)).unwrap_or(first);
                 if let Some(u) = self.unit_mut(job.addr) {
                     u.due = if wrote { first } else { job.queued.min(u.due) };
-                    if wrote && !rtu::writes_coils(function) {
+                    if wrote && writes_holdings(&job.pdu) {
                         u.holdings_stale();
                     }
                 }
@@ -132,5 +145,21 @@ impl Owner {
         };
         job.finish(outcome);
         self.publish();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_writes_to_the_presets_and_set_points_read_them_again() {
+        assert!(writes_holdings(&[6, 0, 0, 0, 5]), "T0's preset");
+        assert!(writes_holdings(&[6, 0, 25, 1, 0]), "the last set-point");
+        assert!(writes_holdings(&[0x10, 0, 24, 0, 2, 4, 0, 1, 0, 2]));
+        assert!(!writes_holdings(&[6, 0, 32, 0, 1]), "hold");
+        assert!(!writes_holdings(&[6, 0, 33, 0, 1]), "a step");
+        assert!(!writes_holdings(&[5, 0, 8, 0xFF, 0]), "a coil");
+        assert!(!writes_holdings(&[6]));
     }
 }

@@ -1,7 +1,9 @@
 // The virtual Nano's rig on a card (utile live --rig): push-buttons A0..A5 (held while the
 // pointer or the key is down, or latched with Latch), the A6/A7 levels in volts, the D8/D9
 // jumpers and reset. Each posts the control socket's own JSON to /api/units/N/rig. The panel
-// shows only while /api/state's `rig` says a rig answers; read-only, its controls are disabled.
+// shows only while /api/state's `rig` says a rig answers and has a Nano for the card: a single
+// Nano's rig is on every card; on a bus (`cargo nano --bus N`) card N works Nano N, the one at
+// its slave address. Read-only, its controls are disabled.
 
 import { el, errorText } from "/dom.js";
 
@@ -18,6 +20,13 @@ export async function rigRequest(addr, request) {
   } catch (e) {
     return { why: `the server did not answer (${e})` };
   }
+}
+
+// The state of the Nano that uTile `addr`'s card works (as RigView::nano_of in rig.rs): the
+// only one, or on a bus the one at that address; null when the rig has none there.
+function nanoOf(rig, addr) {
+  if (rig.nanos.length === 1) return rig.nanos[0];
+  return rig.nanos[addr - 1] || null;
 }
 
 export class RigPanel {
@@ -131,7 +140,7 @@ export class RigPanel {
 
   // `rig`: /api/state's `rig` (null without --rig).
   update(rig) {
-    const s = rig && rig.connected ? rig.state : null;
+    const s = rig && rig.connected ? nanoOf(rig, this.addr) : null;
     this.root.hidden = !s;
     if (s) this.show(s);
   }
