@@ -177,6 +177,44 @@ fn map_names_a_signal() {
 }
 
 #[test]
+fn a_timer_read_by_name_above_its_call_is_its_last_q() {
+    // A pulse generator drawn as in OpenPLC: a contact on TOF5.Q (negated) above TOF5
+    // retriggers it; TOF5.Q read by name is the timer's Q (the last call's, above it).
+    let negated = contact(2, 1, "TOF5.Q", 0).replace("negated=\"false\"", "negated=\"true\"");
+    let body = format!(
+        "{}{negated}{}{}{}",
+        rail(1, 0),
+        block(5, "TOF", 2, "IN", Some(("PT", "T#2s")), 0),
+        contact(6, 1, "TOF5.Q", 40),
+        coil(9, "6", "Lamp", 40)
+    );
+    let path = write_scratch("by-name.xml", &project(&["Lamp=%QX0.0"], &body, "LD"));
+    let l = utile_ok(&["import", &path]);
+    assert!(
+        l.starts_with("000 TQ0.\n001 !\n002 .TK0\n003 TQ0.\n004 .Y0\n005 KEY\n006 END\n"),
+        "{l}"
+    );
+    assert!(l.contains("T0 = 20\n"), "{l}");
+    // Only a timer's or a counter's Q is read by name.
+    let et = body.replace(
+        "<variable>TOF5.Q</variable></contact><coil",
+        "<variable>TOF5.ET</variable></contact><coil",
+    );
+    refused("by-name-et.xml", project(&["Lamp=%QX0.0"], &et, "LD").as_bytes(), None,
+        &["contact TOF5.ET (localId 6): TOF5.ET: uTile reads only the Q of a TON, TOF, TP or CTU by name"]);
+    let nope = body.replace(
+        "<variable>TOF5.Q</variable></contact><coil",
+        "<variable>Nope.Q</variable></contact><coil",
+    );
+    refused(
+        "by-name-nope.xml",
+        project(&["Lamp=%QX0.0"], &nope, "LD").as_bytes(),
+        None,
+        &["contact Nope.Q (localId 6): Nope.Q names no block of the body"],
+    );
+}
+
+#[test]
 fn every_refusal_says_why_and_what_to_do() {
     let lamp = |inner: &str, vars: &[&str]| {
         let body = format!(

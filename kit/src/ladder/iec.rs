@@ -81,7 +81,8 @@ fn lower_all(prog: &IecProgram) -> Result<Ladder, Vec<String>> {
     let mut group = std::vec![0usize; prog.stmts.len()];
     for i in 1..prog.stmts.len() {
         let same = matches!((&prog.stmts[i - 1], &prog.stmts[i]),
-            (Stmt::Coil { power: a, .. }, Stmt::Coil { power: b, .. }) if a == b);
+            (Stmt::Coil { power: a, .. }
+            | Stmt::Timer { kind: TimerKind::Tof, input: a, .. }, Stmt::Coil { power: b, .. }) if a == b);
         group[i] = group[i - 1] + usize::from(!same);
     }
     let mut edge_vars = std::vec![(0u8, true); prog.edges];
@@ -183,9 +184,58 @@ fn lower_all(prog: &IecProgram) -> Result<Ladder, Vec<String>> {
         }
     }
 
+    // Counters in statement order; a timer's or counter's Q is known before its call (a
+    // read above it is the last call's Q: `TOF0.Q`).
+    for (i, s) in prog.stmts.iter().enumerate() {
+        match s {
+            Stmt::Counter { pv, what, .. } => {
+                let Some(m) = (0..COUNTERS as u8).find(|m| l.counters_used & (1 << m) == 0) else {
+                    l.problems.push(format!(
+                        "{what}: more counters than uTile's {COUNTERS} (C0..C7) — use fewer CTU blocks"
+                    ));
+                    continue;
+                };
+                l.counters_used |= 1 << m;
+                l.counter_presets[usize::from(m)] = *pv;
+                l.made[i] = Made::Q(PUSH_CQ + m, false);
+            }
+            Stmt::Timer { kind, .. } => {
+                if let Some(m) = l.timer_of[i] {
+                    l.made[i] = Made::Q(PUSH_TQ + m, *kind == TimerKind::Ton);
+                }
+            }
+            _ => {}
+        }
+    }
+
     let mut i = 0;
     while i < prog.stmts.len() {
         let s = &prog.stmts[i];
+        if let Stmt::Timer {
+            kind: TimerKind::Tof,
+            input,
+            ..
+        } = s
+        {
+            // Coils on a TOF's IN right after it: one rung (the power is read once).
+            let mut j = i + 1;
+            while matches!(&prog.stmts.get(j), Some(Stmt::Coil { power: p, .. }) if p == input) {
+                j += 1;
+            }
+            if j > i + 1 {
+                if let Some(m) = l.timer_of[i] {
+                    let mut flows = std::vec![Flow::Coil(coil(POP_TK + m, false))];
+                    flows.extend(prog.stmts[i + 1..j].iter().map(coil_flow));
+                    let net = l.net(input);
+                    l.rung(net, split(flows));
+                    for k in i..j {
+                        l.after(k, &last_use, &edge_vars);
+                    }
+                    i = j;
+                    continue;
+                }
+            }
+        }
         if let Stmt::Coil { power, .. } = s {
             // Coils on the same power: one rung, split (IEC evaluates the power once).
             let mut j = i + 1;
@@ -423,6 +473,8 @@ impl Lowering {
                 Some(&Made::Q(op, neg)) => contact(op, neg),
                 _ => contact(CLR, false),
             },
+            // Made Out by the reader; a block that never ran reads FALSE.
+            Expr::Named(_) => contact(CLR, false),
         }
     }
 
@@ -442,7 +494,6 @@ impl Lowering {
                 match kind {
                     TimerKind::Tof => {
                         self.rung(net, tk);
-                        self.made[i] = Made::Q(PUSH_TQ + m, false);
                     }
                     TimerKind::Ton => {
                         let p = match self.primed {
@@ -458,7 +509,6 @@ impl Lowering {
                             Box::new(Flow::Then(Step::Or(contact(p, true), 0), Box::new(tk))),
                         );
                         self.rung(net, flow);
-                        self.made[i] = Made::Q(PUSH_TQ + m, true);
                     }
                     TimerKind::Tp => {
                         let mem = self.bit();
@@ -474,32 +524,20 @@ impl Lowering {
                             Flow::Coil(coil(mem - PUSH_U + POP_U, false))
                         ]);
                         self.rung(net, flow);
-                        self.made[i] = Made::Q(PUSH_TQ + m, false);
                     }
                 }
             }
-            Stmt::Counter {
-                cu,
-                reset,
-                pv,
-                what,
-            } => {
-                let Some(m) = (0..COUNTERS as u8).find(|m| self.counters_used & (1 << m) == 0)
-                else {
-                    self.problems.push(format!(
-                        "{what}: more counters than uTile's {COUNTERS} (C0..C7) — use fewer CTU blocks"
-                    ));
+            Stmt::Counter { cu, reset, .. } => {
+                let Some(&Made::Q(cq, _)) = self.made.get(i) else {
                     return;
                 };
-                self.counters_used |= 1 << m;
-                self.counter_presets[usize::from(m)] = *pv;
+                let m = cq - PUSH_CQ;
                 let cu = self.net(cu);
                 self.rung(cu, Flow::Coil(coil(POP_CU + m, false)));
                 if *reset != Expr::Const(false) {
                     let reset = self.net(reset);
                     self.rung(reset, Flow::Coil(coil(POP_CR + m, false)));
                 }
-                self.made[i] = Made::Q(PUSH_CQ + m, false);
             }
             Stmt::CounterReset { counter, power } => {
                 if let Some(&Made::Q(cq, _)) = self.made.get(*counter) {

@@ -95,6 +95,8 @@ struct Reader<'a, 'i> {
     stmts: Vec<Stmt>,
     /// Statement of each FB element already emitted.
     emitted: HashMap<u64, usize>,
+    /// The blocks with an instance name: (name, localId, upper-cased type), in file order.
+    instances: Vec<(String, u64, String)>,
     /// Elements being followed (a loop of wires comes back to one).
     visiting: Vec<u64>,
     /// Edge memories by contact localId.
@@ -181,6 +183,7 @@ fn read_all(text: &str, signals: Signals) -> Result<IecProgram, Vec<String>> {
         constants: HashMap::new(),
         stmts: Vec::new(),
         emitted: HashMap::new(),
+        instances: Vec::new(),
         visiting: Vec::new(),
         edges: HashMap::new(),
         edge_what: Vec::new(),
@@ -259,6 +262,10 @@ fn read_all(text: &str, signals: Signals) -> Result<IecProgram, Vec<String>> {
             ));
             continue;
         };
+        if let (true, Some(inst)) = (tag == "block", n.attribute("instanceName")) {
+            let ty = n.attribute("typeName").unwrap_or("").to_ascii_uppercase();
+            r.instances.push((inst.trim().to_string(), id, ty));
+        }
         if tag == "connector" {
             if let Some(name) = n.attribute("name") {
                 r.connectors.insert(name.to_ascii_uppercase(), n);
@@ -295,6 +302,11 @@ fn read_all(text: &str, signals: Signals) -> Result<IecProgram, Vec<String>> {
     }
     if !r.problems.is_empty() {
         return Err(r.problems);
+    }
+    // Blocks read by name (`TOF0.Q`) are statements now.
+    let emitted = std::mem::take(&mut r.emitted);
+    for s in &mut r.stmts {
+        super::stmt_exprs_mut(s, &mut |e| super::resolve_named(e, &emitted));
     }
     let set_point = |name: &str| {
         r.constants
@@ -377,6 +389,31 @@ impl<'a, 'i> Reader<'a, 'i> {
         })
     }
 
+    /// `TOF0.Q`: the Q of the timer or counter block of that instance name, read by name
+    /// (above its call: the last call's Q).
+    fn instance_output(&self, n: Node, name: &str) -> Res<Expr> {
+        let (inst, out) = name.trim().split_once('.').unwrap_or((name, ""));
+        let block = self
+            .instances
+            .iter()
+            .find(|(i, _, _)| i.eq_ignore_ascii_case(inst.trim()));
+        let Some((_, id, ty)) = block else {
+            return Err(format!(
+                "{}: {name} names no block of the body — declare the variable, or name a TON, TOF, TP or CTU block's instance",
+                what(n)
+            ));
+        };
+        if !matches!(ty.as_str(), "TON" | "TOF" | "TP" | "CTU")
+            || !out.trim().eq_ignore_ascii_case("Q")
+        {
+            return Err(format!(
+                "{}: {name}: uTile reads only the Q of a TON, TOF, TP or CTU by name — wire the block's output instead",
+                what(n)
+            ));
+        }
+        Ok(Expr::Named(*id))
+    }
+
     /// The power on a connectionPointIn: the OR of its connections (none: FALSE).
     fn input_of(&mut self, n: Node<'a, 'i>, point: Option<Node<'a, 'i>>) -> Res<Expr> {
         let Some(point) = point else {
@@ -431,9 +468,21 @@ impl<'a, 'i> Reader<'a, 'i> {
             "contact" => {
                 let power = self.input_of(n, child(n, "connectionPointIn"))?;
                 let name = child_text(n, "variable").unwrap_or_default();
-                let push = self.var(n, &name)?;
                 let negated = n.attribute("negated") == Some("true");
-                let value = match n.attribute("edge").unwrap_or("none") {
+                let edge = n.attribute("edge").unwrap_or("none");
+                if name.contains('.') {
+                    let value = self.instance_output(n, &name)?;
+                    if edge != "none" {
+                        return Err(format!(
+                            "{}: an edge contact on {name} — uTile's edges are on bits; drive a coil from {name} and put the edge contact on that coil's variable",
+                            what(n)
+                        ));
+                    }
+                    let value = if negated { Expr::negate(value) } else { value };
+                    return Ok(Expr::and(power, value));
+                }
+                let push = self.var(n, &name)?;
+                let value = match edge {
                     "none" => Expr::Var(push),
                     e @ ("rising" | "falling") => {
                         let next = self.edges.len();
@@ -463,6 +512,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                 let value = match name.to_ascii_uppercase().as_str() {
                     "TRUE" | "1" => Expr::Const(true),
                     "FALSE" | "0" => Expr::Const(false),
+                    _ if name.contains('.') => self.instance_output(n, &name)?,
                     _ => Expr::Var(self.var(n, &name)?),
                 };
                 Ok(if n.attribute("negated") == Some("true") {

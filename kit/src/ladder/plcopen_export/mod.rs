@@ -70,6 +70,8 @@ fn export_all(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
     let mut ctu = [0u32; 8];
     let mut next_id = 2;
     let mut edges: Vec<u8> = Vec::new();
+    // The timers reset by `.TRm`: a memory bit `TOFm_R` each (see [`Writer::coil`]).
+    let mut resets = [false; 16];
     for c in &contacts {
         let op = c.op;
         let l = first(c);
@@ -86,10 +88,8 @@ fn export_all(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
         } else if (PUSH_TQ..PUSH_TQ + 16).contains(&op) {
             let m = op - PUSH_TQ;
             let tk = coils.iter().find(|k| k.op == POP_TK + m);
-            match tk {
-                None => problems.push(format!("line {l:03}: {w} reads timer {m}, which no .TK{m} starts — remove the contact (it is always open)")),
-                Some(k) if coil_line(k) > l => problems.push(format!("line {l:03}: {w} is read above its .TK{m} (line {:03}) — IEC's TOF gives Q where it is called; move the timer's rung above its readers", coil_line(k))),
-                _ => {}
+            if tk.is_none() {
+                problems.push(format!("line {l:03}: {w} reads timer {m}, which no .TK{m} starts — remove the contact (it is always open)"));
             }
         } else if (PUSH_CQ..PUSH_CQ + 8).contains(&op) {
             let m = op - PUSH_CQ;
@@ -98,10 +98,8 @@ fn export_all(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
                 .filter(|k| k.op == POP_CU + m || k.op == POP_CR + m)
                 .map(|k| coil_line(k))
                 .max();
-            match last {
-                None => problems.push(format!("line {l:03}: {w} reads counter {m}, which no .CU{m} counts — remove the contact (it is always open)")),
-                Some(h) if h > l => problems.push(format!("line {l:03}: {w} is read above counter {m}'s last rung (line {h:03}) — IEC's CTU gives Q where it is called; move the counter's rungs above its readers")),
-                _ => {}
+            if last.is_none() {
+                problems.push(format!("line {l:03}: {w} reads counter {m}, which no .CU{m} counts — remove the contact (it is always open)"));
             }
         } else if (PUSH_Q..PUSH_Q + 16).contains(&op) {
         } else if !ok {
@@ -131,7 +129,7 @@ fn export_all(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
                 }
             }
             op if (POP_TR..POP_CU).contains(&op) => {
-                problems.push(format!("line {l:03}: {w} has no PLCopen form (IEC's TOF has no reset input) — keep the program as a listing"));
+                resets[usize::from(op - POP_TR)] = true;
             }
             op if (POP_CU..POP_CR + 8).contains(&op) => {
                 let m = (op - POP_CU) % 8;
@@ -224,7 +222,12 @@ fn export_all(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
     own.dedup();
     bits += own.len();
     let latches: Vec<String> = rungs.iter().filter_map(|r| latch_name(r)).collect();
-    bits += latches.len();
+    let held: usize = rungs
+        .iter()
+        .filter(|r| rereads(r))
+        .map(|r| branch_points(&r.flow))
+        .sum();
+    bits += latches.len() + resets.iter().filter(|&&r| r).count() + held;
     if bits > 16 {
         problems.push(format!("program: the U/V bits and the flip-flops need {bits} memory bits in IEC and uTile has 16 (a flip-flop read below its .S/.R takes 3) — read each Qm. above its .Sm/.Rm, or keep the program as a listing"));
     }
@@ -242,6 +245,11 @@ fn export_all(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
         tof,
         ctu,
         pending: Default::default(),
+        written: [false; 16],
+        rereads: false,
+        held: 0,
+        ctu_written: [false; 8],
+        resets,
         memory,
         problems: Vec::new(),
     };
@@ -260,6 +268,7 @@ fn export_all(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
             w.row += 1;
             power = w.var_contact(&var, false, std::vec![(w.rail, None)]);
         }
+        w.rereads = rereads(r);
         w.flow(&r.flow, power, ladder);
     }
     for m in 0..16u8 {
@@ -288,6 +297,19 @@ fn export_all(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
             let _ = writeln!(vars, "          <variable name=\"S{}\"><type><INT/></type><initialValue><simpleValue value=\"{sp}\"/></initialValue></variable>", i + 6);
         }
     }
+    for m in (0..16).filter(|&m| resets[m]) {
+        let _ = writeln!(
+            vars,
+            "          <variable name=\"{}\"><type><BOOL/></type></variable>",
+            reset_name(m as u8)
+        );
+    }
+    for k in 0..w.held {
+        let _ = writeln!(
+            vars,
+            "          <variable name=\"W{k}\"><type><BOOL/></type></variable>"
+        );
+    }
     for l in latches {
         let _ = writeln!(
             vars,
@@ -295,6 +317,55 @@ fn export_all(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
         );
     }
     Ok(project(name, &vars, &w.body))
+}
+
+/// The memory bit of a timer reset by `.TRm` (`TOF0_R`): set by `.TRm`, cleared by a
+/// trigger; Q is the TOF's Q while it is clear.
+pub(super) fn reset_name(m: u8) -> String {
+    format!("TOF{m}_R")
+}
+
+/// Whether a rung of several outputs reads, before they are all written, what one of them
+/// writes (or an edge bit past its network): IEC gives a wire one value, and the import
+/// reads each output's power again, so the writer holds the power in a memory bit (`Wk`)
+/// where the rung branches.
+fn rereads(r: &super::model::Rung) -> bool {
+    let (mut net, mut steps, mut coils) = (Vec::new(), Vec::new(), Vec::new());
+    net_contacts(&r.net, &mut net);
+    flow_parts(&r.flow, &mut steps, &mut coils);
+    if coils.len() < 2 {
+        return false;
+    }
+    let edge =
+        |op: u8| (PUSH_AL..PUSH_AL + 6).contains(&op) || (PUSH_AT..PUSH_AT + 6).contains(&op);
+    let writes = |pop: u8, push: u8| match pop {
+        p if p < POP_S => coil_push(p) == Some(push),
+        p if p < POP_TK => push == PUSH_Q + (p - POP_S) % 16,
+        p if p < POP_CU => push == PUSH_TQ + (p - POP_TK) % 16,
+        p => push == PUSH_CQ + (p - POP_CU) % 8,
+    };
+    steps.iter().any(|c| edge(c.op))
+        || net
+            .iter()
+            .chain(&steps)
+            .any(|c| coils.iter().any(|k| writes(k.op, c.op)))
+}
+
+/// How many places a flow branches (a split or a tap).
+fn branch_points(f: &Flow) -> usize {
+    match f {
+        Flow::Coil(_) => 0,
+        Flow::Then(s, f) => step_branches(s) + branch_points(f),
+        Flow::Split(a, b, _) => 1 + branch_points(a) + branch_points(b),
+    }
+}
+
+fn step_branches(s: &Step) -> usize {
+    match s {
+        Step::Tap(f, _) => 1 + branch_points(f),
+        Step::Merge(steps, ..) => steps.iter().map(step_branches).sum(),
+        _ => 0,
+    }
 }
 
 /// The memory bit a rung's edge is read into (`AL0_E`) when the rung has several outputs.
