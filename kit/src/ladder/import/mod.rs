@@ -54,6 +54,9 @@ pub struct IecProgram {
     pub edge_what: Vec<String>,
     /// The U/V bits the program's own variables took (`PU` in the low byte, `PV` high).
     pub used_uv: u16,
+    /// The wires the file leads to several statements (their expressions): IEC gives a wire
+    /// one value, so the lowering reads each once.
+    pub shared: Vec<Expr>,
     /// The analog set-points S6, S7 that H6, H7 compare with (PLCopen: INT variables named
     /// `S6`, `S7` with an initial value, as `utile export` writes them).
     pub set_points: [u16; 2],

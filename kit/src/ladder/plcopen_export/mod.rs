@@ -21,8 +21,11 @@ use super::import::read_only_push;
 use super::Reasons;
 use xml::{project, Writer};
 
+mod memory;
 mod xml;
 use super::model::{op_word, Block, Coil, Contact, Flow, Item, Ladder, Net, Step};
+use memory::reset_name;
+use memory::{branch_points, latch_name, rereads};
 pub(super) fn lines_text(lines: &[u8]) -> String {
     let v: Vec<String> = lines.iter().map(|l| format!("{l:03}")).collect();
     v.join(", ")
@@ -319,68 +322,7 @@ fn export_all(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
     Ok(project(name, &vars, &w.body))
 }
 
-/// The memory bit of a timer reset by `.TRm` (`TOF0_R`): set by `.TRm`, cleared by a
-/// trigger; Q is the TOF's Q while it is clear.
-pub(super) fn reset_name(m: u8) -> String {
-    format!("TOF{m}_R")
-}
-
-/// Whether a rung of several outputs reads, before they are all written, what one of them
-/// writes (or an edge bit past its network): IEC gives a wire one value, and the import
-/// reads each output's power again, so the writer holds the power in a memory bit (`Wk`)
-/// where the rung branches.
-fn rereads(r: &super::model::Rung) -> bool {
-    let (mut net, mut steps, mut coils) = (Vec::new(), Vec::new(), Vec::new());
-    net_contacts(&r.net, &mut net);
-    flow_parts(&r.flow, &mut steps, &mut coils);
-    if coils.len() < 2 {
-        return false;
-    }
-    let edge =
-        |op: u8| (PUSH_AL..PUSH_AL + 6).contains(&op) || (PUSH_AT..PUSH_AT + 6).contains(&op);
-    let writes = |pop: u8, push: u8| match pop {
-        p if p < POP_S => coil_push(p) == Some(push),
-        p if p < POP_TK => push == PUSH_Q + (p - POP_S) % 16,
-        p if p < POP_CU => push == PUSH_TQ + (p - POP_TK) % 16,
-        p => push == PUSH_CQ + (p - POP_CU) % 8,
-    };
-    steps.iter().any(|c| edge(c.op))
-        || net
-            .iter()
-            .chain(&steps)
-            .any(|c| coils.iter().any(|k| writes(k.op, c.op)))
-}
-
-/// How many places a flow branches (a split or a tap).
-fn branch_points(f: &Flow) -> usize {
-    match f {
-        Flow::Coil(_) => 0,
-        Flow::Then(s, f) => step_branches(s) + branch_points(f),
-        Flow::Split(a, b, _) => 1 + branch_points(a) + branch_points(b),
-    }
-}
-
-fn step_branches(s: &Step) -> usize {
-    match s {
-        Step::Tap(f, _) => 1 + branch_points(f),
-        Step::Merge(steps, ..) => steps.iter().map(step_branches).sum(),
-        _ => 0,
-    }
-}
-
-/// The memory bit a rung's edge is read into (`AL0_E`) when the rung has several outputs.
-fn latch_name(r: &super::model::Rung) -> Option<String> {
-    let mut cs = Vec::new();
-    net_contacts(&r.net, &mut cs);
-    let edge = cs.iter().find(|c| {
-        (PUSH_AL..PUSH_AL + 6).contains(&c.op) || (PUSH_AT..PUSH_AT + 6).contains(&c.op)
-    })?;
-    let (mut more, mut coils) = (Vec::new(), Vec::new());
-    flow_parts(&r.flow, &mut more, &mut coils);
-    (coils.len() > 1).then(|| format!("{}_E", op_word(edge.op).trim_end_matches('.')))
-}
-
-fn net_contacts<'a>(n: &'a Net, out: &mut Vec<&'a Contact>) {
+pub(super) fn net_contacts<'a>(n: &'a Net, out: &mut Vec<&'a Contact>) {
     match n {
         Net::Contact(c) => out.push(c),
         Net::Series(a, b, _) | Net::Parallel(a, b, _) | Net::Xor(a, b, _) => {

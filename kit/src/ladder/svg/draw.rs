@@ -1,218 +1,25 @@
-//! The ladder model drawn as SVG: one `<g class="rung" data-rung="N">` per rung or block,
-//! each element a `<g>` with `data-rung`, `data-signal` (the listing's name) and
-//! `data-lines` (its listing lines), so a page can light it from the lines' values.
+//! One rung drawn: its wires, contacts, IEC function boxes and coils, each a `<g>` with
+//! `data-rung`, `data-signal` and `data-lines` (the page lights them from the lines' values).
 
-use std::fmt::Write;
-use std::string::String;
-use std::vec::Vec;
-
-use utile_core::engine::unit_ms;
-
-use super::model::{op_word, Coil, CoilKind, Contact, ContactKind, Flow, Item, Ladder, Net, Step};
-
-/// A cell's width and height in px.
-const W: i32 = 84;
-const H: i32 = 58;
-/// The left margin (rung numbers) and the row of text for a block's line.
-const LEFT: i32 = 44;
-const TEXT_ROW: i32 = 16;
-
-/// The SVG picture of a ladder, titled `title`.
-pub fn svg(ladder: &Ladder, title: &str) -> String {
-    let mut body = String::new();
-    let mut y = 40;
-    let mut width = 4;
-    for (rung_no, item) in ladder.items.iter().enumerate() {
-        match item {
-            Item::Rung(r) => {
-                let (wn, hn) = net_size(&r.net);
-                let mut d = Draw {
-                    out: String::new(),
-                    top: y,
-                    rung: rung_no,
-                    ladder,
-                };
-                // A dry run finds the coils' column, then the drawing.
-                let (coil_col, hf) = d.flow(&r.flow, wn, 0, 0);
-                d.out.clear();
-                let cols = coil_col + 1;
-                let rows = hn.max(hf);
-                width = width.max(cols);
-                d.net(&r.net, 0, 0);
-                d.flow(&r.flow, wn, 0, coil_col);
-                let lines = rung_lines(r);
-                let _ = write!(
-                    body,
-                    "<g class=\"rung\" data-rung=\"{rung_no}\" data-lines=\"{}\">\
-                     <text class=\"no\" x=\"4\" y=\"{}\">{rung_no}</text>\
-                     <line class=\"rail\" x1=\"{LEFT}\" y1=\"{y}\" x2=\"{LEFT}\" y2=\"{}\"/>\
-                     <line class=\"rail\" x1=\"{rx}\" y1=\"{y}\" x2=\"{rx}\" y2=\"{}\"/>{}</g>",
-                    join(&lines),
-                    y + H / 2 + 4,
-                    y + rows * H,
-                    y + rows * H,
-                    d.out,
-                    rx = LEFT + cols * W,
-                );
-                body.push('\n');
-                y += rows * H + 12;
-            }
-            Item::Block(b) => {
-                let h = b.lines.len() as i32 * TEXT_ROW + 10;
-                let lines: Vec<u8> = b.lines.iter().map(|l| l.0).collect();
-                let _ = write!(
-                    body,
-                    "<g class=\"rung block\" data-rung=\"{rung_no}\" data-lines=\"{}\">\
-                     <text class=\"no\" x=\"4\" y=\"{}\">{rung_no}</text>\
-                     <rect x=\"{LEFT}\" y=\"{y}\" width=\"{}\" height=\"{h}\"/>",
-                    join(&lines),
-                    y + 16,
-                    W * 2,
-                );
-                for (k, &(line, op)) in b.lines.iter().enumerate() {
-                    let _ = write!(
-                        body,
-                        "<text class=\"line\" data-lines=\"{line}\" data-signal=\"{}\" x=\"{}\" y=\"{}\">{line:03} {}</text>",
-                        esc(op_word(op).trim_matches('.')),
-                        LEFT + 8,
-                        y + 18 + k as i32 * TEXT_ROW,
-                        esc(&op_word(op)),
-                    );
-                }
-                body.push_str("</g>\n");
-                y += h + 12;
-            }
-        }
-    }
-    let total_w = LEFT + width * W + 20;
-    format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" class=\"ladder\" width=\"{total_w}\" height=\"{}\" \
-         viewBox=\"0 0 {total_w} {}\" font-family=\"monospace\" font-size=\"12\">\n\
-         <style>line,path,rect,circle{{stroke:#222;stroke-width:2;fill:none}}\
-         .rail{{stroke-width:4}} text{{fill:#222;stroke:none}} .no{{fill:#888}}\
-         .block rect{{fill:#f4f4f4;stroke:#888}} .label{{text-anchor:middle}}</style>\n\
-         <text x=\"4\" y=\"20\" font-size=\"14\">{}</text>\n{body}</svg>\n",
-        y + 10,
-        y + 10,
-        esc(title),
-    )
-}
-
-/// Every listing line of a rung, in order.
-fn rung_lines(r: &super::model::Rung) -> Vec<u8> {
-    let mut v = Vec::new();
-    net_lines(&r.net, &mut v);
-    flow_lines(&r.flow, &mut v);
-    v.sort_unstable();
-    v
-}
-
-fn net_lines(n: &Net, v: &mut Vec<u8>) {
-    match n {
-        Net::Contact(c) => v.extend(&c.lines),
-        Net::Series(a, b, l) | Net::Parallel(a, b, l) | Net::Xor(a, b, l) => {
-            net_lines(a, v);
-            net_lines(b, v);
-            v.push(*l);
-        }
-        Net::Not(a, l) => {
-            net_lines(a, v);
-            v.push(*l);
-        }
-    }
-}
-
-fn flow_lines(f: &Flow, v: &mut Vec<u8>) {
-    match f {
-        Flow::Coil(c) => v.extend(&c.lines),
-        Flow::Then(s, rest) => {
-            step_lines(s, v);
-            flow_lines(rest, v);
-        }
-        Flow::Split(a, b, l) => {
-            v.push(*l);
-            flow_lines(a, v);
-            flow_lines(b, v);
-        }
-    }
-}
-
-fn step_lines(s: &Step, v: &mut Vec<u8>) {
-    match s {
-        Step::And(n, l) | Step::Or(n, l) | Step::Xor(n, l) => {
-            net_lines(n, v);
-            v.push(*l);
-        }
-        Step::Not(l) => v.push(*l),
-        Step::Tap(f, l) => {
-            v.push(*l);
-            flow_lines(f, v);
-        }
-        Step::Merge(steps, _, dup, join) => {
-            v.push(*dup);
-            for s in steps {
-                step_lines(s, v);
-            }
-            v.push(*join);
-        }
-    }
-}
-
-/// A network's size in cells (columns, rows).
-fn net_size(n: &Net) -> (i32, i32) {
-    match n {
-        Net::Contact(_) => (1, 1),
-        Net::Series(a, b, _) => {
-            let (wa, ha) = net_size(a);
-            let (wb, hb) = net_size(b);
-            (wa + wb, ha.max(hb))
-        }
-        Net::Parallel(a, b, _) => {
-            let (wa, ha) = net_size(a);
-            let (wb, hb) = net_size(b);
-            (wa.max(wb), ha + hb)
-        }
-        Net::Xor(a, b, _) => {
-            let (wa, ha) = net_size(a);
-            let (wb, hb) = net_size(b);
-            (wa.max(wb) + 1, ha + hb)
-        }
-        Net::Not(a, _) => {
-            let (wa, ha) = net_size(a);
-            (wa + 1, ha)
-        }
-    }
-}
-
-fn join(lines: &[u8]) -> String {
-    let v: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
-    v.join(",")
-}
-
-fn esc(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-}
+use super::*;
 
 /// The drawing of one rung.
-struct Draw<'a> {
-    out: String,
-    top: i32,
-    rung: usize,
-    ladder: &'a Ladder,
+pub(super) struct Draw<'a> {
+    pub(super) out: String,
+    pub(super) top: i32,
+    pub(super) rung: usize,
+    pub(super) ladder: &'a Ladder,
 }
 
 impl Draw<'_> {
-    fn px(&self, col: i32) -> i32 {
+    pub(super) fn px(&self, col: i32) -> i32 {
         LEFT + col * W
     }
-    fn py(&self, row: i32) -> i32 {
+    pub(super) fn py(&self, row: i32) -> i32 {
         self.top + row * H + H / 2
     }
 
-    fn wire(&mut self, c0: i32, c1: i32, row: i32) {
+    pub(super) fn wire(&mut self, c0: i32, c1: i32, row: i32) {
         if c1 > c0 {
             let (x0, x1, y) = (self.px(c0), self.px(c1), self.py(row));
             let _ = write!(
@@ -222,7 +29,7 @@ impl Draw<'_> {
         }
     }
 
-    fn vwire(&mut self, col: i32, r0: i32, r1: i32) {
+    pub(super) fn vwire(&mut self, col: i32, r0: i32, r1: i32) {
         let (x, y0, y1) = (self.px(col), self.py(r0), self.py(r1));
         let _ = write!(
             self.out,
@@ -231,7 +38,7 @@ impl Draw<'_> {
     }
 
     /// A group's opening tag.
-    fn open(&mut self, class: &str, signal: &str, lines: &[u8]) {
+    pub(super) fn open(&mut self, class: &str, signal: &str, lines: &[u8]) {
         let _ = write!(
             self.out,
             "<g class=\"{class}\" data-rung=\"{}\" data-signal=\"{}\" data-lines=\"{}\">",
@@ -241,7 +48,7 @@ impl Draw<'_> {
         );
     }
 
-    fn contact(&mut self, c: &Contact, col: i32, row: i32) {
+    pub(super) fn contact(&mut self, c: &Contact, col: i32, row: i32) {
         let (x, y) = (self.px(col), self.py(row));
         let cx = x + W / 2;
         self.open("contact", &c.signal(), &c.lines);
@@ -306,7 +113,7 @@ impl Draw<'_> {
     }
 
     /// A function box (NOT, OR, XOR) in column `col` from row `r0` to `r1`.
-    fn function(&mut self, name: &str, line: u8, col: i32, r0: i32, r1: i32) {
+    pub(super) fn function(&mut self, name: &str, line: u8, col: i32, r0: i32, r1: i32) {
         let (x, y0, y1) = (self.px(col), self.py(r0), self.py(r1));
         self.open("function", name, &[line]);
         let _ = write!(
@@ -329,7 +136,7 @@ impl Draw<'_> {
         );
     }
 
-    fn net(&mut self, n: &Net, col: i32, row: i32) {
+    pub(super) fn net(&mut self, n: &Net, col: i32, row: i32) {
         match n {
             Net::Contact(c) => self.contact(c, col, row),
             Net::Series(a, b, _) => {
@@ -368,7 +175,7 @@ impl Draw<'_> {
 
     /// A flow whose power arrives at (`col`, `row`), its coils in column `cc`: the column
     /// its coils need at least, and its rows.
-    fn flow(&mut self, f: &Flow, col: i32, row: i32, cc: i32) -> (i32, i32) {
+    pub(super) fn flow(&mut self, f: &Flow, col: i32, row: i32, cc: i32) -> (i32, i32) {
         match f {
             Flow::Coil(c) => {
                 self.wire(col, cc, row);
@@ -396,7 +203,7 @@ impl Draw<'_> {
     }
 
     /// One step on the power at (`col`, `row`): its columns and rows.
-    fn step(&mut self, s: &Step, col: i32, row: i32, cc: i32) -> (i32, i32) {
+    pub(super) fn step(&mut self, s: &Step, col: i32, row: i32, cc: i32) -> (i32, i32) {
         match s {
             Step::And(n, _) => {
                 self.net(n, col, row);
@@ -443,7 +250,7 @@ impl Draw<'_> {
     }
 
     /// A chain of steps from (`col`, `row`), its taps drawn below it: columns and rows.
-    fn steps(&mut self, steps: &[Step], col: i32, row: i32, cc: i32) -> (i32, i32) {
+    pub(super) fn steps(&mut self, steps: &[Step], col: i32, row: i32, cc: i32) -> (i32, i32) {
         let (mut c, mut h) = (col, 1);
         let mut taps = Vec::new();
         for s in steps {
@@ -467,7 +274,7 @@ impl Draw<'_> {
         (c - col, h)
     }
 
-    fn coil(&mut self, c: &Coil, col: i32, row: i32) {
+    pub(super) fn coil(&mut self, c: &Coil, col: i32, row: i32) {
         let (x, y) = (self.px(col), self.py(row));
         let cx = x + W / 2;
         self.open("coil", &c.signal(), &c.lines);
