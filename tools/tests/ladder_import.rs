@@ -417,13 +417,16 @@ fn lines_to_end(p: &utile_core::engine::Program) -> usize {
 }
 
 /// The manual's ch. 11 programs drawn in ladder (`ch11-*.xml`), each beside its listing.
-const CHAPTER_11: [(&str, &str); 3] = [
+const CHAPTER_11: [(&str, &str); 6] = [
+    ("ch11-1-push-button-timer.xml", "11.1-push-button-timer"),
+    ("ch11-1b-continuous-timers.xml", "11.1b-continuous-timers"),
     ("ch11-2-n-switches.xml", "11.2-n-switches"),
     (
         "ch11-3-push-button-lighting.xml",
         "11.3-push-button-lighting",
     ),
     ("ch11-3b-motor-starter.xml", "11.3b-motor-starter"),
+    ("ch11-4-sump-pump.xml", "11.4-sump-pump"),
 ];
 
 #[test]
@@ -436,11 +439,12 @@ fn chapter_11_programs_drawn_in_ladder_run_as_the_manuals_listings() {
         let drawn = listing::parse(fixture, &text).unwrap();
         let path = example(&format!("{stem}.utl"));
         let manual = listing::parse(&path, &std::fs::read_to_string(&path).unwrap()).unwrap();
+        // 8 s: past 11.1's 5 s timer and two of 11.1b's 4 s periods.
         for _ in 0..200 {
-            let events = random_events(&mut rng, 0x0F, 2000, 30);
+            let events = random_events(&mut rng, 0x0F, 8000, 30);
             let (a, b) = (
-                run(&drawn, &events, 2000, 4),
-                run(&manual, &events, 2000, 4),
+                run(&drawn, &events, 8000, 4),
+                run(&manual, &events, 8000, 4),
             );
             assert_eq!(a, b, "{fixture} against {stem}, events {events:?}");
         }
