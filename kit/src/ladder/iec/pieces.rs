@@ -141,10 +141,10 @@ pub(super) fn plan(prog: &IecProgram, own_flip_flop: &[bool]) -> (Vec<Piece>, Ve
     // The current group's wire and what its pieces wrote so far.
     let mut wire: Option<Expr> = None;
     let mut written: Vec<Expr> = Vec::new();
-    for i in 0..prog.stmts.len() {
+    for (i, slot) in block_group.iter_mut().enumerate() {
         let Some(ps) = pieces_of(prog, i, own_flip_flop) else {
             group += 1;
-            block_group[i] = Some(group);
+            *slot = Some(group);
             wire = None;
             continue;
         };
