@@ -1,6 +1,6 @@
 //! The memory bits the export adds where IEC needs them: a timer reset's `TOFm_R`, an edge
-//! read once into `ALn_E` for a rung of several outputs, and a branching wire held in `Wk`
-//! where a rung reads again what its outputs write.
+//! read once into `ALn_E` for a rung of several outputs, and a wire held in `Wk` where it
+//! branches and an output of the first branch changes what it read.
 
 use std::string::String;
 use std::vec::Vec;
@@ -16,17 +16,13 @@ pub(super) fn reset_name(m: u8) -> String {
     format!("TOF{m}_R")
 }
 
-/// Whether a rung of several outputs reads, before they are all written, what one of them
-/// writes (or an edge bit past its network): IEC gives a wire one value, and the import
-/// reads each output's power again, so the writer holds the power in a memory bit (`Wk`)
-/// where the rung branches.
-pub(super) fn rereads(r: &Rung) -> bool {
-    let (mut net, mut steps, mut coils) = (Vec::new(), Vec::new(), Vec::new());
-    net_contacts(&r.net, &mut net);
-    flow_parts(&r.flow, &mut steps, &mut coils);
-    if coils.len() < 2 {
-        return false;
-    }
+/// Whether the wire reaching a branch must be held in a memory bit (`Wk`) before it: IEC
+/// gives a wire one value, and the import reads each output's power again, so a wire whose
+/// contacts so far (`path`: the push opcodes read since the rail or the last hold) the first
+/// branch writes, or that reads an edge bit (cleared when read), would change for the rest.
+pub(super) fn needs_hold(path: &[u8], branch: &Flow) -> bool {
+    let (mut cs, mut ks) = (Vec::new(), Vec::new());
+    flow_parts(branch, &mut cs, &mut ks);
     let edge =
         |op: u8| (PUSH_AL..PUSH_AL + 6).contains(&op) || (PUSH_AT..PUSH_AT + 6).contains(&op);
     let writes = |pop: u8, push: u8| match pop {
@@ -35,27 +31,49 @@ pub(super) fn rereads(r: &Rung) -> bool {
         p if p < POP_CU => push == PUSH_TQ + (p - POP_TK) % 16,
         p => push == PUSH_CQ + (p - POP_CU) % 8,
     };
-    steps.iter().any(|c| edge(c.op))
-        || net
-            .iter()
-            .chain(&steps)
-            .any(|c| coils.iter().any(|k| writes(k.op, c.op)))
+    path.iter()
+        .any(|&op| edge(op) || ks.iter().any(|k| writes(k.op, op)))
 }
 
-/// How many places a flow branches (a split or a tap).
-pub(super) fn branch_points(f: &Flow) -> usize {
-    match f {
-        Flow::Coil(_) => 0,
-        Flow::Then(s, f) => step_branches(s) + branch_points(f),
-        Flow::Split(a, b, _) => 1 + branch_points(a) + branch_points(b),
+/// The contacts a step reads (its network's).
+pub(super) fn step_reads(s: &Step, path: &mut Vec<u8>) {
+    if let Step::And(n, _) | Step::Or(n, _) | Step::Xor(n, _) = s {
+        let mut cs = Vec::new();
+        net_contacts(n, &mut cs);
+        path.extend(cs.iter().map(|c| c.op));
     }
 }
 
-fn step_branches(s: &Step) -> usize {
+/// How many holds a flow takes from a wire that read `path` (as the writer places them).
+pub(super) fn holds(f: &Flow, path: &mut Vec<u8>) -> usize {
+    match f {
+        Flow::Coil(_) => 0,
+        Flow::Then(s, f) => step_holds(s, path) + holds(f, path),
+        Flow::Split(a, b, _) => {
+            let held = needs_hold(path, a);
+            if held {
+                path.clear();
+            }
+            let n = holds(a, &mut path.clone());
+            usize::from(held) + n + holds(b, path)
+        }
+    }
+}
+
+fn step_holds(s: &Step, path: &mut Vec<u8>) -> usize {
     match s {
-        Step::Tap(f, _) => 1 + branch_points(f),
-        Step::Merge(steps, ..) => steps.iter().map(step_branches).sum(),
-        _ => 0,
+        Step::Tap(f, _) => {
+            let held = needs_hold(path, f);
+            if held {
+                path.clear();
+            }
+            usize::from(held) + holds(f, &mut path.clone())
+        }
+        Step::Merge(steps, ..) => steps.iter().map(|s| step_holds(s, path)).sum(),
+        s => {
+            step_reads(s, path);
+            0
+        }
     }
 }
 

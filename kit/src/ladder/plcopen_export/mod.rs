@@ -25,7 +25,7 @@ mod memory;
 mod xml;
 use super::model::{op_word, Block, Coil, Contact, Flow, Item, Ladder, Net, Step};
 use memory::reset_name;
-use memory::{branch_points, latch_name, rereads};
+use memory::{holds, latch_name};
 pub(super) fn lines_text(lines: &[u8]) -> String {
     let v: Vec<String> = lines.iter().map(|l| format!("{l:03}")).collect();
     v.join(", ")
@@ -227,8 +227,7 @@ fn export_all(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
     let latches: Vec<String> = rungs.iter().filter_map(|r| latch_name(r)).collect();
     let held: usize = rungs
         .iter()
-        .filter(|r| rereads(r))
-        .map(|r| branch_points(&r.flow))
+        .map(|r| holds(&r.flow, &mut start_path(r)))
         .sum();
     bits += latches.len() + resets.iter().filter(|&&r| r).count() + held;
     if bits > 16 {
@@ -249,7 +248,7 @@ fn export_all(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
         ctu,
         pending: Default::default(),
         written: [false; 16],
-        rereads: false,
+        path: Vec::new(),
         held: 0,
         ctu_written: [false; 8],
         resets,
@@ -271,7 +270,7 @@ fn export_all(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
             w.row += 1;
             power = w.var_contact(&var, false, std::vec![(w.rail, None)]);
         }
-        w.rereads = rereads(r);
+        w.path = start_path(r);
         w.flow(&r.flow, power, ladder);
     }
     for m in 0..16u8 {
@@ -354,6 +353,17 @@ fn step_parts<'a>(s: &'a Step, cs: &mut Vec<&'a Contact>, ks: &mut Vec<&'a Coil>
         Step::Tap(f, _) => flow_parts(f, cs, ks),
         Step::Merge(steps, ..) => steps.iter().for_each(|s| step_parts(s, cs, ks)),
     }
+}
+
+/// What a rung's wire has read when its flow starts: its network's contacts, none when an
+/// edge was read into a memory coil first (`latch_name`).
+fn start_path(r: &super::model::Rung) -> Vec<u8> {
+    if latch_name(r).is_some() {
+        return Vec::new();
+    }
+    let mut cs = Vec::new();
+    net_contacts(&r.net, &mut cs);
+    cs.iter().map(|c| c.op).collect()
 }
 
 /// The BOOL variable a contact or coil names, and its address.

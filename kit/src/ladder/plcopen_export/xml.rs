@@ -34,8 +34,8 @@ pub(super) struct Writer {
     pub(super) written: [bool; 16],
     /// The CTU blocks written so far.
     pub(super) ctu_written: [bool; 8],
-    /// The rung being written reads again what its outputs write (see `rereads`).
-    pub(super) rereads: bool,
+    /// What the wire being written has read since the rail or the last hold (push opcodes).
+    pub(super) path: Vec<u8>,
     /// The memory bits `Wk` holding a branching wire so far.
     pub(super) held: usize,
     /// The timers reset by `.TRm` (a memory bit `TOFm_R` each).
@@ -297,6 +297,7 @@ impl Writer {
     }
 
     fn step(&mut self, s: &Step, power: Vec<Src>, ladder: &Ladder) -> Vec<Src> {
+        super::memory::step_reads(s, &mut self.path);
         let rail = std::vec![(self.rail, None)];
         match s {
             Step::And(n, _) => self.net(n, power),
@@ -311,8 +312,10 @@ impl Writer {
             }
             Step::Not(_) => self.function("NOT", &[power]),
             Step::Tap(f, _) => {
-                let power = self.hold(power);
+                let power = self.hold(power, f);
+                let path = self.path.clone();
                 self.flow(f, power.clone(), ladder);
+                self.path = path;
                 power
             }
             Step::Merge(steps, _, op, _) => {
@@ -341,8 +344,10 @@ impl Writer {
                 self.flow(f, p, ladder);
             }
             Flow::Split(a, b, _) => {
-                let power = self.hold(power);
+                let power = self.hold(power, a);
+                let path = self.path.clone();
                 self.flow(a, power.clone(), ladder);
+                self.path = path;
                 self.flow(b, power, ladder);
             }
         }
@@ -350,10 +355,11 @@ impl Writer {
 
     /// Where a rung that reads again what it writes branches: its power into a memory coil
     /// `Wk`, and the branches from a contact on it (the wire keeps its one value).
-    fn hold(&mut self, power: Vec<Src>) -> Vec<Src> {
-        if !self.rereads {
+    fn hold(&mut self, power: Vec<Src>, branch: &Flow) -> Vec<Src> {
+        if !super::memory::needs_hold(&self.path, branch) {
             return power;
         }
+        self.path.clear();
         let name = format!("W{}", self.held);
         self.held += 1;
         self.row += 1;
