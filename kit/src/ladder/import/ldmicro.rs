@@ -159,6 +159,7 @@ fn read_all(text: &str, signals: Signals) -> Result<IecProgram, Vec<String>> {
         edges: 0,
         edge_what: Vec::new(),
         used_uv: r.signals.used_uv,
+        shared: Vec::new(),
         set_points: [0; 2],
     })
 }

@@ -54,6 +54,9 @@ pub struct IecProgram {
     pub edge_what: Vec<String>,
     /// The U/V bits the program's own variables took (`PU` in the low byte, `PV` high).
     pub used_uv: u16,
+    /// The wires the file leads to several statements (their expressions): IEC gives a wire
+    /// one value, so the lowering reads each once.
+    pub shared: Vec<Expr>,
     /// The analog set-points S6, S7 that H6, H7 compare with (PLCopen: INT variables named
     /// `S6`, `S7` with an initial value, as `utile export` writes them).
     pub set_points: [u16; 2],
@@ -85,6 +88,10 @@ pub enum Expr {
     },
     /// The Q output of the function block of statement `n`.
     Out(usize),
+    /// The Q output of the timer or counter block with this localId read by its name
+    /// (`TOF0.Q`), above or below its call: the reader makes it [`Expr::Out`] once every
+    /// block is read (above its call it is the last call's Q).
+    Named(u64),
 }
 
 impl Expr {
@@ -197,6 +204,40 @@ pub enum Stmt {
         /// SR.
         set_dominant: bool,
     },
+}
+
+/// Every expression of a statement, to change.
+pub(crate) fn stmt_exprs_mut(s: &mut Stmt, f: &mut dyn FnMut(&mut Expr)) {
+    match s {
+        Stmt::Coil { power, .. } | Stmt::CounterReset { power, .. } => f(power),
+        Stmt::Timer { input, .. } => f(input),
+        Stmt::Trig { clk, .. } => f(clk),
+        Stmt::Counter { cu, reset, .. } => {
+            f(cu);
+            f(reset);
+        }
+        Stmt::FlipFlop { set, reset, .. } => {
+            f(set);
+            f(reset);
+        }
+    }
+}
+
+/// [`Expr::Named`] made [`Expr::Out`] with each block's statement (localId → statement).
+pub(crate) fn resolve_named(e: &mut Expr, emitted: &std::collections::HashMap<u64, usize>) {
+    match e {
+        Expr::Named(id) => {
+            if let Some(&s) = emitted.get(id) {
+                *e = Expr::Out(s);
+            }
+        }
+        Expr::Not(a) => resolve_named(a, emitted),
+        Expr::And(a, b) | Expr::Or(a, b) | Expr::Xor(a, b) => {
+            resolve_named(a, emitted);
+            resolve_named(b, emitted);
+        }
+        _ => {}
+    }
 }
 
 /// The signals a program's variables become: input `8a+b` → `A0`..`A5`, output → `Y0`..`Y7`,

@@ -21,8 +21,11 @@ use super::import::read_only_push;
 use super::Reasons;
 use xml::{project, Writer};
 
+mod memory;
 mod xml;
 use super::model::{op_word, Block, Coil, Contact, Flow, Item, Ladder, Net, Step};
+use memory::reset_name;
+use memory::{holds, latch_name};
 pub(super) fn lines_text(lines: &[u8]) -> String {
     let v: Vec<String> = lines.iter().map(|l| format!("{l:03}")).collect();
     v.join(", ")
@@ -70,6 +73,8 @@ fn export_all(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
     let mut ctu = [0u32; 8];
     let mut next_id = 2;
     let mut edges: Vec<u8> = Vec::new();
+    // The timers reset by `.TRm`: a memory bit `TOFm_R` each (see [`Writer::coil`]).
+    let mut resets = [false; 16];
     for c in &contacts {
         let op = c.op;
         let l = first(c);
@@ -86,10 +91,8 @@ fn export_all(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
         } else if (PUSH_TQ..PUSH_TQ + 16).contains(&op) {
             let m = op - PUSH_TQ;
             let tk = coils.iter().find(|k| k.op == POP_TK + m);
-            match tk {
-                None => problems.push(format!("line {l:03}: {w} reads timer {m}, which no .TK{m} starts — remove the contact (it is always open)")),
-                Some(k) if coil_line(k) > l => problems.push(format!("line {l:03}: {w} is read above its .TK{m} (line {:03}) — IEC's TOF gives Q where it is called; move the timer's rung above its readers", coil_line(k))),
-                _ => {}
+            if tk.is_none() {
+                problems.push(format!("line {l:03}: {w} reads timer {m}, which no .TK{m} starts — remove the contact (it is always open)"));
             }
         } else if (PUSH_CQ..PUSH_CQ + 8).contains(&op) {
             let m = op - PUSH_CQ;
@@ -98,10 +101,8 @@ fn export_all(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
                 .filter(|k| k.op == POP_CU + m || k.op == POP_CR + m)
                 .map(|k| coil_line(k))
                 .max();
-            match last {
-                None => problems.push(format!("line {l:03}: {w} reads counter {m}, which no .CU{m} counts — remove the contact (it is always open)")),
-                Some(h) if h > l => problems.push(format!("line {l:03}: {w} is read above counter {m}'s last rung (line {h:03}) — IEC's CTU gives Q where it is called; move the counter's rungs above its readers")),
-                _ => {}
+            if last.is_none() {
+                problems.push(format!("line {l:03}: {w} reads counter {m}, which no .CU{m} counts — remove the contact (it is always open)"));
             }
         } else if (PUSH_Q..PUSH_Q + 16).contains(&op) {
         } else if !ok {
@@ -131,7 +132,7 @@ fn export_all(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
                 }
             }
             op if (POP_TR..POP_CU).contains(&op) => {
-                problems.push(format!("line {l:03}: {w} has no PLCopen form (IEC's TOF has no reset input) — keep the program as a listing"));
+                resets[usize::from(op - POP_TR)] = true;
             }
             op if (POP_CU..POP_CR + 8).contains(&op) => {
                 let m = (op - POP_CU) % 8;
@@ -224,7 +225,11 @@ fn export_all(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
     own.dedup();
     bits += own.len();
     let latches: Vec<String> = rungs.iter().filter_map(|r| latch_name(r)).collect();
-    bits += latches.len();
+    let held: usize = rungs
+        .iter()
+        .map(|r| holds(&r.flow, &mut start_path(r)))
+        .sum();
+    bits += latches.len() + resets.iter().filter(|&&r| r).count() + held;
     if bits > 16 {
         problems.push(format!("program: the U/V bits and the flip-flops need {bits} memory bits in IEC and uTile has 16 (a flip-flop read below its .S/.R takes 3) — read each Qm. above its .Sm/.Rm, or keep the program as a listing"));
     }
@@ -242,6 +247,11 @@ fn export_all(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
         tof,
         ctu,
         pending: Default::default(),
+        written: [false; 16],
+        path: Vec::new(),
+        held: 0,
+        ctu_written: [false; 8],
+        resets,
         memory,
         problems: Vec::new(),
     };
@@ -260,6 +270,7 @@ fn export_all(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
             w.row += 1;
             power = w.var_contact(&var, false, std::vec![(w.rail, None)]);
         }
+        w.path = start_path(r);
         w.flow(&r.flow, power, ladder);
     }
     for m in 0..16u8 {
@@ -288,6 +299,19 @@ fn export_all(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
             let _ = writeln!(vars, "          <variable name=\"S{}\"><type><INT/></type><initialValue><simpleValue value=\"{sp}\"/></initialValue></variable>", i + 6);
         }
     }
+    for m in (0..16).filter(|&m| resets[m]) {
+        let _ = writeln!(
+            vars,
+            "          <variable name=\"{}\"><type><BOOL/></type></variable>",
+            reset_name(m as u8)
+        );
+    }
+    for k in 0..w.held {
+        let _ = writeln!(
+            vars,
+            "          <variable name=\"W{k}\"><type><BOOL/></type></variable>"
+        );
+    }
     for l in latches {
         let _ = writeln!(
             vars,
@@ -297,19 +321,7 @@ fn export_all(ladder: &Ladder, name: &str) -> Result<String, Vec<String>> {
     Ok(project(name, &vars, &w.body))
 }
 
-/// The memory bit a rung's edge is read into (`AL0_E`) when the rung has several outputs.
-fn latch_name(r: &super::model::Rung) -> Option<String> {
-    let mut cs = Vec::new();
-    net_contacts(&r.net, &mut cs);
-    let edge = cs.iter().find(|c| {
-        (PUSH_AL..PUSH_AL + 6).contains(&c.op) || (PUSH_AT..PUSH_AT + 6).contains(&c.op)
-    })?;
-    let (mut more, mut coils) = (Vec::new(), Vec::new());
-    flow_parts(&r.flow, &mut more, &mut coils);
-    (coils.len() > 1).then(|| format!("{}_E", op_word(edge.op).trim_end_matches('.')))
-}
-
-fn net_contacts<'a>(n: &'a Net, out: &mut Vec<&'a Contact>) {
+pub(super) fn net_contacts<'a>(n: &'a Net, out: &mut Vec<&'a Contact>) {
     match n {
         Net::Contact(c) => out.push(c),
         Net::Series(a, b, _) | Net::Parallel(a, b, _) | Net::Xor(a, b, _) => {
@@ -341,6 +353,17 @@ fn step_parts<'a>(s: &'a Step, cs: &mut Vec<&'a Contact>, ks: &mut Vec<&'a Coil>
         Step::Tap(f, _) => flow_parts(f, cs, ks),
         Step::Merge(steps, ..) => steps.iter().for_each(|s| step_parts(s, cs, ks)),
     }
+}
+
+/// What a rung's wire has read when its flow starts: its network's contacts, none when an
+/// edge was read into a memory coil first (`latch_name`).
+fn start_path(r: &super::model::Rung) -> Vec<u8> {
+    if latch_name(r).is_some() {
+        return Vec::new();
+    }
+    let mut cs = Vec::new();
+    net_contacts(&r.net, &mut cs);
+    cs.iter().map(|c| c.op).collect()
 }
 
 /// The BOOL variable a contact or coil names, and its address.

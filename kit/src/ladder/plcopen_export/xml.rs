@@ -30,6 +30,16 @@ pub(super) struct Writer {
     pub(super) ctu: [u32; 8],
     /// A counter's CU (0) and R (1) power, kept until its last rung.
     pub(super) pending: [[Option<Vec<Src>>; 2]; 8],
+    /// The TOF blocks written so far: a `TQm.` above its block reads `TOFm.Q` by name.
+    pub(super) written: [bool; 16],
+    /// The CTU blocks written so far.
+    pub(super) ctu_written: [bool; 8],
+    /// What the wire being written has read since the rail or the last hold (push opcodes).
+    pub(super) path: Vec<u8>,
+    /// The memory bits `Wk` holding a branching wire so far.
+    pub(super) held: usize,
+    /// The timers reset by `.TRm` (a memory bit `TOFm_R` each).
+    pub(super) resets: [bool; 16],
     /// The flip-flops written through memory coils (`Qm_S`, `Qm_R`) and updated last.
     pub(super) memory: [bool; 16],
     pub(super) problems: Vec<String>,
@@ -154,15 +164,39 @@ impl Writer {
             op if (PUSH_AT..PUSH_AT + 6).contains(&op) => "falling",
             _ => "none",
         };
+        // A timer's or counter's Q: wired from its block below it, read by name above it
+        // (IEC: the last call's Q); a timer reset by `.TRm` only while `TOFm_R` is clear.
         let block_q = if (PUSH_TQ..PUSH_TQ + 16).contains(&c.op) {
-            Some(self.tof[usize::from(c.op - PUSH_TQ)])
+            let m = usize::from(c.op - PUSH_TQ);
+            let named = (!self.written[m]).then(|| format!("TOF{m}.Q"));
+            let reset = self.resets[m].then(|| super::reset_name(m as u8));
+            Some((self.tof[m], named, reset))
         } else if (PUSH_CQ..PUSH_CQ + 8).contains(&c.op) {
-            Some(self.ctu[usize::from(c.op - PUSH_CQ)])
+            let m = usize::from(c.op - PUSH_CQ);
+            let named = (!self.ctu_written[m]).then(|| format!("CTU{m}.Q"));
+            Some((self.ctu[m], named, None))
         } else {
             None
         };
-        if let Some(block) = block_q {
-            let q = std::vec![(block, Some("Q"))];
+        if let Some((block, named, reset)) = block_q {
+            if reset.is_none() {
+                if let Some(name) = &named {
+                    return self.element("contact", name, c.negated, "none", "none", input);
+                }
+            }
+            let rail = std::vec![(self.rail, None)];
+            let q = match &named {
+                Some(name) if !c.negated => self.var_contact(name, false, input.clone()),
+                Some(name) => self.var_contact(name, false, rail),
+                None => std::vec![(block, Some("Q"))],
+            };
+            let q = match &reset {
+                Some(r) => self.var_contact(r, true, q),
+                None => q,
+            };
+            if named.is_some() && !c.negated {
+                return q;
+            }
             let q = if c.negated {
                 self.function("NOT", &[q])
             } else {
@@ -263,6 +297,7 @@ impl Writer {
     }
 
     fn step(&mut self, s: &Step, power: Vec<Src>, ladder: &Ladder) -> Vec<Src> {
+        super::memory::step_reads(s, &mut self.path);
         let rail = std::vec![(self.rail, None)];
         match s {
             Step::And(n, _) => self.net(n, power),
@@ -277,7 +312,10 @@ impl Writer {
             }
             Step::Not(_) => self.function("NOT", &[power]),
             Step::Tap(f, _) => {
+                let power = self.hold(power, f);
+                let path = self.path.clone();
                 self.flow(f, power.clone(), ladder);
+                self.path = path;
                 power
             }
             Step::Merge(steps, _, op, _) => {
@@ -306,10 +344,28 @@ impl Writer {
                 self.flow(f, p, ladder);
             }
             Flow::Split(a, b, _) => {
+                let power = self.hold(power, a);
+                let path = self.path.clone();
                 self.flow(a, power.clone(), ladder);
+                self.path = path;
                 self.flow(b, power, ladder);
             }
         }
+    }
+
+    /// Where a rung that reads again what it writes branches: its power into a memory coil
+    /// `Wk`, and the branches from a contact on it (the wire keeps its one value).
+    fn hold(&mut self, power: Vec<Src>, branch: &Flow) -> Vec<Src> {
+        if !super::memory::needs_hold(&self.path, branch) {
+            return power;
+        }
+        self.path.clear();
+        let name = format!("W{}", self.held);
+        self.held += 1;
+        self.row += 1;
+        self.var_coil(&name, false, "none", power);
+        self.row += 1;
+        self.var_contact(&name, false, std::vec![(self.rail, None)])
     }
 
     /// `.CUm` / `.CRm`: the CTU block, written at the counter's last rung.
@@ -326,6 +382,7 @@ impl Writer {
         let at = self.at();
         let preset = ladder.counter_presets[m];
         let _ = writeln!(self.body, "        <inVariable localId=\"{pv}\" height=\"20\" width=\"50\">{at}<connectionPointOut><relPosition x=\"50\" y=\"10\"/></connectionPointOut><expression>{preset}</expression></inVariable>");
+        self.ctu_written[m] = true;
         let cu = self.pending[m][0].take().unwrap_or_default();
         let r = self.pending[m][1].take().unwrap_or_default();
         let id = self.ctu[m];
@@ -362,6 +419,22 @@ impl Writer {
                 conns(&power),
                 conns(&[(konst, None)])
             );
+            self.written[usize::from(m)] = true;
+            // A trigger clears the reset's memory bit (on the same wire, so it is read once).
+            if self.resets[usize::from(m)] {
+                self.row += 1;
+                self.var_coil(&super::reset_name(m), false, "reset", power);
+            }
+            return;
+        }
+        if (POP_TR..POP_CU).contains(&k.op) {
+            // `.TRm`: TQm off at once until the next trigger: the memory bit TOFm_R set.
+            let power = if k.negated {
+                self.function("NOT", &[power])
+            } else {
+                power
+            };
+            self.var_coil(&super::reset_name(k.op - POP_TR), false, "set", power);
             return;
         }
         if (POP_CU..POP_CR + 8).contains(&k.op) {

@@ -1,5 +1,6 @@
 //! IEC 61131-3 built from uTile's own parts: an imported program's statements
-//! ([`super::import::Stmt`]) lowered to rungs, with timers, counters and memory bits chosen.
+//! ([`super::import::Stmt`]) lowered to rungs, with timers, counters and memory bits chosen
+//! (the blocks' patterns in `blocks.rs`, the timers' units in `timers.rs`).
 //!
 //! The patterns (docs/LADDER.md draws them):
 //!
@@ -11,7 +12,9 @@
 //!   the pulse is off, Q = `TQm`.
 //! - CTU: `CU .CUm`, `R .CRm`, Q = `CQm`, PV the preset `Cm`.
 //! - R_TRIG: `CLK DUP M. ! AND .E .M`, F_TRIG the same on `CLK !`; Q = `E`.
-//! - SR: `S M. R ! AND OR .M`; RS: `R ! S M. OR AND .M`; Q1 = `M`.
+//! - SR, RS whose Q1 is read only above them: uTile's flip-flop, `S .Sm`, `R .Rm` (SR:
+//!   `R S ! AND .Rm`), Q1 = `Qm`; read below (IEC: at once): SR `S M. R ! AND OR .M`, RS
+//!   `R ! S M. OR AND .M`, Q1 = `M`.
 //! - Set and reset coils: `P Y0. OR .Y0`, `P ! Y0. AND .Y0` (the read-back makes them
 //!   exact at once, for the rungs below).
 //! - An edge contact on an input: uTile's own edge bit `ALn.` / `ATn.` (one reader each).
@@ -21,18 +24,21 @@
 use std::string::String;
 use std::vec::Vec;
 
-use utile_core::engine::{unit_ms, COUNTERS, UNITS};
+use utile_core::engine::{COUNTERS, UNITS};
 use utile_core::opcodes::{
-    BLANK, CLR, END, KEY, NOP, POP_CR, POP_CU, POP_TK, POP_U, PUSH_A, PUSH_AL, PUSH_AT, PUSH_CQ,
-    PUSH_TQ, PUSH_U, SET,
+    BLANK, CLR, END, KEY, NOP, POP_CR, POP_CU, POP_R, POP_S, POP_TK, POP_U, PUSH_A, PUSH_AL,
+    PUSH_AT, PUSH_CQ, PUSH_Q, PUSH_TQ, PUSH_U, SET,
 };
 
 use super::import::{CoilMode, Expr, IecProgram, Stmt, TimerKind};
 use super::model::{Block, Coil, Contact, Flow, Item, Ladder, Net, Rung, Step};
 use super::Reasons;
 
-/// The timers of each unit: (first, how many).
-const UNIT_GROUPS: [(u8, u8); 4] = [(0, 4), (4, 8), (12, 3), (15, 1)];
+mod blocks;
+mod pieces;
+mod timers;
+pub use timers::time_text;
+use timers::{holds, timer_for, UNIT_GROUPS};
 
 /// What each block statement became.
 #[derive(Clone, Copy)]
@@ -50,6 +56,7 @@ struct Lowering {
     used_uv: u16,
     timers_used: u16,
     counters_used: u8,
+    flip_flops_used: u16,
     edge_mem: Vec<Option<u8>>,
     made: Vec<Made>,
     problems: Vec<String>,
@@ -71,30 +78,49 @@ fn lower_all(prog: &IecProgram) -> Result<Ladder, Vec<String>> {
         used_uv: prog.used_uv,
         timers_used: 0,
         counters_used: 0,
+        flip_flops_used: 0,
         edge_mem: Vec::new(),
         made: std::vec![Made::None; prog.stmts.len()],
         problems: Vec::new(),
         primed: None,
         timer_of: std::vec![None; prog.stmts.len()],
     };
-    // Which statements run as one rung (coils on one power), and the edges each reads.
-    let mut group = std::vec![0usize; prog.stmts.len()];
-    for i in 1..prog.stmts.len() {
-        let same = matches!((&prog.stmts[i - 1], &prog.stmts[i]),
-            (Stmt::Coil { power: a, .. }, Stmt::Coil { power: b, .. }) if a == b);
-        group[i] = group[i - 1] + usize::from(!same);
-    }
+    // An SR/RS whose Q1 nothing reads below it (in the scan after its call) is uTile's own
+    // flip-flop: Q changes at END, and every read sees the last call's Q, as IEC's would.
+    // uTile has 16 flip-flops; past them, memory bits.
+    let mut own = 0;
+    let own_flip_flop: Vec<bool> = (0..prog.stmts.len())
+        .map(|i| {
+            let yes = own < 16
+                && matches!(prog.stmts[i], Stmt::FlipFlop { .. })
+                && !prog.stmts[i + 1..].iter().any(|s| {
+                    let mut reads = false;
+                    stmt_exprs(s, &mut |e| reads |= reads_out(e, i));
+                    reads
+                });
+            own += usize::from(yes);
+            yes
+        })
+        .collect();
+    // The rungs: pieces on one wire together (pieces.rs), the edges each reads.
+    let (pieces, block_group) = pieces::plan(prog, &own_flip_flop);
     let mut edge_vars = std::vec![(0u8, true); prog.edges];
     let mut edge_groups: Vec<Vec<usize>> = std::vec![Vec::new(); prog.edges];
+    let mut read_in = |e: &Expr, g: usize| {
+        edges_of(e, &mut |id, var, rising| {
+            edge_vars[id] = (var, rising);
+            if !edge_groups[id].contains(&g) {
+                edge_groups[id].push(g);
+            }
+        })
+    };
+    for p in &pieces {
+        read_in(&p.expr, p.group);
+    }
     for (i, s) in prog.stmts.iter().enumerate() {
-        stmt_exprs(s, &mut |e| {
-            edges_of(e, &mut |id, var, rising| {
-                edge_vars[id] = (var, rising);
-                if !edge_groups[id].contains(&group[i]) {
-                    edge_groups[id].push(group[i]);
-                }
-            })
-        });
+        if let Some(g) = block_group[i] {
+            stmt_exprs(s, &mut |e| read_in(e, g));
+        }
     }
     // An edge on an input is uTile's own edge bit (ALn, ATn): one reader each.
     let is_input = |var: u8| (PUSH_A..PUSH_A + 6).contains(&var);
@@ -132,6 +158,7 @@ fn lower_all(prog: &IecProgram) -> Result<Ladder, Vec<String>> {
                 _ => 0,
             })
             .sum::<usize>()
+        - own_flip_flop.iter().filter(|&&o| o).count()
         + usize::from(prog.stmts.iter().any(|s| {
             matches!(
                 s,
@@ -183,27 +210,71 @@ fn lower_all(prog: &IecProgram) -> Result<Ladder, Vec<String>> {
         }
     }
 
-    let mut i = 0;
-    while i < prog.stmts.len() {
-        let s = &prog.stmts[i];
-        if let Stmt::Coil { power, .. } = s {
-            // Coils on the same power: one rung, split (IEC evaluates the power once).
-            let mut j = i + 1;
-            while matches!(&prog.stmts.get(j), Some(Stmt::Coil { power: p, .. }) if p == power) {
-                j += 1;
+    // Counters in statement order; a timer's or counter's Q is known before its call (a
+    // read above it is the last call's Q: `TOF0.Q`).
+    for (i, s) in prog.stmts.iter().enumerate() {
+        match s {
+            Stmt::Counter { pv, what, .. } => {
+                let Some(m) = (0..COUNTERS as u8).find(|m| l.counters_used & (1 << m) == 0) else {
+                    l.problems.push(format!(
+                        "{what}: more counters than uTile's {COUNTERS} (C0..C7) — use fewer CTU blocks"
+                    ));
+                    continue;
+                };
+                l.counters_used |= 1 << m;
+                l.counter_presets[usize::from(m)] = *pv;
+                l.made[i] = Made::Q(PUSH_CQ + m, false);
             }
-            let flows: Vec<Flow> = prog.stmts[i..j].iter().map(coil_flow).collect();
-            let net = l.net(power);
-            l.rung(net, split(flows));
-            for k in i..j {
+            Stmt::Timer { kind, .. } => {
+                if let Some(m) = l.timer_of[i] {
+                    l.made[i] = Made::Q(PUSH_TQ + m, *kind == TimerKind::Ton);
+                }
+            }
+            Stmt::FlipFlop { .. } if own_flip_flop[i] => {
+                // uTile has 16 flip-flops: one each.
+                let m = (0..16u8)
+                    .find(|m| l.flip_flops_used & (1 << m) == 0)
+                    .unwrap_or(15);
+                l.flip_flops_used |= 1 << m;
+                l.made[i] = Made::Q(PUSH_Q + m, false);
+            }
+            Stmt::FlipFlop { .. } => {
+                // Q1 a memory bit, known before the call (read above it: the last call's).
+                let mem = l.bit();
+                l.made[i] = Made::Q(mem, false);
+            }
+            _ => {}
+        }
+    }
+
+    // Statements in scan order: pieces gathered into their rungs, blocks on their own.
+    let mut open: Vec<&pieces::Piece> = Vec::new();
+    let mut done: Vec<usize> = Vec::new();
+    let mut next = pieces.iter().peekable();
+    for (i, s) in prog.stmts.iter().enumerate() {
+        if block_group[i].is_some() {
+            l.flush(prog, &mut open);
+            for k in done.drain(..) {
                 l.after(k, &last_use, &edge_vars);
             }
-            i = j;
+            l.block(i, s);
+            l.after(i, &last_use, &edge_vars);
             continue;
         }
-        l.block(i, s);
-        l.after(i, &last_use, &edge_vars);
-        i += 1;
+        while let Some(p) = next.next_if(|p| p.stmt == i) {
+            if open.last().is_some_and(|o| o.group != p.group) {
+                l.flush(prog, &mut open);
+                for k in done.drain(..) {
+                    l.after(k, &last_use, &edge_vars);
+                }
+            }
+            open.push(p);
+        }
+        done.push(i);
+    }
+    l.flush(prog, &mut open);
+    for k in done.drain(..) {
+        l.after(k, &last_use, &edge_vars);
     }
     if let Some(p) = l.primed {
         l.rung(
@@ -301,6 +372,16 @@ fn stmt_exprs(s: &Stmt, f: &mut dyn FnMut(&Expr)) {
     }
 }
 
+/// Whether `e` reads the Q of statement `n`.
+fn reads_out(e: &Expr, n: usize) -> bool {
+    match e {
+        Expr::Out(k) => *k == n,
+        Expr::Not(a) => reads_out(a, n),
+        Expr::And(a, b) | Expr::Or(a, b) | Expr::Xor(a, b) => reads_out(a, n) || reads_out(b, n),
+        _ => false,
+    }
+}
+
 fn edges_of(e: &Expr, f: &mut dyn FnMut(usize, u8, bool)) {
     match e {
         Expr::Edge { var, rising, id } => f(*id, *var, *rising),
@@ -317,63 +398,67 @@ fn edges_in(e: &Expr, f: &mut dyn FnMut(usize)) {
     edges_of(e, &mut |id, _, _| f(id));
 }
 
-/// Whether the timers from `first` on hold `pt_ms` exactly in a preset 1..255.
-fn holds(first: u8, pt_ms: u32) -> bool {
-    let unit = unit_ms(first);
-    pt_ms.is_multiple_of(unit) && (1..=255).contains(&(pt_ms / unit))
-}
-
-/// A timer of the finest unit that holds `pt_ms` exactly in a preset ≤ 255.
-fn timer_for(pt_ms: u32, used: u16) -> Result<(u8, u8), String> {
-    let mut fits_some = false;
-    for (first, count) in UNIT_GROUPS {
-        if !holds(first, pt_ms) {
-            continue;
-        }
-        let unit = unit_ms(first);
-        fits_some = true;
-        if let Some(m) = (first..first + count).find(|m| used & (1 << m) == 0) {
-            return Ok((m, (pt_ms / unit) as u8));
-        }
-    }
-    if fits_some {
-        Err(format!(
-            "more timers of the unit PT = {} needs than uTile has (T0..T3 count 0.1 s, T4..TB 1 s, TC..TE 1 min, TF 400 s; {} timers in use) — use fewer timers or a PT another unit holds",
-            time_text(pt_ms),
-            used.count_ones()
-        ))
-    } else {
-        Err(format!(
-            "PT = {} fits no timer of uTile (0.1 s to 25.5 s in 0.1 s, 1 s to 255 s, 1 to 255 min, or 400 s steps) — round it to one of those",
-            time_text(pt_ms)
-        ))
-    }
-}
-
-/// A time in IEC's words (`T#1m30s`).
-pub fn time_text(ms: u32) -> String {
-    let mut s = String::from("T#");
-    let (h, m, sec, rest) = (ms / 3_600_000, ms / 60_000 % 60, ms / 1000 % 60, ms % 1000);
-    if h > 0 {
-        s.push_str(&format!("{h}h"));
-    }
-    if m > 0 {
-        s.push_str(&format!("{m}m"));
-    }
-    if sec > 0 {
-        s.push_str(&format!("{sec}s"));
-    }
-    if rest > 0 || ms == 0 {
-        s.push_str(&format!("{rest}ms"));
-    }
-    s
-}
-
 impl Lowering {
     fn bit(&mut self) -> u8 {
         let b = (0..16).find(|b| self.used_uv & (1 << b) == 0).unwrap_or(15);
         self.used_uv |= 1 << b;
         PUSH_U + b
+    }
+
+    /// The pieces gathered on one wire as one rung: the wire, then each piece's steps and
+    /// output, split (`DUP`).
+    fn flush(&mut self, prog: &IecProgram, open: &mut Vec<&pieces::Piece>) {
+        let Some(first) = open.first() else { return };
+        let wire = first.expr.clone();
+        let mut flows = Vec::new();
+        for p in open.drain(..) {
+            let Some(mut flow) = self.piece_flow(prog, p) else {
+                continue;
+            };
+            for step in self.relative(&p.expr, &wire).into_iter().rev() {
+                flow = Flow::Then(step, Box::new(flow));
+            }
+            flows.push(flow);
+        }
+        if !flows.is_empty() {
+            let net = self.net(&wire);
+            self.rung(net, split(flows));
+        }
+    }
+
+    /// What a piece drives.
+    fn piece_flow(&self, prog: &IecProgram, p: &pieces::Piece) -> Option<Flow> {
+        use pieces::Drive;
+        let q = |n: usize| match self.made.get(n) {
+            Some(&Made::Q(q, _)) => Some(q),
+            _ => None,
+        };
+        let op = match p.drive {
+            Drive::Coil => return Some(coil_flow(&prog.stmts[p.stmt])),
+            Drive::Trigger => POP_TK + self.timer_of[p.stmt]?,
+            Drive::Set => POP_S + q(p.stmt)?.checked_sub(PUSH_Q)?,
+            Drive::Reset => POP_R + q(p.stmt)?.checked_sub(PUSH_Q)?,
+            Drive::CountUp => POP_CU + q(p.unit)?.checked_sub(PUSH_CQ)?,
+            Drive::CountReset => POP_CR + q(p.unit)?.checked_sub(PUSH_CQ)?,
+        };
+        Some(Flow::Coil(coil(op, false)))
+    }
+
+    /// The steps from `wire` to `e` (`e` grows from it: [`pieces::grows_from`]).
+    fn relative(&self, e: &Expr, wire: &Expr) -> Vec<Step> {
+        if e == wire {
+            return Vec::new();
+        }
+        let (inner, step) = match e {
+            Expr::And(a, b) => (a, Step::And(self.net(b), 0)),
+            Expr::Or(a, b) => (a, Step::Or(self.net(b), 0)),
+            Expr::Xor(a, b) => (a, Step::Xor(self.net(b), 0)),
+            Expr::Not(a) => (a, Step::Not(0)),
+            _ => return Vec::new(),
+        };
+        let mut steps = self.relative(inner, wire);
+        steps.push(step);
+        steps
     }
 
     fn rung(&mut self, net: Net, flow: Flow) {
@@ -423,139 +508,8 @@ impl Lowering {
                 Some(&Made::Q(op, neg)) => contact(op, neg),
                 _ => contact(CLR, false),
             },
-        }
-    }
-
-    fn block(&mut self, i: usize, s: &Stmt) {
-        match s {
-            Stmt::Coil { .. } => {}
-            Stmt::Timer {
-                kind,
-                input,
-                pt_ms,
-                what,
-            } => {
-                let _ = (pt_ms, what);
-                let Some(m) = self.timer_of[i] else { return };
-                let tk = Flow::Coil(coil(POP_TK + m, false));
-                let net = self.net(input);
-                match kind {
-                    TimerKind::Tof => {
-                        self.rung(net, tk);
-                        self.made[i] = Made::Q(PUSH_TQ + m, false);
-                    }
-                    TimerKind::Ton => {
-                        let p = match self.primed {
-                            Some(p) => p,
-                            None => {
-                                let p = self.bit();
-                                self.primed = Some(p);
-                                p
-                            }
-                        };
-                        let flow = Flow::Then(
-                            Step::Not(0),
-                            Box::new(Flow::Then(Step::Or(contact(p, true), 0), Box::new(tk))),
-                        );
-                        self.rung(net, flow);
-                        self.made[i] = Made::Q(PUSH_TQ + m, true);
-                    }
-                    TimerKind::Tp => {
-                        let mem = self.bit();
-                        let trigger = Flow::Then(
-                            Step::And(contact(mem, true), 0),
-                            Box::new(Flow::Then(
-                                Step::And(contact(PUSH_TQ + m, true), 0),
-                                Box::new(tk),
-                            )),
-                        );
-                        let flow = split(std::vec![
-                            trigger,
-                            Flow::Coil(coil(mem - PUSH_U + POP_U, false))
-                        ]);
-                        self.rung(net, flow);
-                        self.made[i] = Made::Q(PUSH_TQ + m, false);
-                    }
-                }
-            }
-            Stmt::Counter {
-                cu,
-                reset,
-                pv,
-                what,
-            } => {
-                let Some(m) = (0..COUNTERS as u8).find(|m| self.counters_used & (1 << m) == 0)
-                else {
-                    self.problems.push(format!(
-                        "{what}: more counters than uTile's {COUNTERS} (C0..C7) — use fewer CTU blocks"
-                    ));
-                    return;
-                };
-                self.counters_used |= 1 << m;
-                self.counter_presets[usize::from(m)] = *pv;
-                let cu = self.net(cu);
-                self.rung(cu, Flow::Coil(coil(POP_CU + m, false)));
-                if *reset != Expr::Const(false) {
-                    let reset = self.net(reset);
-                    self.rung(reset, Flow::Coil(coil(POP_CR + m, false)));
-                }
-                self.made[i] = Made::Q(PUSH_CQ + m, false);
-            }
-            Stmt::CounterReset { counter, power } => {
-                if let Some(&Made::Q(cq, _)) = self.made.get(*counter) {
-                    let net = self.net(power);
-                    self.rung(net, Flow::Coil(coil(cq - PUSH_CQ + POP_CR, false)));
-                }
-            }
-            Stmt::Trig { clk, rising } => {
-                let (mem, out) = (self.bit(), self.bit());
-                let edge = split(std::vec![
-                    Flow::Then(
-                        Step::And(contact(mem, true), 0),
-                        Box::new(Flow::Coil(coil(out - PUSH_U + POP_U, false))),
-                    ),
-                    Flow::Coil(coil(mem - PUSH_U + POP_U, false)),
-                ]);
-                let flow = if *rising {
-                    edge
-                } else {
-                    Flow::Then(Step::Not(0), Box::new(edge))
-                };
-                let net = self.net(clk);
-                self.rung(net, flow);
-                self.made[i] = Made::Q(out, false);
-            }
-            Stmt::FlipFlop {
-                set,
-                reset,
-                set_dominant,
-            } => {
-                let mem = self.bit();
-                let (s, r) = (self.net(set), self.net(reset));
-                let not_r = match r {
-                    Net::Contact(mut c) if !c.negated => {
-                        c.negated = true;
-                        Net::Contact(c)
-                    }
-                    r => Net::Not(Box::new(r), 0),
-                };
-                let held = contact(mem, false);
-                let net = if *set_dominant {
-                    Net::Parallel(
-                        Box::new(s),
-                        Box::new(Net::Series(Box::new(held), Box::new(not_r), 0)),
-                        0,
-                    )
-                } else {
-                    Net::Series(
-                        Box::new(not_r),
-                        Box::new(Net::Parallel(Box::new(s), Box::new(held), 0)),
-                        0,
-                    )
-                };
-                self.rung(net, Flow::Coil(coil(mem - PUSH_U + POP_U, false)));
-                self.made[i] = Made::Q(mem, false);
-            }
+            // Made Out by the reader; a block that never ran reads FALSE.
+            Expr::Named(_) => contact(CLR, false),
         }
     }
 }

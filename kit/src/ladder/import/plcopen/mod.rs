@@ -6,7 +6,8 @@
 //! blocks TON, TOF, TP, CTU, R_TRIG, F_TRIG, SR, RS and the functions AND, OR, XOR, NOT
 //! (EN optional, ENO passed through), FBD's in-, out- and in-out variables, connectors and
 //! continuations. The sinks (coils, output variables, function blocks) run top to bottom,
-//! then left to right, as the picture shows them.
+//! then left to right, as the picture shows them. The blocks and functions are read in
+//! `blocks.rs`.
 
 use std::collections::HashMap;
 use std::string::String;
@@ -16,6 +17,9 @@ use roxmltree::{Document, Node};
 
 use super::super::Reasons;
 use super::{pop_of, CoilMode, Expr, IecProgram, Signals, Stmt, TimerKind};
+
+mod blocks;
+pub use blocks::parse_time;
 
 /// Words for an element in a refusal: `coil Lamp (localId 7)`.
 fn what(n: Node) -> String {
@@ -44,46 +48,6 @@ fn child_text(n: Node, tag: &str) -> Option<String> {
     child(n, tag).map(|c| c.text().unwrap_or("").trim().to_string())
 }
 
-/// A time literal (`T#500ms`, `TIME#1m30s`, `t#1.5s`) in ms.
-pub fn parse_time(text: &str) -> Option<u32> {
-    let t = text.trim().replace('_', "").to_ascii_lowercase();
-    let body = t
-        .strip_prefix("time#")
-        .or_else(|| t.strip_prefix("t#"))
-        .unwrap_or(&t);
-    if body.is_empty() {
-        return None;
-    }
-    if body.bytes().all(|b| b.is_ascii_digit()) {
-        return body.parse().ok();
-    }
-    let mut ms = 0f64;
-    let mut rest = body;
-    while !rest.is_empty() {
-        let end = rest
-            .find(|c: char| !c.is_ascii_digit() && c != '.')
-            .unwrap_or(rest.len());
-        let num: f64 = rest[..end].parse().ok()?;
-        rest = &rest[end..];
-        let (scale, len) = if rest.starts_with("ms") {
-            (1.0, 2)
-        } else if rest.starts_with('d') {
-            (86_400_000.0, 1)
-        } else if rest.starts_with('h') {
-            (3_600_000.0, 1)
-        } else if rest.starts_with('m') {
-            (60_000.0, 1)
-        } else if rest.starts_with('s') {
-            (1000.0, 1)
-        } else {
-            return None;
-        };
-        ms += num * scale;
-        rest = &rest[len..];
-    }
-    (ms <= f64::from(u32::MAX)).then_some(ms.round() as u32)
-}
-
 /// The reader's state: the body's elements by localId, the signals, the statements.
 struct Reader<'a, 'i> {
     elems: HashMap<u64, Node<'a, 'i>>,
@@ -95,6 +59,12 @@ struct Reader<'a, 'i> {
     stmts: Vec<Stmt>,
     /// Statement of each FB element already emitted.
     emitted: HashMap<u64, usize>,
+    /// Each wire read (element, output) and the statement count when it was first read.
+    wires: HashMap<(u64, Option<String>), usize>,
+    /// The wires read for several statements.
+    shared: Vec<Expr>,
+    /// The blocks with an instance name: (name, localId, upper-cased type), in file order.
+    instances: Vec<(String, u64, String)>,
     /// Elements being followed (a loop of wires comes back to one).
     visiting: Vec<u64>,
     /// Edge memories by contact localId.
@@ -181,6 +151,9 @@ fn read_all(text: &str, signals: Signals) -> Result<IecProgram, Vec<String>> {
         constants: HashMap::new(),
         stmts: Vec::new(),
         emitted: HashMap::new(),
+        instances: Vec::new(),
+        wires: HashMap::new(),
+        shared: Vec::new(),
         visiting: Vec::new(),
         edges: HashMap::new(),
         edge_what: Vec::new(),
@@ -259,6 +232,10 @@ fn read_all(text: &str, signals: Signals) -> Result<IecProgram, Vec<String>> {
             ));
             continue;
         };
+        if let (true, Some(inst)) = (tag == "block", n.attribute("instanceName")) {
+            let ty = n.attribute("typeName").unwrap_or("").to_ascii_uppercase();
+            r.instances.push((inst.trim().to_string(), id, ty));
+        }
         if tag == "connector" {
             if let Some(name) = n.attribute("name") {
                 r.connectors.insert(name.to_ascii_uppercase(), n);
@@ -296,6 +273,14 @@ fn read_all(text: &str, signals: Signals) -> Result<IecProgram, Vec<String>> {
     if !r.problems.is_empty() {
         return Err(r.problems);
     }
+    // Blocks read by name (`TOF0.Q`) are statements now.
+    let emitted = std::mem::take(&mut r.emitted);
+    for s in &mut r.stmts {
+        super::stmt_exprs_mut(s, &mut |e| super::resolve_named(e, &emitted));
+    }
+    for e in &mut r.shared {
+        super::resolve_named(e, &emitted);
+    }
     let set_point = |name: &str| {
         r.constants
             .get(name)
@@ -309,6 +294,7 @@ fn read_all(text: &str, signals: Signals) -> Result<IecProgram, Vec<String>> {
         edge_what: r.edge_what,
         stmts: r.stmts,
         used_uv: r.signals.used_uv,
+        shared: r.shared,
         set_points,
     })
 }
@@ -422,6 +408,20 @@ impl<'a, 'i> Reader<'a, 'i> {
         self.visiting.push(id);
         let r = self.output_inner(n, id, formal);
         self.visiting.pop();
+        // A wire read for a second statement is shared (IEC: one value).
+        if let Ok(e) = &r {
+            let at = self.stmts.len();
+            let key = (id, formal.map(str::to_ascii_uppercase));
+            match self.wires.get(&key) {
+                None => {
+                    self.wires.insert(key, at);
+                }
+                Some(&first) if first != at && !self.shared.contains(e) => {
+                    self.shared.push(e.clone());
+                }
+                Some(_) => {}
+            }
+        }
         r
     }
 
@@ -431,9 +431,21 @@ impl<'a, 'i> Reader<'a, 'i> {
             "contact" => {
                 let power = self.input_of(n, child(n, "connectionPointIn"))?;
                 let name = child_text(n, "variable").unwrap_or_default();
-                let push = self.var(n, &name)?;
                 let negated = n.attribute("negated") == Some("true");
-                let value = match n.attribute("edge").unwrap_or("none") {
+                let edge = n.attribute("edge").unwrap_or("none");
+                if name.contains('.') {
+                    let value = self.instance_output(n, &name)?;
+                    if edge != "none" {
+                        return Err(format!(
+                            "{}: an edge contact on {name} — uTile's edges are on bits; drive a coil from {name} and put the edge contact on that coil's variable",
+                            what(n)
+                        ));
+                    }
+                    let value = if negated { Expr::negate(value) } else { value };
+                    return Ok(Expr::and(power, value));
+                }
+                let push = self.var(n, &name)?;
+                let value = match edge {
                     "none" => Expr::Var(push),
                     e @ ("rising" | "falling") => {
                         let next = self.edges.len();
@@ -463,6 +475,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                 let value = match name.to_ascii_uppercase().as_str() {
                     "TRUE" | "1" => Expr::Const(true),
                     "FALSE" | "0" => Expr::Const(false),
+                    _ if name.contains('.') => self.instance_output(n, &name)?,
                     _ => Expr::Var(self.var(n, &name)?),
                 };
                 Ok(if n.attribute("negated") == Some("true") {
@@ -489,206 +502,5 @@ impl<'a, 'i> Reader<'a, 'i> {
                 what(n)
             )),
         }
-    }
-
-    /// A block's input by formal name (`IN`, `PT`, `IN1`, …).
-    fn block_input(&self, n: Node<'a, 'i>, formal: &str) -> Option<Node<'a, 'i>> {
-        child(n, "inputVariables")?.children().find(|v| {
-            v.tag_name().name() == "variable"
-                && v.attribute("formalParameter")
-                    .is_some_and(|f| f.eq_ignore_ascii_case(formal))
-        })
-    }
-
-    fn bool_input(&mut self, n: Node<'a, 'i>, formal: &str) -> Res<Expr> {
-        match self.block_input(n, formal) {
-            Some(v) => {
-                let e = self.input_of(n, child(v, "connectionPointIn"))?;
-                Ok(if v.attribute("negated") == Some("true") {
-                    Expr::negate(e)
-                } else {
-                    e
-                })
-            }
-            None => Ok(Expr::Const(false)),
-        }
-    }
-
-    /// A constant input (PT, PV): an inVariable's literal, or a variable's initial value.
-    fn constant_input(&self, n: Node, formal: &str) -> Res<String> {
-        let missing = || {
-            format!(
-                "{}: {formal} must come from a constant or a variable with an initial value",
-                what(n)
-            )
-        };
-        let v = self.block_input(n, formal).ok_or_else(missing)?;
-        let conn = child(v, "connectionPointIn")
-            .and_then(|p| p.children().find(|c| c.tag_name().name() == "connection"))
-            .ok_or_else(missing)?;
-        let id: u64 = conn
-            .attribute("refLocalId")
-            .and_then(|s| s.trim().parse().ok())
-            .ok_or_else(missing)?;
-        let src = self.elems.get(&id).ok_or_else(|| {
-            format!(
-                "{}: wired to localId {id}, which is not in the body — redraw the wire",
-                what(n)
-            )
-        })?;
-        if src.tag_name().name() != "inVariable" {
-            return Err(missing());
-        }
-        let text = child_text(*src, "expression").unwrap_or_default();
-        Ok(self
-            .constants
-            .get(&text.to_ascii_uppercase())
-            .cloned()
-            .unwrap_or(text))
-    }
-
-    fn enable_ok(&mut self, n: Node<'a, 'i>) -> Res<()> {
-        if self.block_input(n, "EN").is_some() {
-            let en = self.bool_input(n, "EN")?;
-            if en != Expr::Const(true) {
-                return Err(format!(
-                    "{}: EN from a condition — uTile runs every block every scan; wire the condition into the block's input instead and EN to the left rail",
-                    what(n)
-                ));
-            }
-        }
-        Ok(())
-    }
-
-    fn block_output(&mut self, n: Node<'a, 'i>, formal: &str) -> Res<Expr> {
-        let ty = n.attribute("typeName").unwrap_or("").to_ascii_uppercase();
-        if formal.eq_ignore_ascii_case("ENO") {
-            self.enable_ok(n)?;
-            return Ok(Expr::Const(true));
-        }
-        if FUNCTIONS.contains(&ty.as_str()) {
-            self.enable_ok(n)?;
-            let mut ins: Vec<Expr> = Vec::new();
-            let names: Vec<String> = child(n, "inputVariables")
-                .map(|iv| {
-                    iv.children()
-                        .filter(|v| v.tag_name().name() == "variable")
-                        .filter_map(|v| v.attribute("formalParameter").map(str::to_string))
-                        .filter(|f| !f.eq_ignore_ascii_case("EN"))
-                        .collect()
-                })
-                .unwrap_or_default();
-            for f in &names {
-                ins.push(self.bool_input(n, f)?);
-            }
-            let mut it = ins.into_iter();
-            let first = it.next().ok_or_else(|| format!("{}: no inputs", what(n)))?;
-            let e = match ty.as_str() {
-                "NOT" => Expr::negate(first),
-                "AND" => it.fold(first, |a, b| Expr::And(Box::new(a), Box::new(b))),
-                "OR" => it.fold(first, Expr::or),
-                _ => it.fold(first, |a, b| Expr::Xor(Box::new(a), Box::new(b))),
-            };
-            return Ok(e);
-        }
-        if FB_TYPES.contains(&ty.as_str()) {
-            let q = if matches!(ty.as_str(), "SR" | "RS") {
-                "Q1"
-            } else {
-                "Q"
-            };
-            if !formal.is_empty() && !formal.eq_ignore_ascii_case(q) {
-                return Err(format!(
-                    "{}: its output {formal} has no uTile form (only {q} and ENO) — leave it unwired",
-                    what(n)
-                ));
-            }
-            let s = self.block_stmt(n)?;
-            return Ok(Expr::Out(s));
-        }
-        Err(self.unknown_block(n, &ty))
-    }
-
-    fn unknown_block(&self, n: Node, ty: &str) -> String {
-        let why = match ty {
-            "CTD" | "CTUD" => "uTile's counters count up only (CTU)",
-            "GT" | "GE" | "EQ" | "NE" | "LE" | "LT" => "uTile has no comparisons of numbers",
-            "ADD" | "SUB" | "MUL" | "DIV" | "MOD" | "MOVE" | "SEL" | "MUX" | "MAX" | "MIN"
-            | "LIMIT" => "uTile has no arithmetic or moves of numbers",
-            t if t.contains("_TO_") => "uTile has no conversions of numbers",
-            _ => "uTile knows only TON, TOF, TP, CTU, R_TRIG, F_TRIG, SR, RS, AND, OR, XOR, NOT (user function blocks cannot be imported)",
-        };
-        format!("{}: {ty}: {why} — redraw it with those", what(n))
-    }
-
-    /// The statement of a function block, emitted once (its inputs first).
-    fn block_stmt(&mut self, n: Node<'a, 'i>) -> Res<usize> {
-        let id = local_id(n).unwrap_or(0);
-        if let Some(&s) = self.emitted.get(&id) {
-            return Ok(s);
-        }
-        self.enable_ok(n)?;
-        let ty = n.attribute("typeName").unwrap_or("").to_ascii_uppercase();
-        let w = what(n);
-        let stmt = match ty.as_str() {
-            "TON" | "TOF" | "TP" => {
-                let input = self.bool_input(n, "IN")?;
-                let pt_text = self.constant_input(n, "PT")?;
-                let pt_ms = parse_time(&pt_text).ok_or_else(|| {
-                    format!("{w}: PT '{pt_text}' is not a time (T#500ms, T#2s, T#1m30s)")
-                })?;
-                let kind = match ty.as_str() {
-                    "TON" => TimerKind::Ton,
-                    "TOF" => TimerKind::Tof,
-                    _ => TimerKind::Tp,
-                };
-                Stmt::Timer {
-                    kind,
-                    input,
-                    pt_ms,
-                    what: w,
-                }
-            }
-            "CTU" => {
-                let cu = self.bool_input(n, "CU")?;
-                let reset = self.bool_input(n, "R")?;
-                let pv_text = self.constant_input(n, "PV")?;
-                let pv = pv_text
-                    .trim()
-                    .parse::<u16>()
-                    .ok()
-                    .filter(|&v| v >= 1)
-                    .ok_or_else(|| {
-                        format!(
-                            "{w}: PV '{pv_text}' is not a preset uTile's counters hold (1..65535)"
-                        )
-                    })?;
-                Stmt::Counter {
-                    cu,
-                    reset,
-                    pv,
-                    what: w,
-                }
-            }
-            "R_TRIG" | "F_TRIG" => Stmt::Trig {
-                clk: self.bool_input(n, "CLK")?,
-                rising: ty == "R_TRIG",
-            },
-            "SR" => Stmt::FlipFlop {
-                set: self.bool_input(n, "S1")?,
-                reset: self.bool_input(n, "R")?,
-                set_dominant: true,
-            },
-            "RS" => Stmt::FlipFlop {
-                set: self.bool_input(n, "S")?,
-                reset: self.bool_input(n, "R1")?,
-                set_dominant: false,
-            },
-            _ => return Err(self.unknown_block(n, &ty)),
-        };
-        self.stmts.push(stmt);
-        let s = self.stmts.len() - 1;
-        self.emitted.insert(id, s);
-        Ok(s)
     }
 }

@@ -1,0 +1,277 @@
+//! PLCopen's function blocks and functions read: their inputs (EN, PT, PV from a constant or
+//! a variable's initial value), TON/TOF/TP/CTU/R_TRIG/F_TRIG/SR/RS as statements, AND/OR/
+//! XOR/NOT as expressions, a block's Q read by its instance name (`TOF0.Q`), and time
+//! literals.
+
+use super::*;
+
+/// A time literal (`T#500ms`, `TIME#1m30s`, `t#1.5s`) in ms.
+pub fn parse_time(text: &str) -> Option<u32> {
+    let t = text.trim().replace('_', "").to_ascii_lowercase();
+    let body = t
+        .strip_prefix("time#")
+        .or_else(|| t.strip_prefix("t#"))
+        .unwrap_or(&t);
+    if body.is_empty() {
+        return None;
+    }
+    if body.bytes().all(|b| b.is_ascii_digit()) {
+        return body.parse().ok();
+    }
+    let mut ms = 0f64;
+    let mut rest = body;
+    while !rest.is_empty() {
+        let end = rest
+            .find(|c: char| !c.is_ascii_digit() && c != '.')
+            .unwrap_or(rest.len());
+        let num: f64 = rest[..end].parse().ok()?;
+        rest = &rest[end..];
+        let (scale, len) = if rest.starts_with("ms") {
+            (1.0, 2)
+        } else if rest.starts_with('d') {
+            (86_400_000.0, 1)
+        } else if rest.starts_with('h') {
+            (3_600_000.0, 1)
+        } else if rest.starts_with('m') {
+            (60_000.0, 1)
+        } else if rest.starts_with('s') {
+            (1000.0, 1)
+        } else {
+            return None;
+        };
+        ms += num * scale;
+        rest = &rest[len..];
+    }
+    (ms <= f64::from(u32::MAX)).then_some(ms.round() as u32)
+}
+
+impl<'a, 'i> Reader<'a, 'i> {
+    /// `TOF0.Q`: the Q of the timer or counter block of that instance name, read by name
+    /// (above its call: the last call's Q).
+    pub(super) fn instance_output(&self, n: Node, name: &str) -> Res<Expr> {
+        let (inst, out) = name.trim().split_once('.').unwrap_or((name, ""));
+        let block = self
+            .instances
+            .iter()
+            .find(|(i, _, _)| i.eq_ignore_ascii_case(inst.trim()));
+        let Some((_, id, ty)) = block else {
+            return Err(format!(
+                "{}: {name} names no block of the body — declare the variable, or name a TON, TOF, TP or CTU block's instance",
+                what(n)
+            ));
+        };
+        let q = match ty.as_str() {
+            "TON" | "TOF" | "TP" | "CTU" => "Q",
+            "SR" | "RS" => "Q1",
+            _ => "",
+        };
+        if q.is_empty() || !out.trim().eq_ignore_ascii_case(q) {
+            return Err(format!(
+                "{}: {name}: uTile reads only the Q of a TON, TOF, TP or CTU (Q1 of an SR or RS) by name — wire the block's output instead",
+                what(n)
+            ));
+        }
+        Ok(Expr::Named(*id))
+    }
+
+    /// A block's input by formal name (`IN`, `PT`, `IN1`, …).
+    pub(super) fn block_input(&self, n: Node<'a, 'i>, formal: &str) -> Option<Node<'a, 'i>> {
+        child(n, "inputVariables")?.children().find(|v| {
+            v.tag_name().name() == "variable"
+                && v.attribute("formalParameter")
+                    .is_some_and(|f| f.eq_ignore_ascii_case(formal))
+        })
+    }
+
+    pub(super) fn bool_input(&mut self, n: Node<'a, 'i>, formal: &str) -> Res<Expr> {
+        match self.block_input(n, formal) {
+            Some(v) => {
+                let e = self.input_of(n, child(v, "connectionPointIn"))?;
+                Ok(if v.attribute("negated") == Some("true") {
+                    Expr::negate(e)
+                } else {
+                    e
+                })
+            }
+            None => Ok(Expr::Const(false)),
+        }
+    }
+
+    /// A constant input (PT, PV): an inVariable's literal, or a variable's initial value.
+    pub(super) fn constant_input(&self, n: Node, formal: &str) -> Res<String> {
+        let missing = || {
+            format!(
+                "{}: {formal} must come from a constant or a variable with an initial value",
+                what(n)
+            )
+        };
+        let v = self.block_input(n, formal).ok_or_else(missing)?;
+        let conn = child(v, "connectionPointIn")
+            .and_then(|p| p.children().find(|c| c.tag_name().name() == "connection"))
+            .ok_or_else(missing)?;
+        let id: u64 = conn
+            .attribute("refLocalId")
+            .and_then(|s| s.trim().parse().ok())
+            .ok_or_else(missing)?;
+        let src = self.elems.get(&id).ok_or_else(|| {
+            format!(
+                "{}: wired to localId {id}, which is not in the body — redraw the wire",
+                what(n)
+            )
+        })?;
+        if src.tag_name().name() != "inVariable" {
+            return Err(missing());
+        }
+        let text = child_text(*src, "expression").unwrap_or_default();
+        Ok(self
+            .constants
+            .get(&text.to_ascii_uppercase())
+            .cloned()
+            .unwrap_or(text))
+    }
+
+    pub(super) fn enable_ok(&mut self, n: Node<'a, 'i>) -> Res<()> {
+        if self.block_input(n, "EN").is_some() {
+            let en = self.bool_input(n, "EN")?;
+            if en != Expr::Const(true) {
+                return Err(format!(
+                    "{}: EN from a condition — uTile runs every block every scan; wire the condition into the block's input instead and EN to the left rail",
+                    what(n)
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    pub(super) fn block_output(&mut self, n: Node<'a, 'i>, formal: &str) -> Res<Expr> {
+        let ty = n.attribute("typeName").unwrap_or("").to_ascii_uppercase();
+        if formal.eq_ignore_ascii_case("ENO") {
+            self.enable_ok(n)?;
+            return Ok(Expr::Const(true));
+        }
+        if FUNCTIONS.contains(&ty.as_str()) {
+            self.enable_ok(n)?;
+            let mut ins: Vec<Expr> = Vec::new();
+            let names: Vec<String> = child(n, "inputVariables")
+                .map(|iv| {
+                    iv.children()
+                        .filter(|v| v.tag_name().name() == "variable")
+                        .filter_map(|v| v.attribute("formalParameter").map(str::to_string))
+                        .filter(|f| !f.eq_ignore_ascii_case("EN"))
+                        .collect()
+                })
+                .unwrap_or_default();
+            for f in &names {
+                ins.push(self.bool_input(n, f)?);
+            }
+            let mut it = ins.into_iter();
+            let first = it.next().ok_or_else(|| format!("{}: no inputs", what(n)))?;
+            let e = match ty.as_str() {
+                "NOT" => Expr::negate(first),
+                "AND" => it.fold(first, |a, b| Expr::And(Box::new(a), Box::new(b))),
+                "OR" => it.fold(first, Expr::or),
+                _ => it.fold(first, |a, b| Expr::Xor(Box::new(a), Box::new(b))),
+            };
+            return Ok(e);
+        }
+        if FB_TYPES.contains(&ty.as_str()) {
+            let q = if matches!(ty.as_str(), "SR" | "RS") {
+                "Q1"
+            } else {
+                "Q"
+            };
+            if !formal.is_empty() && !formal.eq_ignore_ascii_case(q) {
+                return Err(format!(
+                    "{}: its output {formal} has no uTile form (only {q} and ENO) — leave it unwired",
+                    what(n)
+                ));
+            }
+            let s = self.block_stmt(n)?;
+            return Ok(Expr::Out(s));
+        }
+        Err(self.unknown_block(n, &ty))
+    }
+
+    pub(super) fn unknown_block(&self, n: Node, ty: &str) -> String {
+        let why = match ty {
+            "CTD" | "CTUD" => "uTile's counters count up only (CTU)",
+            "GT" | "GE" | "EQ" | "NE" | "LE" | "LT" => "uTile has no comparisons of numbers",
+            "ADD" | "SUB" | "MUL" | "DIV" | "MOD" | "MOVE" | "SEL" | "MUX" | "MAX" | "MIN"
+            | "LIMIT" => "uTile has no arithmetic or moves of numbers",
+            t if t.contains("_TO_") => "uTile has no conversions of numbers",
+            _ => "uTile knows only TON, TOF, TP, CTU, R_TRIG, F_TRIG, SR, RS, AND, OR, XOR, NOT (user function blocks cannot be imported)",
+        };
+        format!("{}: {ty}: {why} — redraw it with those", what(n))
+    }
+
+    /// The statement of a function block, emitted once (its inputs first).
+    pub(super) fn block_stmt(&mut self, n: Node<'a, 'i>) -> Res<usize> {
+        let id = local_id(n).unwrap_or(0);
+        if let Some(&s) = self.emitted.get(&id) {
+            return Ok(s);
+        }
+        self.enable_ok(n)?;
+        let ty = n.attribute("typeName").unwrap_or("").to_ascii_uppercase();
+        let w = what(n);
+        let stmt = match ty.as_str() {
+            "TON" | "TOF" | "TP" => {
+                let input = self.bool_input(n, "IN")?;
+                let pt_text = self.constant_input(n, "PT")?;
+                let pt_ms = parse_time(&pt_text).ok_or_else(|| {
+                    format!("{w}: PT '{pt_text}' is not a time (T#500ms, T#2s, T#1m30s)")
+                })?;
+                let kind = match ty.as_str() {
+                    "TON" => TimerKind::Ton,
+                    "TOF" => TimerKind::Tof,
+                    _ => TimerKind::Tp,
+                };
+                Stmt::Timer {
+                    kind,
+                    input,
+                    pt_ms,
+                    what: w,
+                }
+            }
+            "CTU" => {
+                let cu = self.bool_input(n, "CU")?;
+                let reset = self.bool_input(n, "R")?;
+                let pv_text = self.constant_input(n, "PV")?;
+                let pv = pv_text
+                    .trim()
+                    .parse::<u16>()
+                    .ok()
+                    .filter(|&v| v >= 1)
+                    .ok_or_else(|| {
+                        format!(
+                            "{w}: PV '{pv_text}' is not a preset uTile's counters hold (1..65535)"
+                        )
+                    })?;
+                Stmt::Counter {
+                    cu,
+                    reset,
+                    pv,
+                    what: w,
+                }
+            }
+            "R_TRIG" | "F_TRIG" => Stmt::Trig {
+                clk: self.bool_input(n, "CLK")?,
+                rising: ty == "R_TRIG",
+            },
+            "SR" => Stmt::FlipFlop {
+                set: self.bool_input(n, "S1")?,
+                reset: self.bool_input(n, "R")?,
+                set_dominant: true,
+            },
+            "RS" => Stmt::FlipFlop {
+                set: self.bool_input(n, "S")?,
+                reset: self.bool_input(n, "R1")?,
+                set_dominant: false,
+            },
+            _ => return Err(self.unknown_block(n, &ty)),
+        };
+        self.stmts.push(stmt);
+        let s = self.stmts.len() - 1;
+        self.emitted.insert(id, s);
+        Ok(s)
+    }
+}
