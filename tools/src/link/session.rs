@@ -47,8 +47,8 @@ const STORE_FAILED: &[u8] = text::STORE_FAILED.as_bytes();
 /// Ctrl-L: the editor draws its whole screen again.
 const REDRAW: u8 = 0x0C;
 /// The longest wait for a whole screen (about 1,100 bytes, 0.6 s at 19200 baud; a time-out
-/// only, with room for a slow simulation).
-const DRAWN: Duration = Duration::from_secs(5);
+/// only, with room for a simulation slowed to a fifth of the clock on a loaded machine).
+const DRAWN: Duration = Duration::from_secs(10);
 
 /// How a session starts.
 #[derive(Clone, Copy, Debug)]
@@ -319,7 +319,7 @@ impl Session {
         self.port.send(format!("{cmd}\r").as_bytes())?;
         match self
             .port
-            .wait_for(from, &[expect, UNRECOGNIZED], Duration::from_secs(3))?
+            .wait_for(from, &[expect, UNRECOGNIZED], Duration::from_secs(5))?
         {
             Some((0, end)) => Ok(end),
             Some(_) => Err(LinkError::NotTaken(cmd)),
@@ -331,10 +331,10 @@ impl Session {
     }
 
     /// The end of READ's or WRITE's screen after offset `from`: its status line, then the
-    /// cursor put at `ready`. Not seen within a second, the screen is taken as drawn: the
+    /// cursor put at `ready`. Not seen within [`DRAWN`], the screen is taken as drawn: the
     /// prompt already said the command was taken.
     fn transfer_screen(&mut self, from: usize, ready: &[u8]) -> Result<(), LinkError> {
-        let wait = Duration::from_secs(1);
+        let wait = DRAWN;
         if let Some((_, end)) = self.port.wait_for(from, &[TRANSFER], wait)? {
             self.port.wait_for(end, &[ready], wait)?;
         }
@@ -397,7 +397,7 @@ impl Session {
         // READ checks the file, drains 200 ms of quiet, then shows its result.
         let Some((_, end)) = self
             .port
-            .wait_for(from, &[FOR_MENU], Duration::from_secs(6))?
+            .wait_for(from, &[FOR_MENU], DRAWN)?
         else {
             return Err(LinkError::NotConfirmed(shown(&self.port.seen, from)));
         };
