@@ -12,6 +12,7 @@
 //! | `options.rs` | the flags, the broker's URL, the line's name, the client's options |
 //! | `topics.rs` | the topics |
 //! | `payloads.rs` | the retained messages a uTile's report gives |
+//! | `availability.rs` | each uTile's availability on a session of its own, whose last will is its `offline` |
 //! | `discovery.rs` | Home Assistant's discovery configs |
 //! | `outbox.rs` | what should be retained on the broker vs what was sent this connection |
 //! | `client.rs` | the connection: backoff, errors in words, republishing after a reconnect |
@@ -19,6 +20,7 @@
 //! | `adapter.rs` | reports from the published view, write requests by the page's write path |
 
 pub mod adapter;
+pub mod availability;
 pub mod client;
 pub mod commands;
 pub mod discovery;
@@ -86,12 +88,12 @@ impl Counters {
 }
 
 /// Starts publishing: `reports` feed the broker, `writes` take the `set` topics' writes.
-/// Returns at once; the connection is made (and remade) in the background, its trouble told
-/// through `say` as it comes.
+/// Returns at once, with the handle that stops it cleanly; the connection is made (and
+/// remade) in the background, its trouble told on the console as it comes.
 pub fn start(
     settings: options::Settings,
     reports: tokio::sync::mpsc::Receiver<Vec<Report>>,
     writes: tokio::sync::mpsc::Sender<WriteRequest>,
-) {
-    client::spawn(settings, reports, writes);
+) -> client::Handle {
+    client::spawn(settings, reports, writes)
 }

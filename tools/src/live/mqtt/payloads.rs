@@ -1,18 +1,24 @@
-//! The retained messages one uTile's report gives: `<addr>/state` (every value as one JSON
-//! object, the API's names), `<addr>/availability` (`online`/`offline`) and `<addr>/<signal>`
-//! (each value alone: `0`/`1`, a number). The outbox sends only those that changed.
+//! The retained messages one uTile's report gives on the line's session: `<addr>/state`
+//! (every value as one JSON object, the API's names) and `<addr>/<signal>` (each value alone:
+//! `0`/`1`, a number); the outbox sends only those that changed. `<addr>/availability`
+//! (`online`/`offline`) goes on the uTile's own session (`availability.rs`).
 
 use serde_json::Value;
 
 use super::topics::Topics;
 use super::Report;
 
-/// `online` or `offline`.
+/// The payload of a line's status and a uTile's availability while it is there.
+pub const ONLINE: &str = "online";
+/// The payload of a line's status and a uTile's availability once it is not (the last wills).
+pub const OFFLINE: &str = "offline";
+
+/// [`ONLINE`] or [`OFFLINE`].
 pub fn availability(online: bool) -> &'static str {
     if online {
-        "online"
+        ONLINE
     } else {
-        "offline"
+        OFFLINE
     }
 }
 
@@ -31,13 +37,10 @@ pub fn value_text(v: &Value) -> String {
     }
 }
 
-/// The retained (topic, payload) pairs of `r`.
+/// The retained (topic, payload) pairs of `r` on the line's session (its availability is not
+/// among them).
 pub fn retained(t: &Topics, r: &Report) -> Vec<(String, String)> {
-    let mut out = Vec::with_capacity(r.values.len() + 2);
-    out.push((
-        t.unit(r.addr, "availability"),
-        availability(r.online).to_string(),
-    ));
+    let mut out = Vec::with_capacity(r.values.len() + 1);
     let state = serde_json::to_string(&r.values).unwrap_or_else(|_| "{}".into());
     out.push((t.unit(r.addr, "state"), state));
     for (name, v) in &r.values {
@@ -52,7 +55,7 @@ mod tests {
     use serde_json::json;
 
     #[test]
-    fn a_report_gives_state_availability_and_each_value() {
+    fn a_report_gives_state_and_each_value() {
         let t = Topics::new("utile", "l");
         let r = Report {
             addr: 2,
@@ -69,7 +72,11 @@ mod tests {
         };
         let m = retained(&t, &r);
         let get = |topic: &str| m.iter().find(|(k, _)| k == topic).map(|(_, v)| v.as_str());
-        assert_eq!(get("utile/l/2/availability"), Some("online"));
+        assert_eq!(
+            get("utile/l/2/availability"),
+            None,
+            "on the uTile's own session"
+        );
         assert_eq!(
             get("utile/l/2/state"),
             Some(r#"{"A0":1,"A6":409,"scans_per_s":18.0}"#)
