@@ -261,7 +261,7 @@ async fn publish(
                 }
             }
             _ = tick.tick() => {
-                out.want(t.counters(), counters.json().to_string());
+                out.want(t.counters(), counters.payload());
             }
             asked = stop.recv() => {
                 let _ = client.try_publish(t.status(), QoS::AtLeastOnce, true, OFFLINE);

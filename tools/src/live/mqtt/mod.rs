@@ -32,7 +32,7 @@ pub mod topics;
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use serde_json::{json, Value};
+use serde::Serialize;
 use tokio::sync::oneshot;
 
 /// What the live view knows of one uTile, as MQTT publishes it.
@@ -42,10 +42,20 @@ pub struct Report {
     pub addr: u8,
     /// The card is not offline (it answers, or the editor has the line).
     pub online: bool,
-    /// Every value by the API's name (`A0`, `Y0`, `C0`, `A6`, `scans_per_s` …), numbers.
-    pub values: BTreeMap<String, Value>,
+    /// Every value by the API's name (`A0`, `Y0`, `C0`, `A6`, `scans_per_s` …).
+    pub values: BTreeMap<String, Reading>,
     /// The firmware's id (Report Server ID), when known.
     pub firmware: Option<String>,
+}
+
+/// One value of a report: a register's or a bit's (a whole number), or a rate.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[serde(untagged)]
+pub enum Reading {
+    /// A bit (0/1), a count, a preset, an analog value in counts.
+    Whole(u32),
+    /// Scans per second.
+    Rate(f64),
 }
 
 /// A write asked for on a `set` topic: checked and carried out as the page's writes are.
@@ -74,16 +84,26 @@ pub struct Counters {
     pub dropped: AtomicU64,
 }
 
+/// The counters at one moment: `<prefix>/<line>/counters`'s payload.
+#[derive(Debug, Serialize)]
+struct CountersNow {
+    connects: u64,
+    commands: u64,
+    refused: u64,
+    dropped: u64,
+}
+
 impl Counters {
-    /// As JSON.
-    pub fn json(&self) -> Value {
+    /// As JSON (`{"connects":1,"commands":12,"refused":3,"dropped":0}`).
+    pub fn payload(&self) -> String {
         let n = |a: &AtomicU64| a.load(Ordering::Relaxed);
-        json!({
-            "connects": n(&self.connects),
-            "commands": n(&self.commands),
-            "refused": n(&self.refused),
-            "dropped": n(&self.dropped),
-        })
+        let now = CountersNow {
+            connects: n(&self.connects),
+            commands: n(&self.commands),
+            refused: n(&self.refused),
+            dropped: n(&self.dropped),
+        };
+        serde_json::to_string(&now).unwrap_or_default()
     }
 }
 

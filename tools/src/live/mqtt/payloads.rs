@@ -3,10 +3,8 @@
 //! `0`/`1`, a number); the outbox sends only those that changed. `<addr>/availability`
 //! (`online`/`offline`) goes on the uTile's own session (`availability.rs`).
 
-use serde_json::Value;
-
 use super::topics::Topics;
-use super::Report;
+use super::{Reading, Report};
 
 /// The payload of a line's status and a uTile's availability while it is there.
 pub const ONLINE: &str = "online";
@@ -22,18 +20,12 @@ pub fn availability(online: bool) -> &'static str {
     }
 }
 
-/// A value alone: a JSON number as text (`1`, `512`, `18.5`), a string as it is.
-pub fn value_text(v: &Value) -> String {
-    match v {
-        Value::String(s) => s.clone(),
-        Value::Number(n) => match n.as_f64() {
-            // Whole floats (scans per second) without a trailing `.0`.
-            Some(f) if n.is_f64() && f.fract() == 0.0 && f.abs() < 1e15 => {
-                format!("{}", f as i64)
-            }
-            _ => n.to_string(),
-        },
-        other => other.to_string(),
+/// A value alone, as text: `1`, `512`, `18.5` (a whole rate without a trailing `.0`).
+pub fn value_text(v: &Reading) -> String {
+    match *v {
+        Reading::Whole(n) => n.to_string(),
+        Reading::Rate(f) if f.fract() == 0.0 && f.abs() < 1e15 => format!("{}", f as i64),
+        Reading::Rate(f) => f.to_string(),
     }
 }
 
@@ -52,7 +44,6 @@ pub fn retained(t: &Topics, r: &Report) -> Vec<(String, String)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use serde_json::json;
 
     #[test]
     fn a_report_gives_state_and_each_value() {
@@ -61,9 +52,9 @@ mod tests {
             addr: 2,
             online: true,
             values: [
-                ("A0", json!(1)),
-                ("A6", json!(409)),
-                ("scans_per_s", json!(18.0)),
+                ("A0", Reading::Whole(1)),
+                ("A6", Reading::Whole(409)),
+                ("scans_per_s", Reading::Rate(18.0)),
             ]
             .into_iter()
             .map(|(k, v)| (k.to_string(), v))
@@ -83,6 +74,6 @@ mod tests {
         );
         assert_eq!(get("utile/l/2/A6"), Some("409"));
         assert_eq!(get("utile/l/2/scans_per_s"), Some("18"));
-        assert_eq!(value_text(&json!(18.5)), "18.5");
+        assert_eq!(value_text(&Reading::Rate(18.5)), "18.5");
     }
 }
