@@ -130,6 +130,17 @@ fn start_broker(dir: &Path) -> Result<(Child, u16), String> {
 /// `utile live` on `link` publishing as line `name` to the broker at `port`; its page's
 /// address.
 fn start_line(link: &Path, port: u16, name: &str) -> Result<(Child, SocketAddr), String> {
+    let units: Vec<String> = (1..=UNITS).map(|u| u.to_string()).collect();
+    start_line_units(link, port, name, &units.join(","))
+}
+
+/// `utile live --units UNITS` on `link` publishing as line `name`; its page's address.
+fn start_line_units(
+    link: &Path,
+    port: u16,
+    name: &str,
+    units: &str,
+) -> Result<(Child, SocketAddr), String> {
     let utile = std::env::current_exe()
         .map_err(|e| e.to_string())?
         .with_file_name("utile");
@@ -139,12 +150,11 @@ fn start_line(link: &Path, port: u16, name: &str) -> Result<(Child, SocketAddr),
             utile.display()
         ));
     }
-    let units: Vec<String> = (1..=UNITS).map(|u| u.to_string()).collect();
     let mut child = Command::new(&utile)
         .arg("live")
         .arg("--port")
         .arg(link)
-        .args(["--units", &units.join(","), "--http", "127.0.0.1:0"])
+        .args(["--units", units, "--http", "127.0.0.1:0"])
         .args(["--no-tcp", "--mqtt-commands", "--name", name])
         .arg("--mqtt")
         .arg(format!("mqtt://127.0.0.1:{port}"))
@@ -186,15 +196,15 @@ fn refreshes(addr: SocketAddr) -> Result<Vec<(u64, u64)>, String> {
         .collect()
 }
 
-/// A subscriber to every `state` and `Y0`; the messages so far, and its client to publish.
-fn subscribe(port: u16) -> Result<(Client, Seen), String> {
+/// A subscriber to `filters`; the messages so far, and its client to publish.
+fn subscribe(port: u16, filters: &[&str]) -> Result<(Client, Seen), String> {
     let mut o = MqttOptions::new(format!("bench-{port}"), "127.0.0.1", port);
     o.set_keep_alive(Duration::from_secs(10));
     o.set_max_packet_size(1 << 20, 1 << 20);
     let (client, mut conn) = Client::new(o, 1024);
-    for f in ["utile/+/+/state", "utile/+/+/Y0"] {
+    for f in filters {
         client
-            .subscribe(f, QoS::AtLeastOnce)
+            .subscribe(*f, QoS::AtLeastOnce)
             .map_err(|e| format!("subscribe: {e}"))?;
     }
     let seen = Arc::new(Mutex::new(Vec::new()));
@@ -257,6 +267,76 @@ pub fn measure_mqtt(secs: u32) -> Result<MqttFigures, BenchError> {
     run(secs).map_err(BenchError::Live)
 }
 
+/// One uTile (`vnano --pty`), its line publishing as `one`: `presses` rig switches pressed on
+/// the virtual Nano's console (A0 toggles), each to its `A0` message at a subscriber, ms of
+/// simulated time (the wall time scaled by the simulation's pace over the run, from T0's time
+/// left in the states).
+pub fn measure_rig(presses: u32) -> Result<Spread, BenchError> {
+    rig_run(presses).map_err(BenchError::Live)
+}
+
+fn rig_run(presses: u32) -> Result<Spread, String> {
+    use std::io::Write;
+    let dir = std::env::temp_dir().join(format!("utile-mqtt-rig-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let mut rig = Rig {
+        children: Vec::new(),
+        dir: dir.clone(),
+    };
+    let (broker, port) = start_broker(&dir)?;
+    rig.children.push(broker);
+    let link = dir.join("tty");
+    let mut nano = start_nano(&dir, &link, 1).map_err(|e| e.to_string())?;
+    let keys = nano.stdin.take().ok_or("vnano's console")?;
+    rig.children.push(nano);
+    std::thread::sleep(Duration::from_millis(500));
+    let (_client, seen) = subscribe(port, &["utile/one/1/state", "utile/one/1/A0"])?;
+    let (line, _) = start_line_units(&link, port, "one", "1")?;
+    rig.children.push(line);
+    let all = || seen.lock().unwrap_or_else(|e| e.into_inner()).clone();
+    let a0 = |from: Instant| -> Option<(Instant, String)> {
+        all()
+            .into_iter()
+            .rev()
+            .find(|m| m.topic == "utile/one/1/A0" && m.at >= from)
+            .map(|m| (m.at, m.text))
+    };
+    let t0 = Instant::now();
+    if !until(WAIT, || a0(t0).is_some()) {
+        return Err("no A0 message within 120 s".into());
+    }
+    let mut keys = keys;
+    let mut wall = Vec::new();
+    let from = Instant::now();
+    for i in 0..presses {
+        // Varied phases of the polling.
+        std::thread::sleep(Duration::from_millis(300 + u64::from(i * 37 % 100)));
+        let before = a0(t0).map(|m| m.1).unwrap_or_default();
+        let pressed = Instant::now();
+        keys.write_all(b"0")
+            .and_then(|()| keys.flush())
+            .map_err(|e| e.to_string())?;
+        if until(Duration::from_secs(30), || {
+            a0(pressed).is_some_and(|m| m.1 != before)
+        }) {
+            if let Some((at, _)) = a0(pressed) {
+                wall.push((at - pressed).as_secs_f64() * 1e3);
+            }
+        }
+    }
+    let st: Vec<(Instant, Value)> = all()
+        .iter()
+        .filter(|m| m.topic == "utile/one/1/state" && m.at >= from)
+        .map(|m| (m.at, serde_json::from_str(&m.text).unwrap_or(Value::Null)))
+        .collect();
+    let pace = match (st.first(), st.last()) {
+        (Some(a), Some(b)) if b.0 > a.0 => simulated(&st) / (b.0 - a.0).as_secs_f64(),
+        _ => return Err("no states to time the simulation by".into()),
+    };
+    let sim: Vec<f64> = wall.iter().map(|w| w * pace).collect();
+    Spread::of(&sim).ok_or_else(|| "no press reached the subscriber".to_string())
+}
+
 fn run(secs: u32) -> Result<MqttFigures, String> {
     let dir = std::env::temp_dir().join(format!("utile-mqtt-bench-{}", std::process::id()));
     std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -276,7 +356,7 @@ fn run(secs: u32) -> Result<MqttFigures, String> {
         links.push(link);
     }
     std::thread::sleep(Duration::from_millis(500));
-    let (client, seen) = subscribe(port)?;
+    let (client, seen) = subscribe(port, &["utile/+/+/state", "utile/+/+/Y0"])?;
     let mut pages = Vec::new();
     for (l, link) in links.iter().enumerate() {
         let (child, page) = start_line(link, port, &format!("bus{l}"))?;

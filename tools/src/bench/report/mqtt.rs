@@ -1,8 +1,9 @@
-//! The rows of `mqtt`: three lines of three uTiles into one broker (issue 30), counted in
-//! simulated time.
+//! The rows of `mqtt`: three lines of three uTiles into one broker, and one uTile's rig
+//! switch to its message (issue 30), counted in simulated time.
 
+use super::ms;
 use super::Report;
-use crate::bench::mqtt::measure_mqtt;
+use crate::bench::mqtt::{measure_mqtt, measure_rig};
 
 /// Three `utile live` processes, each on a virtual Nano with `--bus 3`, into one mosquitto.
 pub fn mqtt_rows(rows: &mut Report, secs: u32) {
@@ -45,5 +46,10 @@ pub fn mqtt_rows(rows: &mut Report, secs: u32) {
             "—",
             "≥ 5 /s, none lost",
         ),
+    }
+    let what = "MQTT, one uTile: rig switch → its message at a subscriber (min / median / max)";
+    match measure_rig(20) {
+        Ok(s) => rows.row(what, ms(&s), "—", "≤ 150 ms"),
+        Err(e) => rows.row(what, format!("not measurable: {e}"), "—", "≤ 150 ms"),
     }
 }
