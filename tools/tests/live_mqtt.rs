@@ -259,6 +259,11 @@ fn the_broker_stopped_and_back_gets_everything_again_while_the_page_goes_on() {
             .retained
     );
     assert!(late.wait(a0, T, |_| true).retained);
+    // The uTile's own session connected again and published its availability again.
+    assert!(
+        late.wait("utile/plant2/1/availability", T, |p| p == "online")
+            .retained
+    );
 }
 
 /// The keys every MQTT entity of Home Assistant takes (home-assistant.io/integrations/
