@@ -35,7 +35,7 @@ const UNITS: usize = 3;
 /// Simulated seconds between two rounds of toggles.
 const ROUND_SECS: f64 = 2.0;
 /// The longest wall time anything may take (a loaded machine runs the simulations slowly).
-const WAIT: Duration = Duration::from_secs(120);
+pub(super) const WAIT: Duration = Duration::from_secs(120);
 
 /// What one run measured.
 #[derive(Clone, Debug)]
@@ -61,19 +61,24 @@ pub struct MqttFigures {
 
 /// One message as the subscriber got it.
 #[derive(Clone, Debug)]
-struct Msg {
-    topic: String,
-    text: String,
-    at: Instant,
+pub(super) struct Msg {
+    /// Its topic.
+    pub(super) topic: String,
+    /// Its payload as text.
+    pub(super) text: String,
+    /// When it came.
+    pub(super) at: Instant,
 }
 
 /// The messages the subscriber got so far.
-type Seen = Arc<Mutex<Vec<Msg>>>;
+pub(super) type Seen = Arc<Mutex<Vec<Msg>>>;
 
 /// Everything that is stopped when dropped: processes and the scratch folder.
-struct Rig {
-    children: Vec<Child>,
-    dir: PathBuf,
+pub(super) struct Rig {
+    /// The processes, stopped last first.
+    pub(super) children: Vec<Child>,
+    /// The scratch folder.
+    pub(super) dir: PathBuf,
 }
 
 impl Drop for Rig {
@@ -96,7 +101,7 @@ fn free_port() -> Result<u16, String> {
 }
 
 /// mosquitto on a free loopback port, anonymous clients let in, nothing kept on disk.
-fn start_broker(dir: &Path) -> Result<(Child, u16), String> {
+pub(super) fn start_broker(dir: &Path) -> Result<(Child, u16), String> {
     let mosquitto = Path::new("/usr/sbin/mosquitto");
     if !mosquitto.is_file() {
         return Err("/usr/sbin/mosquitto is missing: ./x setup installs it".into());
@@ -135,7 +140,7 @@ fn start_line(link: &Path, port: u16, name: &str) -> Result<(Child, SocketAddr),
 }
 
 /// `utile live --units UNITS` on `link` publishing as line `name`; its page's address.
-fn start_line_units(
+pub(super) fn start_line_units(
     link: &Path,
     port: u16,
     name: &str,
@@ -197,7 +202,7 @@ fn refreshes(addr: SocketAddr) -> Result<Vec<(u64, u64)>, String> {
 }
 
 /// A subscriber to `filters`; the messages so far, and its client to publish.
-fn subscribe(port: u16, filters: &[&str]) -> Result<(Client, Seen), String> {
+pub(super) fn subscribe(port: u16, filters: &[&str]) -> Result<(Client, Seen), String> {
     let mut o = MqttOptions::new(format!("bench-{port}"), "127.0.0.1", port);
     o.set_keep_alive(Duration::from_secs(10));
     o.set_max_packet_size(1 << 20, 1 << 20);
@@ -244,14 +249,14 @@ fn states(all: &[Msg], l: usize, a: usize, from: Instant) -> Vec<(Instant, Value
 
 /// Simulated seconds over consecutive states (T0's time left falls 10 a second and starts
 /// again from 255).
-fn simulated(states: &[(Instant, Value)]) -> f64 {
+pub(super) fn simulated(states: &[(Instant, Value)]) -> f64 {
     let tl: Vec<u64> = states.iter().filter_map(|s| s.1["TL0"].as_u64()).collect();
     let tenths: u64 = tl.windows(2).map(|w| (w[0] + 255 - w[1]) % 255).sum();
     tenths as f64 / 10.0
 }
 
 /// Waits until `ok` holds, checked every 20 ms; false after `limit`.
-fn until(limit: Duration, mut ok: impl FnMut() -> bool) -> bool {
+pub(super) fn until(limit: Duration, mut ok: impl FnMut() -> bool) -> bool {
     let t0 = Instant::now();
     while t0.elapsed() < limit {
         if ok() {
@@ -265,76 +270,6 @@ fn until(limit: Duration, mut ok: impl FnMut() -> bool) -> bool {
 /// Three lines of three for at least `secs` simulated seconds.
 pub fn measure_mqtt(secs: u32) -> Result<MqttFigures, BenchError> {
     run(secs).map_err(BenchError::Live)
-}
-
-/// One uTile (`vnano --pty`), its line publishing as `one`: `presses` rig switches pressed on
-/// the virtual Nano's console (A0 toggles), each to its `A0` message at a subscriber, ms of
-/// simulated time (the wall time scaled by the simulation's pace over the run, from T0's time
-/// left in the states).
-pub fn measure_rig(presses: u32) -> Result<Spread, BenchError> {
-    rig_run(presses).map_err(BenchError::Live)
-}
-
-fn rig_run(presses: u32) -> Result<Spread, String> {
-    use std::io::Write;
-    let dir = std::env::temp_dir().join(format!("utile-mqtt-rig-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    let mut rig = Rig {
-        children: Vec::new(),
-        dir: dir.clone(),
-    };
-    let (broker, port) = start_broker(&dir)?;
-    rig.children.push(broker);
-    let link = dir.join("tty");
-    let mut nano = start_nano(&dir, &link, 1).map_err(|e| e.to_string())?;
-    let keys = nano.stdin.take().ok_or("vnano's console")?;
-    rig.children.push(nano);
-    std::thread::sleep(Duration::from_millis(500));
-    let (_client, seen) = subscribe(port, &["utile/one/1/state", "utile/one/1/A0"])?;
-    let (line, _) = start_line_units(&link, port, "one", "1")?;
-    rig.children.push(line);
-    let all = || seen.lock().unwrap_or_else(|e| e.into_inner()).clone();
-    let a0 = |from: Instant| -> Option<(Instant, String)> {
-        all()
-            .into_iter()
-            .rev()
-            .find(|m| m.topic == "utile/one/1/A0" && m.at >= from)
-            .map(|m| (m.at, m.text))
-    };
-    let t0 = Instant::now();
-    if !until(WAIT, || a0(t0).is_some()) {
-        return Err("no A0 message within 120 s".into());
-    }
-    let mut keys = keys;
-    let mut wall = Vec::new();
-    let from = Instant::now();
-    for i in 0..presses {
-        // Varied phases of the polling.
-        std::thread::sleep(Duration::from_millis(300 + u64::from(i * 37 % 100)));
-        let before = a0(t0).map(|m| m.1).unwrap_or_default();
-        let pressed = Instant::now();
-        keys.write_all(b"0")
-            .and_then(|()| keys.flush())
-            .map_err(|e| e.to_string())?;
-        if until(Duration::from_secs(30), || {
-            a0(pressed).is_some_and(|m| m.1 != before)
-        }) {
-            if let Some((at, _)) = a0(pressed) {
-                wall.push((at - pressed).as_secs_f64() * 1e3);
-            }
-        }
-    }
-    let st: Vec<(Instant, Value)> = all()
-        .iter()
-        .filter(|m| m.topic == "utile/one/1/state" && m.at >= from)
-        .map(|m| (m.at, serde_json::from_str(&m.text).unwrap_or(Value::Null)))
-        .collect();
-    let pace = match (st.first(), st.last()) {
-        (Some(a), Some(b)) if b.0 > a.0 => simulated(&st) / (b.0 - a.0).as_secs_f64(),
-        _ => return Err("no states to time the simulation by".into()),
-    };
-    let sim: Vec<f64> = wall.iter().map(|w| w * pace).collect();
-    Spread::of(&sim).ok_or_else(|| "no press reached the subscriber".to_string())
 }
 
 fn run(secs: u32) -> Result<MqttFigures, String> {

@@ -3,7 +3,8 @@
 
 use super::ms;
 use super::Report;
-use crate::bench::mqtt::{measure_mqtt, measure_rig};
+use crate::bench::mqtt::measure_mqtt;
+use crate::bench::mqtt_rig::measure_rig;
 
 /// Three `utile live` processes, each on a virtual Nano with `--bus 3`, into one mosquitto.
 pub fn mqtt_rows(rows: &mut Report, secs: u32) {
