@@ -2,8 +2,10 @@
 //! through 127.0.0.1 only) every write and every read of the API needs the token (401 and a
 //! JSON error without it, unless `--public-read` for reads), which comes printed as a URL,
 //! from `--token-file`, in the cookie that URL sets, or as a Bearer header; the page itself
-//! is served so it can ask. `--tcp` beyond loopback needs `--tcp-allow`; other clients are
-//! refused and counted. On loopback nothing changes.
+//! is served so it can ask, and does in words in a real browser (`live_token.py`: the request,
+//! a wrong token refused, the printed URL pasted in taken, the plant and a write). `--tcp`
+//! beyond loopback needs `--tcp-allow`; other clients are refused and counted. On loopback
+//! nothing changes.
 
 mod support;
 
@@ -15,7 +17,7 @@ use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
-use support::live::{mbap, Live, UTILE};
+use support::live::{mbap, tank_with_remote, Live, NanoSpec, UTILE};
 use support::vnano::scratch;
 
 const T: Duration = Duration::from_secs(30);
@@ -158,6 +160,25 @@ fn beyond_loopback_every_read_and_write_needs_the_token() {
     );
     let q = http(at, "GET", &format!("/api/state?token={token}"), &[], "");
     assert_eq!(q.status, 200);
+
+    // The page's check of a token typed in: 401 without or wrong, 200 and the cookie right.
+    assert_eq!(http(at, "GET", "/api/token", &[], "").status, 401);
+    let wrong = http(at, "GET", "/api/token?token=0123456789abcdef", &[], "");
+    assert_eq!(wrong.status, 401);
+    assert!(wrong.body["error"]
+        .as_str()
+        .unwrap()
+        .contains("wrong token"));
+    let right = http(at, "GET", &format!("/api/token?token={token}"), &[], "");
+    assert_eq!(right.status, 200);
+    assert_eq!(right.body["ok"], true);
+    assert!(
+        right
+            .head
+            .contains(&format!("set-cookie: utile_token={token}")),
+        "{}",
+        right.head
+    );
 }
 
 #[test]
@@ -175,6 +196,8 @@ fn public_read_opens_reads_only_and_a_token_file_gives_the_token() {
     ]);
     assert_eq!(printed_token(&live), token);
     assert_eq!(http(at, "GET", "/api/state", &[], "").status, 200);
+    // Reads are open, but the page's check of a token still needs the right one.
+    assert_eq!(http(at, "GET", "/api/token", &[], "").status, 401);
     assert_eq!(
         http(at, "POST", "/api/units/1/write", &[], WRITE).status,
         401
@@ -260,4 +283,39 @@ fn the_gateway_beyond_loopback_takes_only_the_allowed_networks() {
     let pdu = mbap(&mut s, 7, 1, &[3, 0, 0, 0, 1]);
     assert_eq!(pdu, [0x83, 0x0B]);
     assert_eq!(live.state()["line"]["tcp_refused_clients"], 0);
+}
+
+#[test]
+fn the_page_asks_for_the_token_in_words_and_takes_it() {
+    assert!(
+        Path::new("/usr/bin/chromium").is_file(),
+        "/usr/bin/chromium is missing: ./x setup installs Debian's chromium"
+    );
+    let spec = NanoSpec::single("guard-page", &tank_with_remote(), false);
+    let _nano = spec.start();
+    let live = Live::start(&spec.link, &["--http", "0.0.0.0:0"]);
+    let printed = loop {
+        let line = live
+            .console
+            .recv_timeout(T)
+            .expect("a line with the token's URL");
+        if let Some(url) = line.split_whitespace().find(|w| w.contains("?token=")) {
+            break url.to_string();
+        }
+    };
+    let url = format!("http://127.0.0.1:{}", live.http.port());
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/live_token.py");
+    let out = Command::new("python3")
+        .arg(&script)
+        .args(["--url", &url, "--printed", &printed])
+        .stdin(Stdio::null())
+        .stderr(Stdio::inherit())
+        .output()
+        .expect("run python3 live_token.py");
+    let said = String::from_utf8_lossy(&out.stdout);
+    eprintln!("{said}");
+    assert!(
+        out.status.success() && said.contains("ALL OK"),
+        "live_token.py failed:\n{said}"
+    );
 }

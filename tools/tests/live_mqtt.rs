@@ -1,9 +1,10 @@
 //! `utile live --mqtt` against a real broker (Debian's mosquitto, started here on free
 //! loopback ports with a password file and a TLS listener whose certificates are made here)
-//! and a real client (rumqttc): state on a rig press, availability, the last will, the
-//! broker stopped and back, Home Assistant discovery checked against the keys HA documents,
-//! `set` commands (with `--mqtt-commands`, refused without it and with `--read-only`, bad
-//! payloads), TLS and the login.
+//! and a real client (rumqttc): state on a rig press, availability, the last wills (the
+//! line's and each uTile's, killed or stopped cleanly), the broker stopped and back, Home
+//! Assistant discovery checked against the keys HA documents, `set` commands (with
+//! `--mqtt-commands`, refused without it and with `--read-only`, bad payloads), TLS and the
+//! login.
 
 mod support;
 
@@ -126,9 +127,95 @@ fn state_follows_a_rig_press_and_the_last_will_marks_the_line_offline() {
     live.child.kill().unwrap();
     let _ = live.child.wait();
     sub.wait_from(from, "utile/plant1/status", T, |p| p == "offline");
+    sub.wait_from(from, "utile/plant1/1/availability", T, |p| p == "offline");
     let late = Subscriber::connect(broker.port, &["utile/plant1/status"]);
     let kept = late.wait("utile/plant1/status", T, |_| true);
     assert_eq!(kept.text, "offline", "the last will is retained");
+}
+
+/// Waits until a new subscriber gets `offline`, retained, on the line's status and on each
+/// of `units`' availability.
+fn all_offline_retained(broker: &Broker, line: &str, units: &[u8]) {
+    let late = Subscriber::connect(broker.port, &[&format!("utile/{line}/#")]);
+    let mut topics = vec![format!("utile/{line}/status")];
+    topics.extend(
+        units
+            .iter()
+            .map(|a| format!("utile/{line}/{a}/availability")),
+    );
+    for topic in &topics {
+        let m = late.wait(topic, T, |_| true);
+        assert!(m.retained, "{topic} is retained");
+        assert_eq!(m.text, "offline", "{topic}, as a new subscriber sees it");
+    }
+}
+
+#[test]
+fn killed_or_stopped_utile_live_leaves_the_line_and_each_utile_offline() {
+    if !have_mosquitto() {
+        return;
+    }
+    let _one = one_at_a_time();
+    let broker = Broker::start("wills");
+    let sub = Subscriber::connect(broker.port, &["utile/#"]);
+    let spec = NanoSpec::bus("mqtt-wills", 3, &tank_with_remote());
+    let _nano = spec.start();
+    let mut args = broker.live_args("wills");
+    args.extend(["--units", "1,2,3"].map(String::from));
+    let units = [1u8, 2, 3];
+    let all_online = |from: usize| {
+        sub.wait_from(from, "utile/wills/status", T, |p| p == "online");
+        for a in units {
+            sub.wait_from(from, &format!("utile/wills/{a}/availability"), T, |p| {
+                p == "online"
+            });
+        }
+    };
+
+    // Killed (SIGKILL: nothing of it runs): the broker's wills, one per session.
+    let mut live = Live::start(&spec.link, &strs(&args));
+    all_online(0);
+    let from = sub.count();
+    live.child.kill().unwrap();
+    let _ = live.child.wait();
+    for a in units {
+        sub.wait_from(from, &format!("utile/wills/{a}/availability"), T, |p| {
+            p == "offline"
+        });
+    }
+    sub.wait_from(from, "utile/wills/status", T, |p| p == "offline");
+    all_offline_retained(&broker, "wills", &units);
+
+    // Started again: online again; then stopped cleanly (SIGTERM): it publishes `offline`
+    // itself and disconnects (the broker logs a clean disconnect, not a lost connection).
+    let from = sub.count();
+    let mut live = Live::start(&spec.link, &strs(&args));
+    all_online(from);
+    let from = sub.count();
+    // SAFETY: kill only sends a signal to the child this test started.
+    let r = unsafe { libc::kill(live.child.id() as libc::pid_t, libc::SIGTERM) };
+    assert_eq!(r, 0, "SIGTERM sent");
+    let status = live.child.wait().unwrap();
+    assert!(status.success(), "utile live ended {status} on SIGTERM");
+    for a in units {
+        sub.wait_from(from, &format!("utile/wills/{a}/availability"), T, |p| {
+            p == "offline"
+        });
+    }
+    sub.wait_from(from, "utile/wills/status", T, |p| p == "offline");
+    all_offline_retained(&broker, "wills", &units);
+    let log = broker.log_text();
+    for id in [
+        "utile-wills",
+        "utile-wills-1",
+        "utile-wills-2",
+        "utile-wills-3",
+    ] {
+        assert!(
+            log.contains(&format!("Client {id} disconnected")),
+            "{id} disconnected cleanly:\n{log}"
+        );
+    }
 }
 
 #[test]
@@ -172,6 +259,11 @@ fn the_broker_stopped_and_back_gets_everything_again_while_the_page_goes_on() {
             .retained
     );
     assert!(late.wait(a0, T, |_| true).retained);
+    // The uTile's own session connected again and published its availability again.
+    assert!(
+        late.wait("utile/plant2/1/availability", T, |p| p == "online")
+            .retained
+    );
 }
 
 /// The keys every MQTT entity of Home Assistant takes (home-assistant.io/integrations/

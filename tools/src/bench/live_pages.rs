@@ -37,7 +37,7 @@ pub struct PagesFigures {
 pub const PAGES: usize = 20;
 
 /// `GET path` on `addr`: the JSON body.
-fn get(addr: SocketAddr, path: &str) -> Result<Value, String> {
+pub(super) fn get(addr: SocketAddr, path: &str) -> Result<Value, String> {
     let mut s = TcpStream::connect(addr).map_err(|e| format!("{addr}: {e}"))?;
     s.set_read_timeout(Some(Duration::from_secs(10)))
         .map_err(|e| e.to_string())?;

@@ -4,7 +4,8 @@
 //! Usage: `bench [--quick | --long] [--scans N] [SECTION...]` with sections `scan`,
 //! `opcodes` (cycles per command line), `latency`, `timers`, `autostart` (also behind each
 //! Arduino boot loader), `size`, `stack`, `uart`, `store`, `modbus`, `live` (`utile live` on
-//! the release `vnano` binary beside this one; default: all).
+//! the release `vnano` binary beside this one), `mqtt` (three lines of three into one
+//! mosquitto; default: all).
 //! Timer runs up to 60 s of simulated time run in simavr, longer ones on the host core;
 //! `--quick` lowers that to 10 s and uses 1000 scans, `--long` raises it to 600 s.
 //! Not a test: nothing is asserted; an unmeasurable row says why. The measurements are in
@@ -15,7 +16,7 @@ use std::time::Instant;
 
 use clap::{Parser, ValueEnum};
 use utile_kit::setup;
-use utile_tools::bench::report::{editor, live, modbus, scan, timing, Report};
+use utile_tools::bench::report::{editor, live, modbus, mqtt, scan, timing, Report};
 use utile_tools::cli;
 
 /// The sections of the table.
@@ -43,6 +44,8 @@ enum Section {
     Modbus,
     /// `utile live` on the release vnano binary beside this one
     Live,
+    /// Three lines of three uTiles into one broker (mosquitto), `utile live --mqtt`
+    Mqtt,
 }
 
 /// Measures the real firmware image (out/m328-nano-utile.elf, or $UTILE_ELF) in simavr and
@@ -107,6 +110,9 @@ fn main() -> ExitCode {
     }
     if want(Section::Live) {
         live::live_rows(&mut rows, if quick { 5 } else { 20 });
+    }
+    if want(Section::Mqtt) {
+        mqtt::mqtt_rows(&mut rows, if quick { 5 } else { 20 });
     }
     if want(Section::Uart) {
         editor::uart_rows(&mut rows, &elf);

@@ -5,7 +5,9 @@
 //! or read from `--token-file`; the page keeps it in a cookie (`utile_token`, SameSite=Strict,
 //! HttpOnly) set when the URL brings it; scripts send `Authorization: Bearer …`. The page's
 //! own files are always served, so it can ask for the token. Without it: 401 and a JSON
-//! error. On loopback nothing changes. An axum middleware layer over the router.
+//! error. `GET /api/token?token=…` is the page's check of a token typed in: it always needs
+//! the token (even with `--public-read`), answers 200 and sets the cookie when it is right.
+//! On loopback nothing changes. An axum middleware layer over the router.
 
 use std::net::SocketAddr;
 use std::sync::Arc;
@@ -19,6 +21,9 @@ use serde::Serialize;
 
 /// The cookie that keeps the token.
 pub const COOKIE: &str = "utile_token";
+
+/// The page's check of a token typed in (answered here, not by the router).
+pub const PROBE: &str = "/api/token";
 
 /// The rules of one listener.
 #[derive(Clone, Debug)]
@@ -59,6 +64,12 @@ pub enum GuardError {
 struct TokenNeeded {
     error: String,
     token_needed: bool,
+}
+
+/// [`PROBE`]'s answer to the right token.
+#[derive(Debug, Serialize)]
+struct TokenTaken {
+    ok: bool,
 }
 
 /// A new random token: 128 bits from the system's generator, in hex.
@@ -168,7 +179,8 @@ async fn check(State(guard): State<Arc<Guard>>, req: Request, next: Next) -> Res
     let path = req.uri().path();
     let writes = !matches!(*req.method(), Method::GET | Method::HEAD) || path == "/api/terminal";
     let api = path.starts_with("/api/");
-    let needed = writes || (api && !guard.public_read);
+    let probe = path == PROBE;
+    let needed = writes || probe || (api && !guard.public_read);
     let (given, in_url) = presented(&req);
     let good = given.as_deref().is_some_and(|g| same(g, token));
     if needed && !good {
@@ -192,7 +204,11 @@ async fn check(State(guard): State<Arc<Guard>>, req: Request, next: Next) -> Res
             .insert(header::WWW_AUTHENTICATE, HeaderValue::from_static("Bearer"));
         return res;
     }
-    let mut res = next.run(req).await;
+    let mut res = if probe {
+        Json(TokenTaken { ok: true }).into_response()
+    } else {
+        next.run(req).await
+    };
     if good && in_url {
         let cookie = format!("{COOKIE}={token}; Path=/; HttpOnly; SameSite=Strict");
         if let Ok(v) = HeaderValue::from_str(&cookie) {

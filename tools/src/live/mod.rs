@@ -127,9 +127,20 @@ pub struct Running {
     /// The gateway's address.
     pub tcp: Option<SocketAddr>,
     line: Option<std::thread::JoinHandle<()>>,
+    /// The MQTT client (`--mqtt`), stopped before the line so its last messages say
+    /// `offline`.
+    mqtt: Option<mqtt::client::Handle>,
 }
 
 impl Running {
+    /// Publishes `offline` for the line and each uTile (with `--mqtt`) and disconnects from
+    /// the broker.
+    pub async fn stop_mqtt(&mut self) {
+        if let Some(m) = self.mqtt.take() {
+            m.stop().await;
+        }
+    }
+
     /// Ends the line's owner (the port is closed).
     pub fn stop(&mut self) {
         self.hub.stop.store(true, Ordering::Relaxed);
@@ -267,6 +278,7 @@ pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Ru
     if opts.read_only {
         say("read-only: every write is refused");
     }
+    let mut mqtt_handle = None;
     if let Some(m) = mqtt {
         say(&format!(
             "MQTT: line '{}' to {}:{} (topics {})",
@@ -276,13 +288,14 @@ pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Ru
             m.topics.status().trim_end_matches("/status")
         ));
         let (reports, writes) = mqtt::adapter::start(hub.clone());
-        mqtt::start(m, reports, writes);
+        mqtt_handle = Some(mqtt::start(m, reports, writes));
     }
     Ok(Running {
         hub,
         http: http_addr,
         tcp: tcp_addr,
         line: Some(line),
+        mqtt: mqtt_handle,
     })
 }
 
@@ -310,6 +323,7 @@ pub fn run(opts: &args::Options) -> Result<(), LiveError> {
             _ = term.recv() => {}
         }
         tracing::info!("stopping");
+        running.stop_mqtt().await;
         running.stop();
         Ok(())
     })

@@ -1,12 +1,13 @@
 //! The `bench` binary's report: one row a measurement, the original assembly firmware's
 //! figure and the goal beside it, which BENCHMARKS.md mirrors row by row. Each file gives
 //! the rows of its sections: [`scan`] (`scan`, `opcodes`), [`timing`] (`latency`,
-//! `autostart`, `timers`), [`editor`] (`size`, `uart`, `store`, `stack`), [`modbus`] and
-//! [`live`].
+//! `autostart`, `timers`), [`editor`] (`size`, `uart`, `store`, `stack`), [`modbus`],
+//! [`live`] and [`mqtt`].
 
 pub mod editor;
 pub mod live;
 pub mod modbus;
+pub mod mqtt;
 pub mod scan;
 pub mod timing;
 

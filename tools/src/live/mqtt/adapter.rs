@@ -8,11 +8,10 @@ use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use serde_json::Value;
 use tokio::sync::mpsc;
 use utile_core::modbus::REPORT_SERVER_ID;
 
-use super::{Report, WriteRequest};
+use super::{Reading, Report, WriteRequest};
 use crate::live::http::write_signal;
 use crate::live::hub::{Hub, Input};
 use crate::live::queue::{Job, Origin};
@@ -89,14 +88,14 @@ fn reports(view: &View) -> Vec<Report> {
 /// A uTile's report: its values by the API's names (with `scans_per_s` once it has values),
 /// online unless its card says offline.
 fn report(u: &UnitView) -> Report {
-    let mut values: BTreeMap<String, Value> = u
+    let mut values: BTreeMap<String, Reading> = u
         .values
         .0
         .iter()
-        .map(|(k, v)| ((*k).to_string(), Value::from(*v)))
+        .map(|(k, v)| ((*k).to_string(), Reading::Whole(*v)))
         .collect();
     if u.values.get("A0").is_some() {
-        values.insert("scans_per_s".into(), Value::from(u.scans_per_s));
+        values.insert("scans_per_s".into(), Reading::Rate(u.scans_per_s));
     }
     Report {
         addr: u.addr,

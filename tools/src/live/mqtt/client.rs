@@ -3,7 +3,9 @@
 //! that back off (0.1 s doubling to 1 s while the broker cannot be reached, to 30 s while it
 //! refuses us), and after every connect the `set` subscription and every retained message
 //! sent again. The publisher never waits on the network: it offers messages to the client's
-//! queue and keeps what did not fit for the next turn.
+//! queue and keeps what did not fit for the next turn. It also keeps each uTile's own
+//! availability session (`availability.rs`) told, and on a clean stop publishes the line's
+//! `offline` and every uTile's, then disconnects.
 
 use std::collections::BTreeMap;
 use std::sync::atomic::Ordering;
@@ -13,32 +15,65 @@ use std::time::Duration;
 use rumqttc::{
     AsyncClient, ConnectReturnCode, ConnectionError, Event, EventLoop, Packet, Publish, QoS,
 };
-use tokio::sync::{mpsc, watch};
+use tokio::sync::{mpsc, oneshot, watch};
+use tokio::task::JoinHandle;
 
+use super::availability::Sessions;
 use super::options::{Broker, Settings};
 use super::outbox::Outbox;
+use super::payloads::{OFFLINE, ONLINE};
 use super::{commands, discovery, payloads, Counters, Report, WriteRequest};
 
 /// The client's queue of requests.
 const QUEUE: usize = 4096;
 /// The first wait after a failed connect.
-const BACKOFF_MIN: Duration = Duration::from_millis(100);
+pub const BACKOFF_MIN: Duration = Duration::from_millis(100);
 /// The longest wait while the broker cannot be reached (it comes back within 2 s of that).
-const BACKOFF_MAX: Duration = Duration::from_secs(1);
+pub const BACKOFF_MAX: Duration = Duration::from_secs(1);
 /// The longest wait while the broker refuses us (login, TLS): no point in hammering it.
-const BACKOFF_REFUSED: Duration = Duration::from_secs(30);
+pub const BACKOFF_REFUSED: Duration = Duration::from_secs(30);
 /// How often the counters are looked at and what could not be sent is tried again.
 const TICK: Duration = Duration::from_millis(250);
 
+/// The longest a clean stop waits for the broker to take the `offline` messages.
+const STOP_WAIT: Duration = Duration::from_secs(2);
+
 /// The connection's state as the publisher sees it: connects so far, and connected now.
 type Link = (u64, bool);
+
+/// The running client, to stop cleanly.
+pub struct Handle {
+    stop: mpsc::Sender<oneshot::Sender<()>>,
+    driver: JoinHandle<()>,
+}
+
+impl Handle {
+    /// Publishes `offline` on the line's status and every uTile's availability (retained),
+    /// and disconnects (so the broker drops the wills, which say the same); waits at most
+    /// twice [`STOP_WAIT`] for the broker.
+    pub async fn stop(self) {
+        let all = async {
+            let (done, rx) = oneshot::channel();
+            if self.stop.send(done).await.is_ok() {
+                let _ = rx.await;
+            }
+            let _ = self.driver.await;
+        };
+        if tokio::time::timeout(STOP_WAIT * 2, all).await.is_err() {
+            eprintln!(
+                "utile live: MQTT: the broker did not take the offline messages in time \
+                 (the last wills say the same once it notices)"
+            );
+        }
+    }
+}
 
 /// Starts the connection, the publisher and (with `--mqtt-commands`) the commands.
 pub fn spawn(
     settings: Settings,
     reports: mpsc::Receiver<Vec<Report>>,
     writes: mpsc::Sender<WriteRequest>,
-) {
+) -> Handle {
     let counters = Arc::new(Counters::default());
     let (client, events) = AsyncClient::new(settings.client_options(), QUEUE);
     let (link_tx, link_rx) = watch::channel((0, false));
@@ -52,7 +87,7 @@ pub fn spawn(
             counters.clone(),
         ));
     }
-    tokio::spawn(drive(
+    let driver = tokio::spawn(drive(
         events,
         client.clone(),
         settings.clone(),
@@ -60,7 +95,15 @@ pub fn spawn(
         inbox_tx,
         counters.clone(),
     ));
-    tokio::spawn(publish(settings, client, reports, link_rx, counters));
+    let (stop, stop_rx) = mpsc::channel(1);
+    tokio::spawn(publish(
+        settings,
+        client,
+        (reports, stop_rx),
+        link_rx,
+        counters,
+    ));
+    Handle { stop, driver }
 }
 
 /// A connection error in words, and whether the broker refused us (rather than not being
@@ -131,6 +174,8 @@ async fn drive(
                 }
                 link.send_replace((n, true));
             }
+            // Only a clean stop disconnects.
+            Ok(Event::Outgoing(rumqttc::Outgoing::Disconnect)) => return,
             Ok(Event::Incoming(Packet::Publish(p))) => {
                 if inbox.try_send(p).is_err() {
                     counters.dropped.fetch_add(1, Ordering::Relaxed);
@@ -161,17 +206,28 @@ async fn drive(
     }
 }
 
-/// Keeps the broker's retained messages as the reports say, sending only what changed.
+/// The reports, and the clean stop's requests.
+type Inputs = (
+    mpsc::Receiver<Vec<Report>>,
+    mpsc::Receiver<oneshot::Sender<()>>,
+);
+
+/// Keeps the broker's retained messages as the reports say, sending only what changed, and
+/// each uTile's availability session told; on a clean stop, `offline` everywhere.
 async fn publish(
     settings: Settings,
     client: AsyncClient,
-    mut reports: mpsc::Receiver<Vec<Report>>,
+    (mut reports, mut stop): Inputs,
     mut link: watch::Receiver<Link>,
     counters: Arc<Counters>,
 ) {
     let t = &settings.topics;
+    let mut sessions = Sessions::new(settings.clone());
+    // Each uTile's availability, given to its session once the line's session has been let in
+    // (a broker that refuses the login is not asked once more per uTile).
+    let mut online: BTreeMap<u8, bool> = BTreeMap::new();
     let mut out = Outbox::new(vec![t.status()]);
-    out.want(t.status(), "online".into());
+    out.want(t.status(), ONLINE.into());
     if settings.discovery {
         let (k, v) = discovery::line_config(t);
         out.want(k, v);
@@ -184,6 +240,7 @@ async fn publish(
             r = reports.recv() => {
                 let Some(units) = r else { return };
                 for r in &units {
+                    online.insert(r.addr, r.online);
                     for (k, v) in payloads::retained(t, r) {
                         out.want(k, v);
                     }
@@ -204,7 +261,21 @@ async fn publish(
                 }
             }
             _ = tick.tick() => {
-                out.want(t.counters(), counters.json().to_string());
+                out.want(t.counters(), counters.payload());
+            }
+            asked = stop.recv() => {
+                let _ = client.try_publish(t.status(), QoS::AtLeastOnce, true, OFFLINE);
+                let _ = client.try_disconnect();
+                sessions.stop(STOP_WAIT).await;
+                if let Some(done) = asked {
+                    let _ = done.send(());
+                }
+                return;
+            }
+        }
+        if link.borrow().0 > 0 {
+            for (addr, on) in &online {
+                sessions.set(*addr, *on);
             }
         }
         if link.borrow().1 {

@@ -9,11 +9,24 @@ use std::sync::atomic::Ordering;
 use std::sync::Arc;
 
 use rumqttc::{AsyncClient, Publish, QoS};
-use serde_json::json;
+use serde::Serialize;
 use tokio::sync::{mpsc, oneshot};
 
 use super::topics::Topics;
 use super::{Counters, WriteRequest};
+
+/// A refusal as published on the error topic.
+#[derive(Debug, Serialize)]
+struct Refusal<'a> {
+    /// The signal the `set` was for.
+    signal: &'a str,
+    /// The payload, cut short.
+    payload: String,
+    /// Why, in words.
+    error: &'a str,
+    /// Refusals so far.
+    refused: u64,
+}
 
 /// The longest payload a `set` takes (a number is a few bytes).
 pub const MAX_PAYLOAD: usize = 32;
@@ -94,13 +107,14 @@ pub async fn serve(
                     Some(a) => t.unit(a, "error"),
                     None => t.line_error(),
                 };
-                let body = json!({
-                    "signal": set.signal,
-                    "payload": shown(&p.payload),
-                    "error": why,
-                    "refused": n,
-                });
-                let _ = client.try_publish(topic, QoS::AtMostOnce, false, body.to_string());
+                let body = Refusal {
+                    signal: &set.signal,
+                    payload: shown(&p.payload),
+                    error: &why,
+                    refused: n,
+                };
+                let body = serde_json::to_string(&body).unwrap_or_default();
+                let _ = client.try_publish(topic, QoS::AtMostOnce, false, body);
             }
         }
     }

@@ -6,6 +6,7 @@ use std::time::Duration;
 
 use rumqttc::{LastWill, MqttOptions, QoS, TlsConfiguration, Transport};
 
+use super::payloads::OFFLINE;
 use super::topics::Topics;
 
 /// The CA bundle used for `mqtts://` without `--mqtt-ca` (Debian's ca-certificates).
@@ -236,20 +237,28 @@ impl Settings {
         }))
     }
 
-    /// The client's options: its id, the login, TLS, the last will (`offline` on the line's
-    /// status, retained), keep-alive, packet sizes.
+    /// The line's client's options: its id (`utile-LINE`), the login, TLS, the last will
+    /// (`offline` on the line's status, retained), keep-alive, packet sizes.
     pub fn client_options(&self) -> MqttOptions {
         let id = format!("utile-{}", self.topics.line());
+        self.options(id, self.topics.status())
+    }
+
+    /// The options of uTile `addr`'s own session (`utile-LINE-ADDR`), whose last will is
+    /// `offline` on that uTile's availability, retained.
+    pub fn unit_options(&self, addr: u8) -> MqttOptions {
+        let id = format!("utile-{}-{addr}", self.topics.line());
+        self.options(id, self.topics.unit(addr, "availability"))
+    }
+
+    /// A session's options: `id`, the login, TLS, `offline` retained on `will` as the last
+    /// will, keep-alive, packet sizes.
+    fn options(&self, id: String, will: String) -> MqttOptions {
         let mut o = MqttOptions::new(id, self.broker.host.clone(), self.broker.port);
         o.set_keep_alive(Duration::from_secs(10));
         // Big enough that a huge `set` payload is refused by us, not a reason to disconnect.
         o.set_max_packet_size(256 * 1024, 256 * 1024);
-        o.set_last_will(LastWill::new(
-            self.topics.status(),
-            "offline",
-            QoS::AtLeastOnce,
-            true,
-        ));
+        o.set_last_will(LastWill::new(will, OFFLINE, QoS::AtLeastOnce, true));
         if let Some((u, p)) = &self.login {
             o.set_credentials(u.clone(), p.clone());
         }

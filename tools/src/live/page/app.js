@@ -7,6 +7,7 @@ import { LadderView } from "/ladder.js";
 import { ProgramView } from "/program.js";
 import { RigPanel } from "/rig.js";
 import { openTerminal } from "/terminal.js";
+import { askToken } from "/token.js";
 
 const cards = new Map();
 // The signal table (/api/signals) by name.
@@ -117,19 +118,10 @@ async function connect() {
   };
 }
 
-// Beyond loopback utile live wants its token (docs/LIVE.md, "Security beyond loopback"):
-// the URL printed at its start brings it once (the server keeps it in a cookie), else the
-// page asks for it when a read or a write gets 401.
-function askToken() {
-  const given = prompt(
-    "This utile live listens beyond its computer and needs its token " +
-    "(the URL it printed at its start ends in ?token=…):");
-  if (given) {
-    const token = given.trim().replace(/^.*[?&]token=/, "");
-    location.href = "/?token=" + encodeURIComponent(token);
-  }
-}
-window.addEventListener("utile-token", askToken);
+// Beyond loopback utile live wants its token (token.js): the page asks for it when a read
+// or a write gets 401.
+window.addEventListener("utile-token", () =>
+  askToken("A write was refused: it needs the token (reading is open to all here)."));
 
 async function start() {
   const url = new URL(location.href);
@@ -140,7 +132,9 @@ async function start() {
   const res = await fetch("/api/state").catch(() => null);
   if (res && res.status === 401) {
     $("mode").textContent = "this utile live needs its token";
-    askToken();
+    const body = await res.json().catch(() => ({}));
+    const wrong = typeof body.error === "string" && body.error.startsWith("wrong token");
+    askToken(wrong ? "The token this page had was refused (utile live was started again?)." : "");
     return;
   }
   connect();
