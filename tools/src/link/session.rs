@@ -395,10 +395,7 @@ impl Session {
             file.len()
         ));
         // READ checks the file, drains 200 ms of quiet, then shows its result.
-        let Some((_, end)) = self
-            .port
-            .wait_for(from, &[FOR_MENU], DRAWN)?
-        else {
+        let Some((_, end)) = self.port.wait_for(from, &[FOR_MENU], DRAWN)? else {
             return Err(LinkError::NotConfirmed(shown(&self.port.seen, from)));
         };
         let answer = &self.port.seen[from..end];

@@ -126,7 +126,15 @@ impl Draw<'_> {
 
     /// A function box (NOT, OR, XOR) in column `col` from row `r0` to `r1`, passing `power`
     /// on.
-    pub(super) fn function(&mut self, name: &str, line: u8, col: i32, r0: i32, r1: i32, power: &[u8]) {
+    pub(super) fn function(
+        &mut self,
+        name: &str,
+        line: u8,
+        col: i32,
+        r0: i32,
+        r1: i32,
+        power: &[u8],
+    ) {
         let (x, y0, y1) = (self.px(col), self.py(r0), self.py(r1));
         self.open("function", name, &[line], power);
         let _ = write!(
@@ -196,7 +204,14 @@ impl Draw<'_> {
 
     /// A flow whose power arrives at (`col`, `row`) as `power`, its coils in column `cc`:
     /// the column its coils need at least, and its rows.
-    pub(super) fn flow(&mut self, f: &Flow, col: i32, row: i32, cc: i32, power: &[u8]) -> (i32, i32) {
+    pub(super) fn flow(
+        &mut self,
+        f: &Flow,
+        col: i32,
+        row: i32,
+        cc: i32,
+        power: &[u8],
+    ) -> (i32, i32) {
         match f {
             Flow::Coil(c) => {
                 self.wire(col, cc, row, power);
@@ -225,7 +240,14 @@ impl Draw<'_> {
 
     /// One step on the power `power` at (`col`, `row`): its columns and rows, and the power
     /// leaving it.
-    pub(super) fn step(&mut self, s: &Step, col: i32, row: i32, cc: i32, power: &[u8]) -> (i32, i32, Vec<u8>) {
+    pub(super) fn step(
+        &mut self,
+        s: &Step,
+        col: i32,
+        row: i32,
+        cc: i32,
+        power: &[u8],
+    ) -> (i32, i32, Vec<u8>) {
         match s {
             Step::And(n, line) => {
                 self.net(n, col, row, power);
@@ -274,7 +296,14 @@ impl Draw<'_> {
 
     /// A chain of steps from (`col`, `row`) on the power `power`, its taps drawn below it:
     /// columns and rows.
-    pub(super) fn steps(&mut self, steps: &[Step], col: i32, row: i32, cc: i32, power: &[u8]) -> (i32, i32) {
+    pub(super) fn steps(
+        &mut self,
+        steps: &[Step],
+        col: i32,
+        row: i32,
+        cc: i32,
+        power: &[u8],
+    ) -> (i32, i32) {
         let (mut c, mut h) = (col, 1);
         let mut p = power.to_vec();
         let mut taps = Vec::new();
