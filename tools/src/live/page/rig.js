@@ -109,20 +109,27 @@ export class RigPanel {
     });
   }
 
-  // A6/A7's slider: sent as it moves (one request at a time, the latest wins).
+  // A6/A7's slider: sent as it moves (one request at a time, the latest wins). The value
+  // sent is the one the user set, taken at its event: while a request is out, the state's
+  // events may still carry the level from before and show() would put it back on the slider.
   level(input, volts, n) {
     let busy = false;
     let again = false;
+    let want = 0;
     const key = `a${n}`;
     const go = async () => {
+      want = Number(input.value);
       if (busy) { again = true; return; }
       busy = true;
+      input.dataset.sending = "1";
       do {
         again = false;
-        volts.textContent = `${Number(input.value).toFixed(2)} V`;
-        await this.send({ [key]: Number(input.value) });
+        const v = want;
+        volts.textContent = `${v.toFixed(2)} V`;
+        await this.send({ [key]: v });
       } while (again);
       busy = false;
+      delete input.dataset.sending;
     };
     input.addEventListener("input", go);
     input.addEventListener("change", go);
@@ -153,7 +160,7 @@ export class RigPanel {
     this.sliders.forEach(({ input, volts }, i) => {
       const v = i === 0 ? s.a6 : s.a7;
       input.dataset.value = v.toFixed(2);
-      if (input.dataset.moving || document.activeElement === input) return;
+      if (input.dataset.moving || input.dataset.sending || document.activeElement === input) return;
       input.value = String(v);
       volts.textContent = `${v.toFixed(2)} V`;
     });
