@@ -59,22 +59,10 @@ fn program() -> utile_core::engine::Program {
 
 /// The virtual Nano (`units` of them on a bus when more than one), autostarting the program.
 pub(crate) fn start_nano(dir: &Path, link: &Path, units: usize) -> Result<Child, BenchError> {
-    spawn_nano(dir, link, units, false).map_err(BenchError::Live)
+    spawn_nano(dir, link, units).map_err(BenchError::Live)
 }
 
-/// [`start_nano`] behind the masters: the simulation at `nice 10`, so a master on the same
-/// machine never waits for a core while the simulated chips run on (as on a plant, where each
-/// Nano is its own chip and each line's master its own computer). Figures counted in
-/// simulated time then measure the line, not the machine's sharing of its cores.
-pub(crate) fn start_nano_behind(
-    dir: &Path,
-    link: &Path,
-    units: usize,
-) -> Result<Child, BenchError> {
-    spawn_nano(dir, link, units, true).map_err(BenchError::Live)
-}
-
-fn spawn_nano(dir: &Path, link: &Path, units: usize, behind: bool) -> Result<Child, String> {
+fn spawn_nano(dir: &Path, link: &Path, units: usize) -> Result<Child, String> {
     let vnano = std::env::current_exe()
         .map_err(|e| e.to_string())?
         .with_file_name("vnano");
@@ -88,15 +76,7 @@ fn spawn_nano(dir: &Path, link: &Path, units: usize, behind: bool) -> Result<Chi
     let ee = dir.join("live-bench.eeprom");
     std::fs::write(&ee, eeprom).map_err(|e| e.to_string())?;
     let elf = utile_kit::setup::firmware_elf();
-    // `nice` execs the Nano: the child's pid is the Nano's, and every thread it starts
-    // inherits the priority.
-    let mut cmd = if behind {
-        let mut c = Command::new("nice");
-        c.args(["-n", "10"]).arg(vnano);
-        c
-    } else {
-        Command::new(vnano)
-    };
+    let mut cmd = Command::new(vnano);
     cmd.arg("--elf").arg(&elf).arg("--eeprom").arg(&ee);
     cmd.arg("--link").arg(link);
     if units > 1 {

@@ -24,7 +24,7 @@ use std::time::{Duration, Instant};
 use rumqttc::{Client, Event, MqttOptions, Packet, QoS};
 use serde_json::Value;
 
-use super::live::start_nano_behind;
+use super::live::start_nano;
 use super::live_pages::get;
 use super::{BenchError, Spread};
 
@@ -287,7 +287,7 @@ fn run(secs: u32) -> Result<MqttFigures, String> {
         std::fs::create_dir_all(&d).map_err(|e| format!("{}: {e}", d.display()))?;
         let link = d.join("tty");
         rig.children
-            .push(start_nano_behind(&d, &link, UNITS).map_err(|e| e.to_string())?);
+            .push(start_nano(&d, &link, UNITS).map_err(|e| e.to_string())?);
         links.push(link);
     }
     std::thread::sleep(Duration::from_millis(500));
