@@ -70,36 +70,42 @@ fn cpu_seconds(pid: u32) -> Result<f64, String> {
 
 /// `utile live` on `link`, its page's address.
 fn start_tool(utile: &Path, link: &Path) -> Result<(Child, SocketAddr), String> {
-    let mut child = Command::new(utile)
-        .arg("live")
-        .arg("--port")
-        .arg(link)
-        .args([
-            "--units",
-            "1",
-            "--http",
-            "127.0.0.1:0",
-            "--tcp",
-            "127.0.0.1:0",
-        ])
+    let mut cmd = Command::new(utile);
+    cmd.arg("live").arg("--port").arg(link).args([
+        "--units",
+        "1",
+        "--http",
+        "127.0.0.1:0",
+        "--tcp",
+        "127.0.0.1:0",
+    ]);
+    spawn_live(cmd)
+}
+
+/// Starts `cmd` (a `utile live` command line) and reads its page's address from the console;
+/// the rest of the console is read and dropped (a full pipe would stop it).
+pub(super) fn spawn_live(mut cmd: Command) -> Result<(Child, SocketAddr), String> {
+    let utile = cmd.get_program().to_string_lossy().into_owned();
+    let mut child = cmd
         .stdin(Stdio::null())
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
-        .map_err(|e| format!("{}: {e}", utile.display()))?;
+        .map_err(|e| format!("{utile}: {e}"))?;
     let err = child.stderr.take().ok_or("utile live's stderr")?;
     let mut lines = BufReader::new(err).lines();
     let addr = loop {
         let Some(Ok(line)) = lines.next() else {
             return Err("utile live printed no address".into());
         };
-        if let Some(rest) = line.split("http://").nth(1) {
-            if let Ok(a) = rest.trim_end_matches('/').parse::<SocketAddr>() {
-                break a;
-            }
+        if let Some(a) = line
+            .split("http://")
+            .nth(1)
+            .and_then(|r| r.trim_end_matches('/').parse().ok())
+        {
+            break a;
         }
     };
-    // The rest of its console is read and dropped (a full pipe would stop it).
     std::thread::spawn(move || for _ in lines.by_ref() {});
     Ok((child, addr))
 }

@@ -14,7 +14,6 @@
 //! change and the one before. The lines' own refreshes (snapshots per simulated second, from
 //! each `utile live`'s API) are read over the same window: what the states can follow.
 
-use std::io::{BufRead, BufReader};
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
@@ -25,7 +24,7 @@ use rumqttc::{Client, Event, MqttOptions, Packet, QoS};
 use serde_json::Value;
 
 use super::live::start_nano;
-use super::live_pages::get;
+use super::live_pages::{get, spawn_live};
 use super::{BenchError, Spread};
 
 /// Lines, and uTiles on each.
@@ -81,6 +80,21 @@ pub(super) struct Rig {
     pub(super) dir: PathBuf,
 }
 
+impl Rig {
+    /// A scratch folder `name`-PID and a broker on a free port: the rig and the port.
+    pub(super) fn with_broker(name: &str) -> Result<(Rig, u16), String> {
+        let dir = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        let mut rig = Rig {
+            children: Vec::new(),
+            dir: dir.clone(),
+        };
+        let (broker, port) = start_broker(&dir)?;
+        rig.children.push(broker);
+        Ok((rig, port))
+    }
+}
+
 impl Drop for Rig {
     fn drop(&mut self) {
         // The lines first (they publish `offline`), then the Nanos and the broker.
@@ -101,7 +115,7 @@ fn free_port() -> Result<u16, String> {
 }
 
 /// mosquitto on a free loopback port, anonymous clients let in, nothing kept on disk.
-pub(super) fn start_broker(dir: &Path) -> Result<(Child, u16), String> {
+fn start_broker(dir: &Path) -> Result<(Child, u16), String> {
     let mosquitto = Path::new("/usr/sbin/mosquitto");
     if !mosquitto.is_file() {
         return Err("/usr/sbin/mosquitto is missing: ./x setup installs it".into());
@@ -155,36 +169,15 @@ pub(super) fn start_line_units(
             utile.display()
         ));
     }
-    let mut child = Command::new(&utile)
-        .arg("live")
+    let mut cmd = Command::new(&utile);
+    cmd.arg("live")
         .arg("--port")
         .arg(link)
         .args(["--units", units, "--http", "127.0.0.1:0"])
         .args(["--no-tcp", "--mqtt-commands", "--name", name])
         .arg("--mqtt")
-        .arg(format!("mqtt://127.0.0.1:{port}"))
-        .stdin(Stdio::null())
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .map_err(|e| format!("{}: {e}", utile.display()))?;
-    let err = child.stderr.take().ok_or("utile live's stderr")?;
-    let mut lines = BufReader::new(err).lines();
-    let addr = loop {
-        let Some(Ok(line)) = lines.next() else {
-            return Err("utile live printed no address".into());
-        };
-        if let Some(a) = line
-            .split("http://")
-            .nth(1)
-            .and_then(|r| r.trim_end_matches('/').parse().ok())
-        {
-            break a;
-        }
-    };
-    // The rest is read and dropped: a full pipe would stop it.
-    std::thread::spawn(move || for _ in lines.by_ref() {});
-    Ok((child, addr))
+        .arg(format!("mqtt://127.0.0.1:{port}"));
+    spawn_live(cmd)
 }
 
 /// Each uTile's (snapshots, TL0) in a line's API.
@@ -273,14 +266,8 @@ pub fn measure_mqtt(secs: u32) -> Result<MqttFigures, BenchError> {
 }
 
 fn run(secs: u32) -> Result<MqttFigures, String> {
-    let dir = std::env::temp_dir().join(format!("utile-mqtt-bench-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    let mut rig = Rig {
-        children: Vec::new(),
-        dir: dir.clone(),
-    };
-    let (broker, port) = start_broker(&dir)?;
-    rig.children.push(broker);
+    let (mut rig, port) = Rig::with_broker("utile-mqtt-bench")?;
+    let dir = rig.dir.clone();
     let mut links = Vec::new();
     for l in 0..LINES {
         let d = dir.join(format!("bus{l}"));

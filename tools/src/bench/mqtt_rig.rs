@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use serde_json::Value;
 
 use super::live::start_nano;
-use super::mqtt::{simulated, start_broker, start_line_units, subscribe, until, Rig, WAIT};
+use super::mqtt::{simulated, start_line_units, subscribe, until, Rig, WAIT};
 use super::{BenchError, Spread};
 
 /// One uTile (`vnano --pty`), its line publishing as `one`: `presses` rig switches pressed on
@@ -20,14 +20,8 @@ pub fn measure_rig(presses: u32) -> Result<Spread, BenchError> {
 }
 
 fn rig_run(presses: u32) -> Result<Spread, String> {
-    let dir = std::env::temp_dir().join(format!("utile-mqtt-rig-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    let mut rig = Rig {
-        children: Vec::new(),
-        dir: dir.clone(),
-    };
-    let (broker, port) = start_broker(&dir)?;
-    rig.children.push(broker);
+    let (mut rig, port) = Rig::with_broker("utile-mqtt-rig")?;
+    let dir = rig.dir.clone();
     let link = dir.join("tty");
     let mut nano = start_nano(&dir, &link, 1).map_err(|e| e.to_string())?;
     let keys = nano.stdin.take().ok_or("vnano's console")?;

@@ -14,7 +14,7 @@ use std::time::Duration;
 use rumqttc::{AsyncClient, Event, EventLoop, Outgoing, Packet, QoS};
 use tokio::task::JoinHandle;
 
-use super::client::{explain, BACKOFF_MAX, BACKOFF_MIN, BACKOFF_REFUSED};
+use super::client::{explain, next_backoff, BACKOFF_MIN};
 use super::options::{Broker, Settings};
 use super::payloads::{availability, OFFLINE};
 
@@ -147,12 +147,7 @@ async fn drive(
                     told = true;
                 }
                 tokio::time::sleep(backoff).await;
-                let most = if refused {
-                    BACKOFF_REFUSED
-                } else {
-                    BACKOFF_MAX
-                };
-                backoff = (backoff * 2).min(most);
+                backoff = next_backoff(backoff, refused);
             }
         }
     }

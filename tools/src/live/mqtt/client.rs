@@ -107,6 +107,18 @@ pub fn spawn(
 }
 
 /// A connection error in words, and whether the broker refused us (rather than not being
+/// The wait after `backoff` before the next attempt to connect: doubled, up to
+/// [`BACKOFF_REFUSED`] when the broker refused the login or the certificate (asking again
+/// soon changes nothing) and [`BACKOFF_MAX`] otherwise.
+pub fn next_backoff(backoff: Duration, refused: bool) -> Duration {
+    let most = if refused {
+        BACKOFF_REFUSED
+    } else {
+        BACKOFF_MAX
+    };
+    (backoff * 2).min(most)
+}
+
 /// there).
 pub fn explain(e: &ConnectionError, b: &Broker) -> (String, bool) {
     let at = format!("{}:{}", b.host, b.port);
@@ -195,12 +207,7 @@ async fn drive(
                 }
                 last = Some(words);
                 tokio::time::sleep(backoff).await;
-                let most = if refused {
-                    BACKOFF_REFUSED
-                } else {
-                    BACKOFF_MAX
-                };
-                backoff = (backoff * 2).min(most);
+                backoff = next_backoff(backoff, refused);
             }
         }
     }
