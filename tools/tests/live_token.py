@@ -13,29 +13,11 @@ Exits 1 with the reason on the first check that fails; prints `ALL OK` at the en
 """
 
 import argparse
-import sys
 
 from playwright.sync_api import sync_playwright
 
-ARGS = [
-    "--no-sandbox",
-    "--headless=new",
-    "--disable-gpu",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--no-first-run",
-]
-T = 60_000  # ms: the longest wait for anything the page must show (a loaded machine)
-
-
-def fail(why):
-    print(f"FAIL: {why}", flush=True)
-    sys.exit(1)
-
-
-def step(what):
-    print(f"-- {what}", flush=True)
+# The browser's flags, the longest wait and the reporting are live_page.py's (beside this).
+from live_page import ARGS, T, fail, step
 
 
 def sel(unit, signal):

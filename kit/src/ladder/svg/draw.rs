@@ -157,6 +157,19 @@ impl Draw<'_> {
         );
     }
 
+    /// Networks `a` above `b` from column `col`, row `row`, both fed `power`, each wired out
+    /// to the wider one's right edge: that edge's column offset and `a`'s height in rows.
+    fn branches(&mut self, a: &Net, b: &Net, col: i32, row: i32, power: &[u8]) -> (i32, i32) {
+        let (wa, ha) = net_size(a);
+        let (wb, _) = net_size(b);
+        let w = wa.max(wb);
+        let pa = self.net(a, col, row, power);
+        self.wire(col + wa, col + w, row, &pa);
+        let pb = self.net(b, col, row + ha, power);
+        self.wire(col + wb, col + w, row + ha, &pb);
+        (w, ha)
+    }
+
     /// A network whose power arrives at (`col`, `row`) as `power`: the power leaving it.
     pub(super) fn net(&mut self, n: &Net, col: i32, row: i32, power: &[u8]) -> Vec<u8> {
         match n {
@@ -168,27 +181,15 @@ impl Draw<'_> {
                 then(power, *line)
             }
             Net::Parallel(a, b, line) => {
-                let (wa, ha) = net_size(a);
-                let (wb, _) = net_size(b);
-                let w = wa.max(wb);
                 let out = then(power, *line);
-                let pa = self.net(a, col, row, power);
-                self.wire(col + wa, col + w, row, &pa);
-                let pb = self.net(b, col, row + ha, power);
-                self.wire(col + wb, col + w, row + ha, &pb);
+                let (w, ha) = self.branches(a, b, col, row, power);
                 self.vwire(col, row, row + ha, power);
                 self.vwire(col + w, row, row + ha, &out);
                 out
             }
             Net::Xor(a, b, line) => {
-                let (wa, ha) = net_size(a);
-                let (wb, _) = net_size(b);
-                let w = wa.max(wb);
                 let out = then(power, *line);
-                let pa = self.net(a, col, row, power);
-                self.wire(col + wa, col + w, row, &pa);
-                let pb = self.net(b, col, row + ha, power);
-                self.wire(col + wb, col + w, row + ha, &pb);
+                let (w, ha) = self.branches(a, b, col, row, power);
                 self.function("XOR", *line, col + w, row, row + ha, &out);
                 out
             }
