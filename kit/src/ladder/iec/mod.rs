@@ -37,8 +37,10 @@ use super::Reasons;
 mod blocks;
 mod pieces;
 mod timers;
+mod walk;
 pub use timers::time_text;
 use timers::{holds, timer_for, UNIT_GROUPS};
+use walk::{edges_in, edges_of, reads_out, stmt_exprs};
 
 /// What each block statement became.
 #[derive(Clone, Copy)]
@@ -352,50 +354,6 @@ fn coil_flow(s: &Stmt) -> Flow {
             )),
         ),
     }
-}
-
-/// Every expression of a statement.
-fn stmt_exprs(s: &Stmt, f: &mut dyn FnMut(&Expr)) {
-    match s {
-        Stmt::Coil { power, .. } => f(power),
-        Stmt::Timer { input, .. } => f(input),
-        Stmt::Counter { cu, reset, .. } => {
-            f(cu);
-            f(reset);
-        }
-        Stmt::Trig { clk, .. } => f(clk),
-        Stmt::CounterReset { power, .. } => f(power),
-        Stmt::FlipFlop { set, reset, .. } => {
-            f(set);
-            f(reset);
-        }
-    }
-}
-
-/// Whether `e` reads the Q of statement `n`.
-fn reads_out(e: &Expr, n: usize) -> bool {
-    match e {
-        Expr::Out(k) => *k == n,
-        Expr::Not(a) => reads_out(a, n),
-        Expr::And(a, b) | Expr::Or(a, b) | Expr::Xor(a, b) => reads_out(a, n) || reads_out(b, n),
-        _ => false,
-    }
-}
-
-fn edges_of(e: &Expr, f: &mut dyn FnMut(usize, u8, bool)) {
-    match e {
-        Expr::Edge { var, rising, id } => f(*id, *var, *rising),
-        Expr::Not(a) => edges_of(a, f),
-        Expr::And(a, b) | Expr::Or(a, b) | Expr::Xor(a, b) => {
-            edges_of(a, f);
-            edges_of(b, f);
-        }
-        _ => {}
-    }
-}
-
-fn edges_in(e: &Expr, f: &mut dyn FnMut(usize)) {
-    edges_of(e, &mut |id, _, _| f(id));
 }
 
 impl Lowering {

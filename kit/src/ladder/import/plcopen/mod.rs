@@ -19,34 +19,9 @@ use super::super::Reasons;
 use super::{pop_of, CoilMode, Expr, IecProgram, Signals, Stmt, TimerKind};
 
 mod blocks;
+mod xml;
 pub use blocks::parse_time;
-
-/// Words for an element in a refusal: `coil Lamp (localId 7)`.
-fn what(n: Node) -> String {
-    let tag = n.tag_name().name();
-    let id = n.attribute("localId").unwrap_or("?");
-    let name = match tag {
-        "contact" | "coil" => child_text(n, "variable"),
-        "block" => n
-            .attribute("instanceName")
-            .or(n.attribute("typeName"))
-            .map(str::to_string),
-        "inVariable" | "outVariable" | "inOutVariable" => child_text(n, "expression"),
-        _ => None,
-    };
-    match name {
-        Some(v) => format!("{tag} {} (localId {id})", v.trim()),
-        None => format!("{tag} (localId {id})"),
-    }
-}
-
-fn child<'a, 'i>(n: Node<'a, 'i>, tag: &str) -> Option<Node<'a, 'i>> {
-    n.children().find(|c| c.tag_name().name() == tag)
-}
-
-fn child_text(n: Node, tag: &str) -> Option<String> {
-    child(n, tag).map(|c| c.text().unwrap_or("").trim().to_string())
-}
+use xml::{child, child_text, local_id, pos, what};
 
 /// The reader's state: the body's elements by localId, the signals, the statements.
 struct Reader<'a, 'i> {
@@ -74,20 +49,6 @@ struct Reader<'a, 'i> {
 }
 
 type Res<T> = Result<T, String>;
-
-fn local_id(n: Node) -> Option<u64> {
-    n.attribute("localId").and_then(|s| s.trim().parse().ok())
-}
-
-fn pos(n: Node) -> (i64, i64) {
-    let p = child(n, "position");
-    let num = |a: &str| {
-        p.and_then(|p| p.attribute(a))
-            .and_then(|v| v.trim().parse::<f64>().ok())
-            .map_or(0, |v| v as i64)
-    };
-    (num("y"), num("x"))
-}
 
 const FB_TYPES: [&str; 8] = ["TON", "TOF", "TP", "CTU", "R_TRIG", "F_TRIG", "SR", "RS"];
 const FUNCTIONS: [&str; 4] = ["AND", "OR", "XOR", "NOT"];
