@@ -8,6 +8,8 @@
 //!   (`utile_*`, `crosscheck_examples`);
 //! - [`ladder`]: random timelines, runs sampled every ms and a ladder SVG's elements
 //!   (`ladder_*`);
+//! - [`iec`]: a reference evaluator of IEC 61131-3 ladder in PLCopen XML, scan by scan
+//!   (`ladder_equivalence`, `ladder_export`);
 //! - [`live`]: `utile live` on the virtual Nano, an HTTP client for its API, a raw Modbus
 //!   TCP client (`live_*`);
 //! - [`mqtt`]: mosquitto on loopback (password file, TLS listener, certificates), an MQTT
@@ -16,6 +18,7 @@
 //! Each test binary uses only part of it.
 #![allow(dead_code, unused_imports)]
 
+pub mod iec;
 pub mod ladder;
 pub mod live;
 pub mod mqtt;
