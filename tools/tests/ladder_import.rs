@@ -168,12 +168,10 @@ fn map_names_a_signal() {
     let path = write_scratch("far.xml", &xml);
     let l = utile_ok(&["import", &path, "--map", "valve=Y7,Go=A5"]);
     assert!(l.starts_with("000 A5.\n001 .Y7\n"), "{l}");
-    refused(
-        "far.xml",
-        xml.as_bytes(),
-        Some("Valve=Q9"),
-        &["--map: 'Q9' is not a signal"],
-    );
+    // A --map that is no signal is a usage error: exit 2 (as clap's own).
+    let r = utile(&["import", &path, "--map", "Valve=Q9"]);
+    assert_eq!(r.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("--map: 'Q9' is not a signal"));
 }
 
 #[test]
@@ -315,9 +313,10 @@ fn bad_input_is_refused_cleanly() {
         None,
         &["file: 10485760 bytes is past the 4 MiB an import reads"],
     );
+    // Bytes that are not UTF-8, with no BOM or declaration naming another encoding.
     refused(
         "binary.xml",
-        &[0xff, 0xfe, 0x00, 0x80],
+        &[b'<', b'a', b'>', 0x80, 0xff, b'<', b'/', b'a', b'>'],
         None,
         &["file: not UTF-8 text"],
     );

@@ -1,7 +1,7 @@
 //! The function blocks lowered to rungs of their own: TON and TP on uTile's timers,
 //! R_TRIG/F_TRIG on memory bits, SR/RS whose Q1 is read below them on a memory bit
-//! (docs/LADDER.md's patterns). TOF, CTU and the SR/RS that are uTile's own flip-flops are
-//! pieces of rungs (pieces.rs).
+//! (docs/LADDER.md's patterns), a TRUE initial value set at the first scan. TOF, CTU and the
+//! SR/RS that are uTile's own flip-flops are pieces of rungs (pieces.rs).
 
 use super::*;
 
@@ -23,14 +23,7 @@ impl Lowering {
                 match kind {
                     TimerKind::Tof => {}
                     TimerKind::Ton => {
-                        let p = match self.primed {
-                            Some(p) => p,
-                            None => {
-                                let p = self.bit();
-                                self.primed = Some(p);
-                                p
-                            }
-                        };
+                        let p = self.primed_bit();
                         let flow = Flow::Then(
                             Step::Not(0),
                             Box::new(Flow::Then(Step::Or(contact(p, true), 0), Box::new(tk))),
@@ -55,7 +48,12 @@ impl Lowering {
                 }
             }
             Stmt::Trig { clk, rising } => {
-                let (mem, out) = (self.bit(), self.bit());
+                // Its bits were chosen before the call (resources.rs): E read above it is
+                // the last call's Q.
+                let Some(&Made::Q(out, _)) = self.made.get(i) else {
+                    return;
+                };
+                let mem = self.trig_mem[i];
                 let edge = split(std::vec![
                     Flow::Then(
                         Step::And(contact(mem, true), 0),
@@ -70,7 +68,16 @@ impl Lowering {
                 };
                 let net = self.net(clk);
                 self.rung(net, flow);
-                self.made[i] = Made::Q(out, false);
+            }
+            Stmt::FirstScan { pop, push } => {
+                // TRUE at the first scan until written: set while the first-scan bit is
+                // still clear.
+                let p = self.primed_bit();
+                let flow = Flow::Then(
+                    Step::Or(contact(*push, false), 0),
+                    Box::new(Flow::Coil(coil(*pop, false))),
+                );
+                self.rung(contact(p, true), flow);
             }
             Stmt::FlipFlop {
                 set,
