@@ -4,6 +4,7 @@
 
 mod support;
 
+use support::ladder::import_refused as refused;
 use support::utile::*;
 use utile_kit::ladder;
 use utile_kit::listing;
@@ -84,30 +85,6 @@ fn block(id: u32, ty: &str, from: u32, first: &str, konst: Option<(&str, &str)>,
         "<block localId=\"{id}\" typeName=\"{ty}\" instanceName=\"{ty}{id}\"><position x=\"200\" y=\"{y}\"/><inputVariables>{ins}</inputVariables><inOutVariables/><outputVariables><variable formalParameter=\"Q\"><connectionPointOut/></variable><variable formalParameter=\"OUT\"><connectionPointOut/></variable></outputVariables></block>"
     ));
     s
-}
-
-/// Import must fail with each of `wants` in its message (which starts with the file's
-/// name), exit 1, write nothing and print nothing.
-fn refused(name: &str, text: &[u8], map: Option<&str>, wants: &[&str]) -> String {
-    let path = scratch(name);
-    std::fs::write(&path, text).unwrap();
-    let path = path.to_str().unwrap().to_string();
-    let out = scratch("out.utl");
-    let mut args = vec!["import", path.as_str(), "-o", out.to_str().unwrap()];
-    if let Some(m) = map {
-        args.extend(["--map", m]);
-    }
-    let r = utile(&args);
-    let err = String::from_utf8_lossy(&r.stderr).to_string();
-    assert_eq!(r.status.code(), Some(1), "{name}: {err}");
-    assert!(r.stdout.is_empty());
-    assert!(!out.exists(), "{name}: nothing may be written");
-    assert!(!err.contains("panicked"), "{err}");
-    assert!(err.starts_with(&format!("{path}: ")), "{name}: {err}");
-    for w in wants {
-        assert!(err.contains(w), "{name}: '{w}' not in: {err}");
-    }
-    err
 }
 
 #[test]

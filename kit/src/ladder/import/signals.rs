@@ -11,6 +11,8 @@ use utile_core::opcodes::{self, PUSH_A, PUSH_H, PUSH_U, PUSH_V, PUSH_Y};
 /// The signals of a program's variables, `--map` first.
 pub struct Signals {
     map: Vec<(String, u8)>,
+    /// Each `--map` name as given (for messages).
+    given: Vec<String>,
     /// The variables, upper-cased name → push opcode.
     pub vars: Vec<(String, u8)>,
     /// The U/V bits taken so far (bit n: `Un`, bit 8+n: `Vn`).
@@ -80,6 +82,7 @@ impl Signals {
 
     fn with_map(map: &str) -> Result<Signals, String> {
         let mut list: Vec<(String, u8)> = Vec::new();
+        let mut given: Vec<String> = Vec::new();
         for pair in map.split(',').map(str::trim).filter(|p| !p.is_empty()) {
             let Some((name, sig)) = pair.split_once('=') else {
                 return Err(format!(
@@ -103,17 +106,25 @@ impl Signals {
                     ))
                 }
                 Some((other, _)) => {
+                    let other = list
+                        .iter()
+                        .position(|(n, _)| n == other)
+                        .map_or(other.as_str(), |i| given[i].as_str());
                     return Err(format!(
                         "--map: {other} and {} are both given {} — one signal holds one variable; give each its own",
                         name.trim(),
                         sig.trim().to_ascii_uppercase()
-                    ))
+                    ));
                 }
-                None => list.push((key, op)),
+                None => {
+                    list.push((key, op));
+                    given.push(name.trim().into());
+                }
             }
         }
         let mut s = Signals {
             map: Vec::new(),
+            given,
             vars: Vec::new(),
             used_uv: 0,
         };
@@ -127,6 +138,11 @@ impl Signals {
     /// The `--map` pairs: upper-cased name → push opcode.
     pub fn mapped(&self) -> &[(String, u8)] {
         &self.map
+    }
+
+    /// The `--map` names as given, in the order of [`Signals::mapped`].
+    pub fn mapped_as_given(&self) -> &[String] {
+        &self.given
     }
 
     fn take(&mut self, op: u8) {

@@ -219,6 +219,7 @@ impl<'a, 'i> Reader<'a, 'i> {
     /// body's language).
     pub(super) fn unknown_block(&mut self, n: Node, ty: &str) -> Said {
         let user = self.pous.get(ty).cloned();
+        let is_user = user.is_some() && !FUNCTIONS.contains(&ty) && !ty.contains("_TO_");
         let why = match ty {
             "CTD" | "CTUD" => "uTile's counters count up only (CTU)".into(),
             "GT" | "GE" | "EQ" | "NE" | "LE" | "LT" => "uTile has no comparisons of numbers".into(),
@@ -227,7 +228,7 @@ impl<'a, 'i> Reader<'a, 'i> {
             t if t.contains("_TO_") => "uTile has no conversions of numbers".into(),
             _ => match user {
                 Some((kind, lang)) => format!(
-                    "a user {} of this project (its body {lang}) — uTile imports only the program's LD or FBD with TON, TOF, TP, CTU, R_TRIG, F_TRIG, SR, RS, AND, OR, XOR, NOT (user function blocks cannot be imported); draw its logic in the program",
+                    "a user {} of this project (its body {lang}); uTile imports only the program, with TON, TOF, TP, CTU, R_TRIG, F_TRIG, SR, RS, AND, OR, XOR, NOT (user function blocks cannot be imported) — draw its logic in the program",
                     if kind == "function" { "function" } else { "function block" }
                 ),
                 None => "uTile knows only TON, TOF, TP, CTU, R_TRIG, F_TRIG, SR, RS, AND, OR, XOR, NOT (user function blocks cannot be imported)".into(),
@@ -235,7 +236,12 @@ impl<'a, 'i> Reader<'a, 'i> {
         };
         let id = local_id(n).unwrap_or(0);
         self.failed_blocks.insert(id);
-        self.fail(n, CAUSE, &format!("{ty}: {why} — redraw it with those"))
+        let what_to_do = if is_user {
+            ""
+        } else {
+            " — redraw it with those"
+        };
+        self.fail(n, CAUSE, &format!("{ty}: {why}{what_to_do}"))
     }
 
     /// The statement of a function block, emitted once (its inputs first).

@@ -102,12 +102,7 @@ fn note<'a, 'i>(r: &mut Reader<'a, 'i>, found: &mut Found<'a, 'i>, n: Node<'a, '
         }
         _ => {}
     }
-    let name = match tag {
-        "contact" | "coil" => child_text(n, "variable"),
-        "inVariable" | "outVariable" | "inOutVariable" => child_text(n, "expression"),
-        _ => None,
-    };
-    let Some(name) = name.map(|s| s.to_ascii_uppercase()) else {
+    let Some(name) = name_in(n).map(|s| s.to_ascii_uppercase()) else {
         return;
     };
     if name.is_empty() || matches!(name.as_str(), "TRUE" | "FALSE" | "0" | "1") {
@@ -120,5 +115,15 @@ fn note<'a, 'i>(r: &mut Reader<'a, 'i>, found: &mut Found<'a, 'i>, n: Node<'a, '
         && found.seen_written.insert(name.clone())
     {
         found.written.push((name, n));
+    }
+}
+
+/// The variable an element names: a contact's or coil's variable, an in- or out-variable's
+/// expression.
+pub(super) fn name_in(n: Node) -> Option<String> {
+    match n.tag_name().name() {
+        "contact" | "coil" => child_text(n, "variable"),
+        "inVariable" | "outVariable" | "inOutVariable" => child_text(n, "expression"),
+        _ => None,
     }
 }

@@ -178,15 +178,17 @@ impl<'a, 'i> Reader<'a, 'i> {
     /// an input and a written variable a writable signal, no signal another variable's.
     pub(super) fn check_map(&self, found: &body::Found) -> Result<(), Failure> {
         let mut problems = Vec::new();
-        for (name, op) in self.signals.mapped() {
+        let given = self.signals.mapped_as_given();
+        for (k, (key, op)) in self.signals.mapped().iter().enumerate() {
+            let name = given.get(k).map_or(key.as_str(), String::as_str);
             let sig = signal_name(*op);
             let decl = self
                 .vars
                 .decls
                 .iter()
-                .find(|d| d.name.eq_ignore_ascii_case(name));
-            let used = found.used.iter().any(|(u, _)| u == name);
-            if decl.is_none() && !used && !self.vars.types.contains_key(name) {
+                .find(|d| d.name.eq_ignore_ascii_case(key));
+            let used = found.used.iter().any(|(u, _)| u == key);
+            if decl.is_none() && !used && !self.vars.types.contains_key(key) {
                 problems.push(format!(
                     "--map {name}={sig}: the file has no variable {name} — check the name ({})",
                     self.names(found)
@@ -197,7 +199,7 @@ impl<'a, 'i> Reader<'a, 'i> {
             if let Some((_, n)) = found
                 .written
                 .iter()
-                .find(|(w, _)| w == name)
+                .find(|(w, _)| w == key)
                 .filter(|_| !writable)
             {
                 problems.push(format!(
@@ -249,11 +251,7 @@ impl<'a, 'i> Reader<'a, 'i> {
             {
                 continue;
             }
-            let text = match n.tag_name().name() {
-                "contact" | "coil" => child_text(*n, "variable"),
-                _ => child_text(*n, "expression"),
-            }
-            .unwrap_or_default();
+            let text = body::name_in(*n).unwrap_or_default();
             if text.contains('.') {
                 let _ = self.instance_output(*n, &text);
             } else if parse_time(&text).is_none() && text.parse::<f64>().is_err() {
@@ -264,10 +262,10 @@ impl<'a, 'i> Reader<'a, 'i> {
 
     /// The file's variable names, for a `--map` that names none of them.
     fn names(&self, found: &body::Found) -> String {
-        let mut names: Vec<&str> = self.vars.decls.iter().map(|d| d.name.as_str()).collect();
-        for (u, _) in &found.used {
-            if !names.iter().any(|n| n.eq_ignore_ascii_case(u)) {
-                names.push(u);
+        let mut names: Vec<String> = self.vars.decls.iter().map(|d| d.name.clone()).collect();
+        for (u, n) in &found.used {
+            if !names.iter().any(|k| k.eq_ignore_ascii_case(u)) {
+                names.push(body::name_in(*n).unwrap_or_else(|| u.clone()));
             }
         }
         match names.len() {
