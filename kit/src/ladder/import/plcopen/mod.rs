@@ -92,6 +92,8 @@ struct Reader<'a, 'i> {
     problems: Vec<(Key, String)>,
     said: HashSet<u64>,
     said_vars: HashSet<String>,
+    /// Wires nested past the limit were said to be.
+    said_deep: bool,
 }
 
 const FB_TYPES: [&str; 8] = ["TON", "TOF", "TP", "CTU", "R_TRIG", "F_TRIG", "SR", "RS"];
@@ -221,6 +223,7 @@ impl<'a, 'i> Reader<'a, 'i> {
             problems: Vec::new(),
             said: HashSet::new(),
             said_vars: HashSet::new(),
+            said_deep: false,
         }
     }
 
@@ -249,10 +252,18 @@ impl<'a, 'i> Reader<'a, 'i> {
             })
             .collect();
         sinks.sort_by_key(|n| (pos(*n), local_id(*n)));
+        let mut failed = false;
         for (k, s) in sinks.into_iter().enumerate() {
             self.rung = k + 1;
             self.reached.insert(local_id(s).unwrap_or(0));
-            let _ = self.sink(s);
+            failed |= self.sink(s).is_err();
+        }
+        if failed && self.problems.is_empty() {
+            // Every failure gives its reason; should one not, the file is still refused.
+            self.problems.push((
+                (0, DETAIL, 0),
+                "file: an element could not be read and its reason was lost — please report this file".into(),
+            ));
         }
     }
 

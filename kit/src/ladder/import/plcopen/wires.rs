@@ -147,6 +147,10 @@ impl<'a, 'i> Reader<'a, 'i> {
         key: &(u64, String),
     ) -> Res<Expr> {
         if self.visiting.len() >= MAX_NODES {
+            // Said once: every wire past the limit has the same problem.
+            if std::mem::replace(&mut self.said_deep, true) {
+                return Err(Said);
+            }
             return Err(self.fail(
                 n,
                 DETAIL,
