@@ -1,5 +1,6 @@
 //! The chip's serial port (USART0): bytes into the firmware, paced as chosen, and bytes out
-//! of it, each with the cycle its stop bit ends.
+//! of it, each with the cycle its stop bit ends. The transmitter is the datasheet's, not
+//! simavr's (see [`on_udr_write`]).
 
 use super::chip::{Chip, Link};
 use super::{ioctl_def, LoadError, CYCLES_PER_BYTE, F_CPU, RX_FIXED_CYCLES_PER_BYTE};
@@ -9,6 +10,11 @@ use std::ffi::{c_int, c_void};
 
 const UCSR0A: usize = 0xC0;
 const UCSR0B: usize = 0xC1;
+const UDR0: usize = 0xC6;
+/// UCSR0A bit: the data register is empty.
+const UDRE0: u8 = 1 << 5;
+/// UCSR0B bit: transmitter enabled.
+const TXEN0: u8 = 1 << 3;
 const UBRR0L: usize = 0xC4;
 const UBRR0H: usize = 0xC5;
 /// UCSR0A bit: double speed.
@@ -52,8 +58,17 @@ pub(crate) struct UartLink {
     out: VecDeque<(u8, u64)>,
     /// Cycle at which the firmware wrote its last byte to UDR0.
     out_last_cycle: u64,
-    /// Cycle at which the transmitter's line is free again.
+    /// Cycle at which the transmitter's line is free again (its shift register empty).
     tx_free: u64,
+    /// CPU cycles of the last byte's frame on the line.
+    tx_frame: u64,
+    /// A byte waits in UDR0 for the shift register (UDRE0 is 0 until it moves).
+    udr_full: bool,
+    /// simavr's cycle (since reset) the last byte's stop bit ends: transmit complete then,
+    /// unless another byte followed.
+    tx_end: u64,
+    /// simavr's USART0 module (its UDRE and TXC vectors, its output IRQ).
+    module: *mut ffi::avr_uart_t,
     /// simavr's receive FIFO is empty: the firmware has read every byte we gave it.
     rx_empty: bool,
     /// simavr's receive FIFO is full (XOFF).
@@ -66,6 +81,10 @@ impl UartLink {
             out: VecDeque::with_capacity(4096),
             out_last_cycle: 0,
             tx_free: 0,
+            tx_frame: 0,
+            udr_full: false,
+            tx_end: 0,
+            module: std::ptr::null_mut(),
             rx_empty: true,
             rx_full: false,
         }
@@ -127,8 +146,99 @@ unsafe extern "C" fn on_uart_output(_irq: *mut ffi::avr_irq_t, value: u32, param
     let bit = (ubrr + 1) * if ucsra & U2X0 != 0 { 8 } else { 16 };
     let stop = now.max(link.uart.tx_free) + 10 * bit;
     link.uart.tx_free = stop;
+    link.uart.tx_frame = 10 * bit;
     link.uart.out.push_back((value as u8, stop));
     link.uart.out_last_cycle = now;
+}
+
+/// The firmware writes UDR0: the datasheet's transmitter, in place of simavr's handler.
+///
+/// On the chip UDR0 is a buffer in front of the shift register: a byte written while the
+/// line is idle moves into the shift register at once and UDRE0 rises again, so the next
+/// byte can follow back to back; a byte written while one is being sent waits in UDR0, and
+/// UDRE0 rises when it moves on; TXC0 rises when the shift register has sent its byte with
+/// nothing in UDR0. simavr instead runs a "pump" timer every frame from the first byte and
+/// raises UDRE0 only on its ticks: after a byte on an idle line the next waited a whole
+/// frame, and the data-register-empty interrupt cleared UDRE0 until the next tick
+/// (docs/SIMULATORS.md). UDRE0 is kept sticky (`attach_uart`): it falls only here.
+unsafe extern "C" fn on_udr_write(avr: *mut ffi::avr_t, _addr: u16, v: u8, param: *mut c_void) {
+    // SAFETY: `param` is the chip's boxed `Link`, `avr` its running AVR, `module` its USART0
+    // (found at load); simavr is inside the write and calls back only from its run.
+    unsafe {
+        let link = &mut *(param as *mut Link);
+        let p = link.uart.module;
+        let d = (*avr).data;
+        if *d.add(UCSR0B) & TXEN0 == 0 {
+            return;
+        }
+        // UDR0 holds the byte: UDRE0 falls, its interrupt is no longer pending.
+        ffi::avr_clear_interrupt(avr, &mut (*p).udrc);
+        *d.add(UCSR0A) &= !UDRE0;
+        // On the line (`on_uart_output` logs it and times its frame).
+        ffi::avr_raise_irq((*p).io.irq.add(ffi::UART_IRQ_OUTPUT as usize), u32::from(v));
+        let now = (*avr).cycle;
+        let stop = link.uart.tx_free.saturating_sub(link.base);
+        let start = stop.saturating_sub(link.uart.tx_frame);
+        link.uart.tx_end = stop;
+        if start <= now {
+            link.uart.udr_full = false;
+            ffi::avr_raise_interrupt(avr, &mut (*p).udrc);
+        } else {
+            link.uart.udr_full = true;
+            ffi::avr_cycle_timer_register(avr, start - now, Some(udr_moved), param);
+        }
+        ffi::avr_cycle_timer_register(avr, stop - now, Some(tx_done), param);
+    }
+}
+
+/// The byte in UDR0 moves into the shift register: UDRE0 rises.
+unsafe extern "C" fn udr_moved(
+    avr: *mut ffi::avr_t,
+    _when: ffi::avr_cycle_count_t,
+    param: *mut c_void,
+) -> ffi::avr_cycle_count_t {
+    // SAFETY: as in `on_udr_write`; simavr runs this timer from its run.
+    unsafe {
+        let link = &mut *(param as *mut Link);
+        link.uart.udr_full = false;
+        ffi::avr_raise_interrupt(avr, &mut (*link.uart.module).udrc);
+    }
+    0
+}
+
+/// A byte's stop bit has ended: if no byte followed it, TXC0 rises.
+unsafe extern "C" fn tx_done(
+    avr: *mut ffi::avr_t,
+    when: ffi::avr_cycle_count_t,
+    param: *mut c_void,
+) -> ffi::avr_cycle_count_t {
+    // SAFETY: as in `udr_moved`.
+    unsafe {
+        let link = &mut *(param as *mut Link);
+        if link.uart.tx_end == when && !link.uart.udr_full {
+            ffi::avr_raise_interrupt(avr, &mut (*link.uart.module).txc);
+        }
+    }
+    0
+}
+
+/// After simavr's UCSR0B handler: it raises UDRE0's interrupt whenever UDRIE0 is switched
+/// on and its own pump is still (which, with [`on_udr_write`], it always is); with a byte
+/// still waiting in UDR0 the data register is not empty, so that is undone.
+unsafe extern "C" fn on_ucsr0b_write(
+    avr: *mut ffi::avr_t,
+    _addr: u16,
+    _v: u8,
+    param: *mut c_void,
+) {
+    // SAFETY: as in `on_udr_write`.
+    unsafe {
+        let link = &mut *(param as *mut Link);
+        if link.uart.udr_full {
+            ffi::avr_clear_interrupt(avr, &mut (*link.uart.module).udrc);
+            *(*avr).data.add(UCSR0A) &= !UDRE0;
+        }
+    }
 }
 
 /// simavr's UART XON IRQ: raised whenever its receive FIFO is (or becomes) empty.
@@ -187,6 +297,18 @@ impl Chip {
                 }
                 io = (*io).next;
             }
+            if self.rx.uart.is_null() {
+                return Err(LoadError::NoMcu);
+            }
+            // The datasheet's transmitter in place of simavr's (see `on_udr_write`): UDR0's
+            // write handler replaced, UDRE0 kept when its interrupt runs, UCSR0B's handler
+            // followed by ours.
+            self.link.uart.module = self.rx.uart;
+            (*self.rx.uart).udrc.set_raise_sticky(1);
+            let slot = &mut (*avr).io[UDR0 - 0x20].w;
+            slot.c = Some(on_udr_write);
+            slot.param = param;
+            ffi::avr_register_io_write(avr, UCSR0B as u16, Some(on_ucsr0b_write), param);
         }
         if self.rx.irq.is_null() {
             return Err(LoadError::NoMcu);
@@ -321,6 +443,9 @@ impl Chip {
         self.rx.next = self.cycle();
         self.link.uart.rx_empty = true;
         self.link.uart.rx_full = false;
+        // simavr's reset dropped every timer: nothing waits in UDR0 any more.
+        self.link.uart.udr_full = false;
+        self.link.uart.tx_end = 0;
     }
 
     /// Chooses how input is paced (default [`RxPacing::AfterRead`]).
