@@ -257,6 +257,29 @@ pub fn parse(file: &str, text: &str) -> Result<Program, FileErrors> {
     Ok(prog)
 }
 
+/// The longest listing [`check`] reads (a full program with a comment on every line fits
+/// many times).
+pub const MAX_LISTING: usize = 256 * 1024;
+
+/// The problems of a listing's `text`, in [`parse`]'s words (`utile asm`'s), none when it is
+/// a good listing: what an editor shows while the user types (`utile live`'s `/api/check`,
+/// the playground). A text past [`MAX_LISTING`] is one problem, on line 1, and is not read.
+pub fn check(text: &str) -> Vec<Problem> {
+    if text.len() > MAX_LISTING {
+        return vec![Problem {
+            line: 1,
+            message: format!(
+                "the listing has {} bytes: more than {MAX_LISTING} is no uTile program",
+                text.len()
+            ),
+        }];
+    }
+    match parse("listing", text) {
+        Ok(_) => Vec::new(),
+        Err(e) => e.problems,
+    }
+}
+
 /// A program from command names (any case), from line 0 on; the other lines NOP, as after
 /// FILL; presets 0. The listing of those commands, one per line, for tests and benches.
 ///

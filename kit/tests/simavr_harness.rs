@@ -425,7 +425,11 @@ fn an_adc_conversion_takes_25_adc_clocks_first_then_13() {
     // The app enables the ADC at boot with clk/128 and converts on each 'a' (ADSC polled).
     let mut chip = Chip::load(&app()).expect("load");
     lines(&mut chip, 1, 50);
-    for (clocks, what) in [(25, "the first conversion"), (13, "the next"), (13, "the next")] {
+    for (clocks, what) in [
+        (25, "the first conversion"),
+        (13, "the next"),
+        (13, "the next"),
+    ] {
         let took = conversion_cycles(&mut chip);
         // Within the few cycles of the polling loop around the end.
         // ADSC is seen set after the instruction that wrote it and clear after the one that
@@ -464,11 +468,20 @@ fn the_transmitter_takes_a_byte_at_once_on_an_idle_line_and_the_next_after_it() 
     let mut chip = Chip::load(&app()).expect("load");
     let (_, first) = step_until(&mut chip, CYCLES_PER_MS, |c| c.output_len() == 1);
     step_until(&mut chip, 20, |c| c.peek(UCSR0A) & UDRE0 != 0);
-    assert!(chip.cycle() - first < 20, "UDRE0 rises at once on an idle line");
+    assert!(
+        chip.cycle() - first < 20,
+        "UDRE0 rises at once on an idle line"
+    );
     step_until(&mut chip, 100, |c| c.output_len() == 2);
-    assert_eq!(chip.peek(UCSR0A) & UDRE0, 0, "the second byte waits in UDR0");
+    assert_eq!(
+        chip.peek(UCSR0A) & UDRE0,
+        0,
+        "the second byte waits in UDR0"
+    );
     assert_eq!(chip.peek(UCSR0A) & TXC0, 0, "the first is still being sent");
-    step_until(&mut chip, 10 * CYCLES_PER_MS, |c| c.peek(UCSR0A) & TXC0 != 0);
+    step_until(&mut chip, 10 * CYCLES_PER_MS, |c| {
+        c.peek(UCSR0A) & TXC0 != 0
+    });
     let out = chip.take_output_timed();
     let text: Vec<u8> = out.iter().map(|&(b, _)| b).collect();
     assert!(text.starts_with(b"APP mcusr="), "{text:?}");

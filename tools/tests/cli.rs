@@ -51,6 +51,7 @@ const COMMANDS: &[(&str, &[&str], &str)] = &[
     (VNANO, &[], "--bootloader <NAME>"),
     (XTASK, &[], "fw"),
     (XTASK, &["fw"], "--check-budget-enforced"),
+    (XTASK, &["play"], "--out <DIR>"),
     (BENCH, &[], "--quick"),
 ];
 

@@ -48,8 +48,7 @@ pub use flash::{ArduinoBoot, FlashImage, HexLineError};
 pub use pins::RigPin;
 pub use uart::RxPacing;
 
-/// CPU clock of the Nano (16 MHz crystal).
-pub const F_CPU: u64 = 16_000_000;
+pub use crate::nano::{F_CPU, VCC_MV};
 
 /// CPU cycles per millisecond.
 pub const CYCLES_PER_MS: u64 = F_CPU / 1000;
@@ -71,9 +70,6 @@ pub const EEPROM_SIZE: usize = 1024;
 
 /// Duration of one EEPROM byte write (erase + write) on the chip, in µs (datasheet).
 pub const EE_WRITE_US: u32 = 3400;
-
-/// Supply, analog supply and ADC reference of the simulated board, in millivolts.
-pub const VCC_MV: u32 = 5000;
 
 /// CPU cycles of one 8N1 frame (start, 8 data, stop bit) at `baud`.
 pub fn frame_cycles(baud: u32) -> u64 {

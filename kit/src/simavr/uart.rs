@@ -225,12 +225,7 @@ unsafe extern "C" fn tx_done(
 /// After simavr's UCSR0B handler: it raises UDRE0's interrupt whenever UDRIE0 is switched
 /// on and its own pump is still (which, with [`on_udr_write`], it always is); with a byte
 /// still waiting in UDR0 the data register is not empty, so that is undone.
-unsafe extern "C" fn on_ucsr0b_write(
-    avr: *mut ffi::avr_t,
-    _addr: u16,
-    _v: u8,
-    param: *mut c_void,
-) {
+unsafe extern "C" fn on_ucsr0b_write(avr: *mut ffi::avr_t, _addr: u16, _v: u8, param: *mut c_void) {
     // SAFETY: as in `on_udr_write`.
     unsafe {
         let link = &mut *(param as *mut Link);

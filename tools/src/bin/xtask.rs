@@ -11,12 +11,17 @@
 //! Every build FAILS when the image links a panic path (`core::panicking`, bounds checks,
 //! `unwrap` failures …), naming the source lines that call one (`tools/src/xtask/panics.rs`).
 //!
+//! `xtask play` (`./x play --build`) builds the playground, a static site, into `out/play/`
+//! (`tools/src/xtask/play.rs`, docs/PLAY.md).
+//!
 //! `cargo fw --check-budget-enforced` links the firmware with shrunken budgets (a copy of
 //! `memory.x` with tiny flash, then tiny RAM) and succeeds only if both links FAIL, proving
 //! that an image over budget cannot be built.
 
 #[path = "../xtask/panics.rs"]
 mod panics;
+#[path = "../xtask/play.rs"]
+mod play;
 #[path = "../xtask/size.rs"]
 mod size;
 
@@ -45,6 +50,20 @@ enum Task {
     /// Build the release firmware, write out/m328-nano-utile.hex and .elf, print flash and
     /// RAM use against the budgets of memory.x; fails if the image links a panic path
     Fw(Fw),
+    /// Build the playground into out/play/: the page, the adapter, avr8js and xterm.js, the
+    /// firmware image (cargo fw first), the WebAssembly module, the examples
+    Play(Play),
+}
+
+/// `xtask play [--out DIR]`.
+#[derive(clap::Args)]
+#[command(after_help = "Examples:
+  ./x play --build                           the site in out/play/ (cargo fw first)
+  python3 -m http.server -d out/play         serve it (./x play does both)")]
+struct Play {
+    /// The site's folder (emptied first)
+    #[arg(long, value_name = "DIR", default_value = "out/play")]
+    out: PathBuf,
 }
 
 /// `cargo fw [--features F] [--size] [--check-budget-enforced]`.
@@ -100,6 +119,7 @@ fn main() -> ExitCode {
     // Usage errors (and --help) exit here: 2 with clap's message, or 0.
     let result = match Xtask::parse().task {
         Task::Fw(args) => fw(&args),
+        Task::Play(args) => play(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -108,6 +128,22 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+fn play(args: &Play) -> anyhow::Result<()> {
+    let started = std::time::Instant::now();
+    let root = root();
+    let built = play::build(&root, &root.join(&args.out))?;
+    println!(
+        "playground: {} ({} files, {} KiB; the WebAssembly module {} KiB; {} examples) in {:.1} s",
+        rel(&built.out),
+        built.files,
+        built.bytes / 1024,
+        built.wasm_bytes / 1024,
+        built.examples,
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
 }
 
 /// The repository root (the parent of `tools/`).

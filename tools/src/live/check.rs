@@ -11,9 +11,6 @@ use utile_kit::listing;
 
 use super::api::ApiError;
 
-/// The longest listing taken (a full program with a comment on every line fits many times).
-pub const MAX_LISTING: usize = 256 * 1024;
-
 /// `POST /api/check`'s body.
 #[derive(Debug, Deserialize)]
 pub struct CheckBody {
@@ -31,28 +28,15 @@ pub struct Problem {
     pub message: String,
 }
 
-/// The problems of `text` (none when it is a good listing).
+/// The problems of `text` (none when it is a good listing): the kit's [`listing::check`].
 pub fn problems(text: &str) -> Vec<Problem> {
-    if text.len() > MAX_LISTING {
-        return vec![Problem {
-            line: 1,
-            message: format!(
-                "the listing has {} bytes: more than {MAX_LISTING} is no uTile program",
-                text.len()
-            ),
-        }];
-    }
-    match listing::parse("listing", text) {
-        Ok(_) => Vec::new(),
-        Err(e) => e
-            .problems
-            .into_iter()
-            .map(|p| Problem {
-                line: p.line,
-                message: p.message,
-            })
-            .collect(),
-    }
+    listing::check(text)
+        .into_iter()
+        .map(|p| Problem {
+            line: p.line,
+            message: p.message,
+        })
+        .collect()
 }
 
 /// `POST /api/check`: 200 with `[{"line", "message"}]`, empty when the listing is good.

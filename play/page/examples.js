@@ -1,0 +1,73 @@
+// The Examples tab: every program of examples/ (examples/index.json, written by
+// ./x play --build) with its title; its listing shown on request, its .utl and its .hex to
+// download. The .hex is made here by the kit's listing code in the WebAssembly module: the
+// file `utile asm` writes and READ takes.
+
+import { el } from "./live/dom.js";
+
+async function fetchText(url) {
+  const res = await fetch(url);
+  if (!res.ok) throw new Error(`${url}: the server answered ${res.status}`);
+  return res.text();
+}
+
+// Saves `text` as a file called `name` (a download of the page's own bytes).
+function download(name, text, type) {
+  const url = URL.createObjectURL(new Blob([text], { type }));
+  const a = el("a", { href: url, download: name });
+  document.body.append(a);
+  a.click();
+  a.remove();
+  setTimeout(() => URL.revokeObjectURL(url), 10_000);
+}
+
+export class Examples {
+  // `root`: the list's element; `notify(text)`: says what went wrong, in words.
+  constructor(root, notify) {
+    this.root = root;
+    this.notify = notify;
+    this.utile = null;
+    this.hexButtons = [];
+  }
+
+  // Lists them (examples/index.json).
+  async load() {
+    const list = JSON.parse(await fetchText("./examples/index.json"));
+    for (const ex of list) this.root.append(this.row(ex));
+    this.root.dataset.count = String(list.length);
+  }
+
+  // `utile`: the WebAssembly module; the .hex buttons work from now on.
+  attach(utile) {
+    this.utile = utile;
+    for (const b of this.hexButtons) b.disabled = false;
+  }
+
+  row(ex) {
+    const base = ex.name.split("/").pop();
+    const pre = el("pre", { class: "listing-text", hidden: "" });
+    const show = el("button", { class: "scan-button", type: "button", "data-action": "show",
+      text: "Show", title: "show the listing" });
+    show.addEventListener("click", async () => {
+      if (pre.hidden && !pre.textContent) pre.textContent = await fetchText(ex.file);
+      pre.hidden = !pre.hidden;
+      show.textContent = pre.hidden ? "Show" : "Hide";
+    });
+    const utl = el("a", { class: "scan-button", href: ex.file, download: `${base}.utl`,
+      "data-action": "utl", text: ".utl", title: "the listing, as a file" });
+    const hex = el("button", { class: "scan-button", type: "button", "data-action": "hex",
+      text: ".hex", disabled: "", title: "the Intel HEX file READ takes (WRITE's format)" });
+    hex.addEventListener("click", async () => {
+      const made = this.utile.listingToHex(await fetchText(ex.file));
+      if (made.hex) download(`${base}.hex`, made.hex, "text/plain");
+      else this.notify(`${ex.name}: ${made.problems.map((p) => `line ${p.line}: ${p.message}`).join("; ")}`);
+    });
+    this.hexButtons.push(hex);
+    return el("article", { class: "example", "data-example": ex.name },
+      el("div", { class: "example-head" },
+        el("b", { class: "example-name", text: ex.name }),
+        el("span", { class: "example-title", text: ex.title }),
+        el("span", { class: "example-actions" }, show, utl, hex)),
+      pre);
+  }
+}
