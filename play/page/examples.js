@@ -1,7 +1,9 @@
 // The Examples tab: every program of examples/ (examples/index.json, written by
-// ./x play --build) with its title; its listing shown on request, its .utl and its .hex to
-// download. The .hex is made here by the kit's listing code in the WebAssembly module: the
-// file `utile asm` writes and READ takes.
+// ./x play --build, with each listing's text) with its title; its listing shown on request,
+// its .utl and its .hex to download. The .hex is made here by the kit's listing code in the
+// WebAssembly module: the file `utile asm` writes and READ takes. It is made in the click
+// itself, the link's address set before the browser follows it: a download the user asked
+// for, never one started after an await (which a browser may refuse as unrequested).
 
 import { el } from "./live/dom.js";
 
@@ -9,16 +11,6 @@ async function fetchText(url) {
   const res = await fetch(url);
   if (!res.ok) throw new Error(`${url}: the server answered ${res.status}`);
   return res.text();
-}
-
-// Saves `text` as a file called `name` (a download of the page's own bytes).
-function download(name, text, type) {
-  const url = URL.createObjectURL(new Blob([text], { type }));
-  const a = el("a", { href: url, download: name });
-  document.body.append(a);
-  a.click();
-  a.remove();
-  setTimeout(() => URL.revokeObjectURL(url), 10_000);
 }
 
 export class Examples {
@@ -40,7 +32,7 @@ export class Examples {
   // `utile`: the WebAssembly module; the .hex buttons work from now on.
   attach(utile) {
     this.utile = utile;
-    for (const b of this.hexButtons) b.disabled = false;
+    for (const b of this.hexButtons) b.removeAttribute("aria-disabled");
   }
 
   row(ex) {
@@ -48,19 +40,31 @@ export class Examples {
     const pre = el("pre", { class: "listing-text", hidden: "" });
     const show = el("button", { class: "scan-button", type: "button", "data-action": "show",
       text: "Show", title: "show the listing" });
-    show.addEventListener("click", async () => {
-      if (pre.hidden && !pre.textContent) pre.textContent = await fetchText(ex.file);
+    show.addEventListener("click", () => {
+      if (!pre.textContent) pre.textContent = ex.text;
       pre.hidden = !pre.hidden;
       show.textContent = pre.hidden ? "Show" : "Hide";
     });
     const utl = el("a", { class: "scan-button", href: ex.file, download: `${base}.utl`,
       "data-action": "utl", text: ".utl", title: "the listing, as a file" });
-    const hex = el("button", { class: "scan-button", type: "button", "data-action": "hex",
-      text: ".hex", disabled: "", title: "the Intel HEX file READ takes (WRITE's format)" });
-    hex.addEventListener("click", async () => {
-      const made = this.utile.listingToHex(await fetchText(ex.file));
-      if (made.hex) download(`${base}.hex`, made.hex, "text/plain");
-      else this.notify(`${ex.name}: ${made.problems.map((p) => `line ${p.line}: ${p.message}`).join("; ")}`);
+    const hex = el("a", { class: "scan-button", href: "#", download: `${base}.hex`,
+      "data-action": "hex", "aria-disabled": "true",
+      title: "the Intel HEX file READ takes (WRITE's format)", text: ".hex" });
+    let url = null;
+    hex.addEventListener("click", (event) => {
+      if (!this.utile) {
+        event.preventDefault();
+        return;
+      }
+      if (url) return;
+      const made = this.utile.listingToHex(ex.text);
+      if (!made.hex) {
+        event.preventDefault();
+        this.notify(`${ex.name}: ${made.problems.map((p) => `line ${p.line}: ${p.message}`).join("; ")}`);
+        return;
+      }
+      url = URL.createObjectURL(new Blob([made.hex], { type: "text/plain" }));
+      hex.href = url;
     });
     this.hexButtons.push(hex);
     return el("article", { class: "example", "data-example": ex.name },

@@ -335,8 +335,8 @@ fn normalize(path: &Path) -> PathBuf {
 }
 
 /// Every `.utl` of `examples/` (its sub-folders too) into the site's `examples/`, and
-/// `examples/index.json`: `[{"name", "file", "title"}]`, the title the listing's first
-/// comment line. Returns how many.
+/// `examples/index.json`: `[{"name", "file", "title", "text"}]`, the title the listing's
+/// first comment line, the text the listing (the page makes its `.hex` in the click). Returns how many.
 fn examples(site: &mut Site, dir: &Path) -> anyhow::Result<usize> {
     let mut list = Vec::new();
     let names = site.tree(dir, Path::new("examples"), "utl")?;
@@ -354,6 +354,7 @@ fn examples(site: &mut Site, dir: &Path) -> anyhow::Result<usize> {
             "name": file.trim_end_matches(".utl"),
             "file": format!("examples/{file}"),
             "title": title,
+            "text": text,
         }));
     }
     let count = list.len();
