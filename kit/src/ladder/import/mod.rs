@@ -409,11 +409,23 @@ impl Signals {
         }
     }
 
+    /// Whether `--map` names `name` (any case).
+    pub fn is_mapped(&self, name: &str) -> bool {
+        let key = name.trim().to_ascii_uppercase();
+        self.map.iter().any(|(n, _)| *n == key)
+    }
+
     /// The push opcode of a declared variable (any case).
     pub fn get(&self, name: &str) -> Option<u8> {
         let key = name.trim().to_ascii_uppercase();
         self.vars.iter().find(|(n, _)| *n == key).map(|&(_, op)| op)
     }
+}
+
+/// Whether a file's bytes begin as an LDmicro file's (after a BOM and blanks).
+fn is_ldmicro(bytes: &[u8]) -> bool {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    bytes.trim_ascii_start().starts_with(b"LDmicro")
 }
 
 /// Import a PLCopen XML or LDmicro file (told apart by their first bytes) as a ladder
@@ -430,10 +442,15 @@ pub fn import(file: &str, bytes: &[u8], map: &str) -> Result<Ladder, Refused> {
             MAX_BYTES >> 20
         )));
     }
-    let Ok(text) = std::str::from_utf8(bytes) else {
-        return Err(refuse(
-            "file: not UTF-8 text — export the program as PLCopen XML (plc.xml) or save it from LDmicro (.ld)".into(),
-        ));
+    // LDmicro is a Windows program: its files may be Windows-1252 (ldmicro::decode).
+    let text = match std::str::from_utf8(bytes) {
+        Ok(text) => std::borrow::Cow::Borrowed(text),
+        Err(_) if is_ldmicro(bytes) => ldmicro::decode(bytes),
+        Err(_) => {
+            return Err(refuse(
+                "file: not UTF-8 text — export the program as PLCopen XML (plc.xml) or save it from LDmicro (.ld)".into(),
+            ))
+        }
     };
     let signals = Signals::new(map).map_err(|e| refuse(e.0))?;
     let trimmed = text.trim_start_matches('\u{feff}').trim_start();

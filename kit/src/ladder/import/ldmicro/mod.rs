@@ -1,0 +1,102 @@
+//! LDmicro's `.ld` files (versions 0.1 and 0.2), read as IEC statements ([`super::Stmt`])
+//! in three steps, one room each: reading the text (`text.rs`: the header fields, the
+//! sections, the rungs as trees, without recursion), resolving the names (`resolve.rs`:
+//! X and Y names to pins in the IO LIST's order, R names to memory bits) and lowering the
+//! rungs (`lower.rs`, with LDmicro's instruction set in `elements.rs`: every element is
+//! run or refused by name). [`decode`] reads the bytes: UTF-8 (with or without its BOM),
+//! else Windows-1252, as LDmicro writes on Windows.
+//!
+//! Every problem is collected, then given once each, in the order of the rungs and lines.
+//! Delays are in µs.
+
+use std::borrow::Cow;
+use std::string::String;
+use std::vec::Vec;
+
+use super::super::Reasons;
+use super::{IecProgram, Signals};
+
+mod elements;
+mod lower;
+mod resolve;
+mod text;
+
+/// The deepest nesting of `SERIES` and `PARALLEL` (the rung itself is 1) uTile reads:
+/// LDmicro's editor draws far less.
+pub const MAX_DEPTH: usize = 64;
+
+/// The most elements and subcircuits a file may have: uTile's program holds 256 lines.
+pub const MAX_ELEMENTS: usize = 1024;
+
+/// One problem: its rung (0: the file's), its line, and the text.
+#[derive(Clone, Debug)]
+struct Problem {
+    rung: usize,
+    line: usize,
+    text: String,
+}
+
+impl Problem {
+    fn file(line: usize, text: String) -> Problem {
+        Problem {
+            rung: 0,
+            line,
+            text,
+        }
+    }
+
+    fn at(rung: usize, line: usize, text: String) -> Problem {
+        Problem { rung, line, text }
+    }
+}
+
+/// The text of an LDmicro file: UTF-8 (its BOM left out), else Windows-1252.
+pub fn decode(bytes: &[u8]) -> Cow<'_, str> {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    match std::str::from_utf8(bytes) {
+        Ok(text) => Cow::Borrowed(text),
+        Err(_) => encoding_rs::WINDOWS_1252
+            .decode_without_bom_handling(bytes)
+            .0,
+    }
+}
+
+/// Read an LDmicro program.
+pub fn read(text: &str, mut signals: Signals) -> Result<IecProgram, Reasons> {
+    let first = text.lines().map(str::trim).find(|l| !l.is_empty());
+    let first = first.unwrap_or("");
+    if first != "LDmicro0.1" && first != "LDmicro0.2" {
+        return Err(Reasons(std::vec![format!(
+            "file: '{first}' is not an LDmicro version uTile reads (LDmicro0.1, LDmicro0.2) — save it in one of those from LDmicro"
+        )]));
+    }
+    let mut problems = Vec::new();
+    let file = text::read(text, &mut problems);
+    if file.rungs.is_empty() && problems.is_empty() {
+        problems.push(Problem::file(
+            0,
+            "file: the PROGRAM has no rungs — nothing to run".into(),
+        ));
+    }
+    let mut prog = None;
+    if file.elements <= MAX_ELEMENTS {
+        let mcr = resolve::resolve(&file, &mut signals, &mut problems);
+        prog = Some(lower::lower(&file, &signals, mcr, &mut problems));
+    }
+    match prog {
+        Some(prog) if problems.is_empty() => Ok(prog),
+        _ => Err(Reasons(in_order(problems))),
+    }
+}
+
+/// Each problem once, by rung and line.
+fn in_order(mut problems: Vec<Problem>) -> Vec<String> {
+    problems.sort_by_key(|p| (p.rung, p.line));
+    let mut out: Vec<String> = Vec::with_capacity(problems.len());
+    for p in problems {
+        if !out.contains(&p.text) {
+            out.push(p.text);
+        }
+    }
+    out
+}
