@@ -10,6 +10,7 @@
 //!   (`ladder_*`);
 //! - [`iec`]: a reference evaluator of IEC 61131-3 ladder in PLCopen XML, scan by scan
 //!   (`ladder_equivalence`, `ladder_export`);
+//! - [`ldmicro`]: a reference evaluator of LDmicro's rungs, scan by scan (`ladder_ldmicro`);
 //! - [`live`]: `utile live` on the virtual Nano, an HTTP client for its API, a raw Modbus
 //!   TCP client (`live_*`);
 //! - [`mqtt`]: mosquitto on loopback (password file, TLS listener, certificates), an MQTT
@@ -20,6 +21,7 @@
 
 pub mod iec;
 pub mod ladder;
+pub mod ldmicro;
 pub mod live;
 pub mod mqtt;
 pub mod utile;

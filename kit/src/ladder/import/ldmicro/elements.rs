@@ -281,7 +281,9 @@ fn counter(words: &[String]) -> Result<Element, String> {
         )
     })?;
     let max = u16::try_from(max).ok().filter(|&v| v >= 1).ok_or_else(|| {
-        format!("a maximum of {max} is past uTile's counter presets (1..65535) — give it one of those")
+        format!(
+            "a maximum of {max} is past uTile's counter presets (1..65535) — give it one of those"
+        )
     })?;
     if let Some(init) = words.get(3).filter(|w| w.as_str() != "0") {
         return Err(format!(
@@ -312,7 +314,10 @@ pub(super) fn words(line: &str) -> Vec<String> {
     let mut it = line.split_whitespace();
     match it.next() {
         Some("COMMENT") => std::vec!["COMMENT".into()],
-        Some(first) => core::iter::once(first).chain(it).map(str::to_string).collect(),
+        Some(first) => core::iter::once(first)
+            .chain(it)
+            .map(str::to_string)
+            .collect(),
         None => Vec::new(),
     }
 }

@@ -196,7 +196,6 @@ impl Lowering<'_> {
     }
 }
 
-
 /// Branches joined (a wired OR).
 fn or(acc: Option<Wire>, w: Wire) -> Wire {
     match acc {

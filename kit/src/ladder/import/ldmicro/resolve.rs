@@ -15,7 +15,11 @@ pub(super) const MCR: &str = "$MCR";
 
 /// Declare every name the program's contacts and coils use; the master control relay's
 /// bit (its push opcode) if the program has one.
-pub(super) fn resolve(file: &File, signals: &mut Signals, problems: &mut Vec<Problem>) -> Option<u8> {
+pub(super) fn resolve(
+    file: &File,
+    signals: &mut Signals,
+    problems: &mut Vec<Problem>,
+) -> Option<u8> {
     let mut used: Vec<&str> = Vec::new();
     let mut relay = false;
     for n in file.nodes.iter().filter(|n| n.kind == Kind::Leaf) {

@@ -107,17 +107,24 @@ pub(super) fn read(text: &str, problems: &mut Vec<Problem>) -> File {
         }
     }
     if !program {
-        problems.push(Problem::file(0, "file: no PROGRAM line, so no rungs — save the file again from LDmicro".into()));
+        problems.push(Problem::file(
+            0,
+            "file: no PROGRAM line, so no rungs — save the file again from LDmicro".into(),
+        ));
         return file;
     }
     while let Some((no, line)) = lines.next() {
         if is_rung(line) {
             rung(&mut lines, no, &mut file, problems);
         } else {
-            problems.push(Problem::at(file.rungs.len() + 1, no, format!(
-                "line {no}: '{}' where a RUNG should begin — save the file again from LDmicro",
-                clip(line)
-            )));
+            problems.push(Problem::at(
+                file.rungs.len() + 1,
+                no,
+                format!(
+                    "line {no}: '{}' where a RUNG should begin — save the file again from LDmicro",
+                    clip(line)
+                ),
+            ));
         }
     }
     if file.elements > MAX_ELEMENTS {
@@ -203,15 +210,19 @@ fn section(
             return;
         }
         if !good(line) {
-            problems.push(Problem::file(no, format!(
+            problems.push(Problem::file(
+                no,
+                format!(
                 "line {no}: '{}' is not a line of the {what} — save the file again from LDmicro",
                 clip(line)
-            )));
+            ),
+            ));
         }
     }
-    problems.push(Problem::file(start, format!(
-        "line {start}: the {what} has no END — save the file again from LDmicro"
-    )));
+    problems.push(Problem::file(
+        start,
+        format!("line {start}: the {what} has no END — save the file again from LDmicro"),
+    ));
 }
 
 /// A rung from its `RUNG` line (`start`) to its END, without recursion: a stack of the
@@ -227,7 +238,11 @@ fn rung(lines: &mut Lines<'_>, start: usize, file: &mut File, problems: &mut Vec
     let mut skipped = false;
     loop {
         let Some((no, line)) = lines.next() else {
-            let what = if over > 0 { "SERIES" } else { open.last().map_or("RUNG", |o| o.1) };
+            let what = if over > 0 {
+                "SERIES"
+            } else {
+                open.last().map_or("RUNG", |o| o.1)
+            };
             problems.push(Problem::at(number, start, format!(
                 "rung {number} (line {start}): the file ends inside a {what} with no END — save the file again from LDmicro"
             )));
