@@ -71,7 +71,8 @@ fn hold_writes(pdu: &[u8]) -> Option<Vec<(u16, u16)>> {
 /// core's hold held to the [`Model`] after every frame and every decision, and what a request
 /// may change checked as there.
 pub(super) fn held(data: &[u8]) -> Verdict {
-    use super::modbus::{check_windows, end_frame, line_events, FrameEnd, Judged, Line, ADDRESS};
+    use super::modbus::{line_events, Line, ADDRESS};
+    use super::modbus_plc::{check_windows, end_frame, FrameEnd, Judged};
     use crate::modbus::crc_ok;
     use utile_core::modbus::plc::PlcMap;
     use utile_core::modbus::slave::Slave;
