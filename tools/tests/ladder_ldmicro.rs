@@ -147,8 +147,9 @@ fn every_reason_is_given_once_in_rung_and_line_order() {
 }
 
 #[test]
-fn unknown_lines_are_refused() {
-    let cases: [(&str, &str, &str); 6] = [
+fn unknown_lines_and_a_wire_read_twice_are_refused() {
+    let cases: [(&str, &str, &str); 7] = [
+        ("again.ld", "LDmicro0.2\nPROGRAM\nRUNG 1\n    CONTACTS Rosc 1 0\n    PARALLEL\n        COIL Rosc 0 0 0 0\n        SERIES\n            TON Tt 100000 0\n            COIL Ya 0 0 0 0\n        END\n    END\nEND\n", "rung 1: TON Tt (line 8): its power reads Rosc, which a coil before it in this rung writes"),
         ("hello.ld", "LDmicro0.1\nhello world\n", "line 2: 'hello world' is not a line of an LDmicro file"),
         ("noprogram.ld", "LDmicro0.2\nMICRO=Atmel AVR ATmega328 28-PDIP\n", "file: no PROGRAM line"),
         ("empty.ld", "LDmicro0.2\nPROGRAM\n", "file: the PROGRAM has no rungs"),

@@ -11,7 +11,7 @@ use std::vec::Vec;
 use super::elements::{element, CoilKind, Element};
 use super::text::{File, Kind, Rung};
 use super::{Problem, MAX_ELEMENTS};
-use crate::ladder::import::{pop_of, CoilMode, Expr, IecProgram, Signals, Stmt};
+use crate::ladder::import::{pop_of, CoilMode, Expr, IecProgram, Signals, Stmt, TimerKind};
 
 /// A wire's power and how many contacts its expression reads (a bound on the network a
 /// rung may make: its branches copy the power into each).
@@ -35,6 +35,8 @@ struct Lowering<'a> {
     timers: Vec<String>,
     /// The master control relay's bit, kept inverted (0 at start: the relay on).
     mcr: Option<u8>,
+    /// What the coils of this rung wrote so far (push opcodes).
+    written: Vec<u8>,
     problems: &'a mut Vec<Problem>,
     rung: usize,
 }
@@ -54,11 +56,13 @@ pub(super) fn lower(
         counters: HashMap::new(),
         timers: Vec::new(),
         mcr,
+        written: Vec::new(),
         problems,
         rung: 0,
     };
     for (k, r) in file.rungs.iter().enumerate() {
         l.rung = k + 1;
+        l.written.clear();
         if !r.skipped && !l.comment_rung(r) {
             l.walk(r);
         }
@@ -162,6 +166,7 @@ impl Lowering<'_> {
     }
 
     fn coil(&mut self, power: Expr, push: u8, mode: CoilMode) {
+        self.written.push(push);
         if let Some(pop) = pop_of(push) {
             self.stmts.push(Stmt::Coil {
                 power,
@@ -204,7 +209,44 @@ fn or(acc: Option<Wire>, w: Wire) -> Wire {
     }
 }
 
+/// The first of `vars` that `e` reads, walked with a stack.
+fn reads_any(e: &Expr, vars: &[u8]) -> Option<u8> {
+    let mut todo = std::vec![e];
+    while let Some(e) = todo.pop() {
+        match e {
+            Expr::Var(v) if vars.contains(v) => return Some(*v),
+            Expr::Not(a) => todo.push(a),
+            Expr::And(a, b) | Expr::Or(a, b) | Expr::Xor(a, b) => todo.extend([&**a, &**b]),
+            _ => {}
+        }
+    }
+    None
+}
+
 impl Lowering<'_> {
+    /// A block uTile runs in a rung of its own (TON, an edge) reads its power again after
+    /// the coils to its left in the rung; LDmicro read it once, before them. Refused when
+    /// those coils write what the power reads.
+    fn read_once(&self, p: &Expr, kind: &str) -> Result<(), String> {
+        match reads_any(p, &self.written) {
+            None => Ok(()),
+            Some(v) => Err(format!(
+                "its power reads {}, which a coil before it in this rung writes: LDmicro reads the power once, before the coil, and uTile would read it again after — draw the {kind} in a rung of its own above the coil",
+                self.name_of(v)
+            )),
+        }
+    }
+
+    /// The file's name for a signal (as its first contact or coil spells it).
+    fn name_of(&self, push: u8) -> String {
+        let named = self.file.nodes.iter().find_map(|n| {
+            let name = n.words.get(1).filter(|_| n.kind == Kind::Leaf)?;
+            let leaf = matches!(n.words[0].as_str(), "CONTACTS" | "COIL");
+            (leaf && self.signals.get(name) == Some(push)).then(|| name.clone())
+        });
+        named.unwrap_or_else(|| crate::ladder::import::signal_name(push))
+    }
+
     /// What element `el` (`what`: its rung, words and line) does to `power`.
     fn element(&mut self, el: Element, what: &str, power: Wire) -> Result<Wire, String> {
         let Wire(p, size) = power;
@@ -228,6 +270,7 @@ impl Lowering<'_> {
                     CoilKind::Set => CoilMode::Set,
                     CoilKind::Reset => CoilMode::Reset,
                     CoilKind::Toggle => {
+                        self.read_once(&p, "T-trigger coil")?;
                         // On the power's rising edge the name becomes its complement.
                         let edge = self.push(Stmt::Trig {
                             clk: p.clone(),
@@ -246,6 +289,9 @@ impl Lowering<'_> {
                     return Err(format!(
                         "timer {name} is used twice — give each timer its own name"
                     ));
+                }
+                if kind == TimerKind::Ton {
+                    self.read_once(&p, "TON")?;
                 }
                 self.timers.push(name);
                 if us % 1000 != 0 || us / 1000 > u64::from(u32::MAX) {
@@ -289,8 +335,12 @@ impl Lowering<'_> {
                 });
                 Wire(p, size)
             }
-            Element::OneShot { rising } => Wire(self.push(Stmt::Trig { clk: p, rising }), 1),
+            Element::OneShot { rising } => {
+                self.read_once(&p, if rising { "OSR" } else { "OSF" })?;
+                Wire(self.push(Stmt::Trig { clk: p, rising }), 1)
+            }
             Element::DropRising => {
+                self.read_once(&p, "ODR")?;
                 let edge = self.push(Stmt::Trig {
                     clk: p,
                     rising: true,
