@@ -123,27 +123,25 @@ fn what_utile_cannot_run_is_refused_by_name_rung_and_line_all_at_once() {
 
 #[test]
 fn every_reason_is_given_once_in_rung_and_line_order() {
-    // A name past the pins (a file reason), the same element refused twice on one line
-    // never (each line once), reasons of rungs 1 and 3 after the file's.
-    let text = "LDmicro0.2\nIO LIST\n    Xa at 1 0 0\nEND\nPROGRAM\nRUNG 1\n    CONTACTS Xa 0 0\n    ADD Rx Ry Rz\n    TON Tt 1500 0\nEND\nRUNG 2\n    CONTACTS Xa 0 0\n    COIL Ya 0 0 0 0\nEND\nRUNG 3\n    CONTACTS Xa 0 0\n    CTD Cc 5 0 /\nEND\nRUNG 4\n    GOTO Rung1\nEND\n";
+    // Found in another order (the stray line while reading, the seventh input while
+    // resolving, the elements while lowering): given by rung and line, the file's first.
+    let ins: String = (b'a'..=b'g')
+        .map(|c| format!("    X{} at {} 0 0\n", c as char, c))
+        .collect();
+    let text = format!("LDmicro0.2\nIO LIST\n{ins}END\nPROGRAM\nRUNG 1\n    CONTACTS Xg 0 0\n    ADD Rx Ry Rz\n    TON Tt 1500 0\nEND\nRUNG 2\n    CONTACTS Xa 0 0\n    COIL Ya 0 0 0 0\nEND\nRUNG 3\n    CONTACTS Xa 0 0\n    CTD Cc 5 0 /\nEND\nRUNG 4\n    GOTO Rung1\nEND\nFOO\n");
     let reasons = refused("order.ld", text.as_bytes());
-    assert_eq!(reasons.len(), 4, "{reasons:#?}");
-    assert!(
-        reasons[0].starts_with("rung 1: ADD Rx (line 8)"),
-        "{reasons:#?}"
-    );
-    assert!(
-        reasons[1].starts_with("rung 1: TON Tt (line 9): a delay of 1500 µs"),
-        "{reasons:#?}"
-    );
-    assert!(
-        reasons[2].starts_with("rung 3: CTD Cc (line 17): CTD has no uTile form: counts down"),
-        "{reasons:#?}"
-    );
-    assert!(
-        reasons[3].starts_with("rung 4: GOTO Rung1 (line 20): GOTO has no uTile form"),
-        "{reasons:#?}"
-    );
+    let wants = [
+        "variable Xg (input 7 of the IO LIST): input 6 is past uTile's pins",
+        "rung 1: ADD Rx (line 14): ADD has no uTile form",
+        "rung 1: TON Tt (line 15): a delay of 1500 µs",
+        "rung 3: CTD Cc (line 23): CTD has no uTile form: counts down",
+        "rung 4: GOTO Rung1 (line 26): GOTO has no uTile form",
+        "line 28: 'FOO' where a RUNG should begin",
+    ];
+    assert_eq!(reasons.len(), wants.len(), "{reasons:#?}");
+    for (r, w) in reasons.iter().zip(wants) {
+        assert!(r.starts_with(w), "'{w}' is not the start of: {r}");
+    }
 }
 
 #[test]

@@ -250,6 +250,12 @@ impl Lowering<'_> {
     /// What element `el` (`what`: its rung, words and line) does to `power`.
     fn element(&mut self, el: Element, what: &str, power: Wire) -> Result<Wire, String> {
         let Wire(p, size) = power;
+        if let Element::Contact { name, .. } | Element::Coil { name, .. } = &el {
+            if self.signals.get(name).is_none() && name.starts_with(['X', 'Y', 'R']) {
+                // Refused when its name was resolved (past the pins or the memory bits).
+                return Ok(Wire(p, size));
+            }
+        }
         Ok(match el {
             Element::Contact { name, negated } => {
                 let v = Expr::Var(self.var(&name)?);
