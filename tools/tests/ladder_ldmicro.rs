@@ -146,7 +146,9 @@ fn every_reason_is_given_once_in_rung_and_line_order() {
 
 #[test]
 fn unknown_lines_and_a_wire_read_twice_are_refused() {
-    let cases: [(&str, &str, &str); 7] = [
+    let cases: [(&str, &str, &str); 9] = [
+        ("comments.ld", "LDmicro0.2\nPROGRAM\nRUNG 1\n    COMMENT only\x20words\nEND\nRUNG 2\n    CONTACTS Xa 0 0\nEND\n", "file: no rung drives anything"),
+        ("strays.ld", "LDmicro0.2\nPROGRAM\nRUNG 1\n    CONTACTS Xa 0 0\n    COIL Ya 0 0 0 0\nEND\nEND\nEND\n\nSERIES\n", "lines 7–10: 3 lines where a RUNG should begin, the first 'END'"),
         ("again.ld", "LDmicro0.2\nPROGRAM\nRUNG 1\n    CONTACTS Rosc 1 0\n    PARALLEL\n        COIL Rosc 0 0 0 0\n        SERIES\n            TON Tt 100000 0\n            COIL Ya 0 0 0 0\n        END\n    END\nEND\n", "rung 1: TON Tt (line 8): its power reads Rosc, which a coil before it in this rung writes"),
         ("hello.ld", "LDmicro0.1\nhello world\n", "line 2: 'hello world' is not a line of an LDmicro file"),
         ("noprogram.ld", "LDmicro0.2\nMICRO=Atmel AVR ATmega328 28-PDIP\n", "file: no PROGRAM line"),
@@ -217,6 +219,10 @@ fn nesting_250000_deep_is_refused_in_words() {
     );
     let reasons = refused("many.ld", many.as_bytes());
     assert_eq!(reasons, ["file: 100000 elements; uTile reads up to 1024 (its program holds 256 lines) — is it the right file?"]);
+    // A file of stray lines is one reason, not a million.
+    let strays = format!("LDmicro0.2\nPROGRAM\n{}", "END\n".repeat(1_000_000));
+    let reasons = refused("strays.ld", strays.as_bytes());
+    assert_eq!(reasons, ["lines 3–1000002: 1000000 lines where a RUNG should begin, the first 'END' — save the file again from LDmicro"]);
     let mut wide = String::from("LDmicro0.2\nPROGRAM\nRUNG 1\n");
     for _ in 0..40 {
         wide.push_str("PARALLEL\nSERIES\nCONTACTS Xa 0 0\nCONTACTS Xb 0 0\nEND\nSERIES\nCONTACTS Xc 0 0\nCONTACTS Xd 0 0\nEND\nEND\n");

@@ -74,16 +74,18 @@ pub fn read(text: &str, mut signals: Signals) -> Result<IecProgram, Reasons> {
     }
     let mut problems = Vec::new();
     let file = text::read(text, &mut problems);
-    if file.rungs.is_empty() && problems.is_empty() {
-        problems.push(Problem::file(
-            0,
-            "file: the PROGRAM has no rungs — nothing to run".into(),
-        ));
-    }
     let mut prog = None;
     if file.elements <= MAX_ELEMENTS {
         let mcr = resolve::resolve(&file, &mut signals, &mut problems);
         prog = Some(lower::lower(&file, &signals, mcr, &mut problems));
+    }
+    if prog.as_ref().is_some_and(|p| p.stmts.is_empty()) && problems.is_empty() {
+        let why = if file.rungs.is_empty() {
+            "file: the PROGRAM has no rungs — nothing to run"
+        } else {
+            "file: no rung drives anything (a coil, a timer, a counter): only comments or contacts — nothing to run"
+        };
+        problems.push(Problem::file(0, why.into()));
     }
     match prog {
         Some(prog) if problems.is_empty() => Ok(prog),
@@ -94,11 +96,10 @@ pub fn read(text: &str, mut signals: Signals) -> Result<IecProgram, Reasons> {
 /// Each problem once, by rung and line.
 fn in_order(mut problems: Vec<Problem>) -> Vec<String> {
     problems.sort_by_key(|p| (p.rung, p.line));
-    let mut out: Vec<String> = Vec::with_capacity(problems.len());
-    for p in problems {
-        if !out.contains(&p.text) {
-            out.push(p.text);
-        }
-    }
-    out
+    let mut seen = std::collections::HashSet::new();
+    problems
+        .into_iter()
+        .filter(|p| seen.insert(p.text.clone()))
+        .map(|p| p.text)
+        .collect()
 }

@@ -90,7 +90,13 @@ pub(super) fn read(text: &str, problems: &mut Vec<Problem>) -> File {
     lines.next();
     let mut file = File::default();
     let mut program = false;
+    let mut stray = Stray::new(0, "is not a line of an LDmicro file (its header fields, IO LIST, VAR LIST, PULL-UP LIST, PROGRAM)", "that are not lines of an LDmicro file");
     while let Some((no, line)) = lines.next() {
+        if !header(line) && !matches!(line, "IO LIST" | "VAR LIST" | "PULL-UP LIST" | "PROGRAM") {
+            stray.add(no, line);
+            continue;
+        }
+        stray.flush(problems);
         match line {
             "IO LIST" => io_list(&mut lines, no, &mut file, problems),
             "VAR LIST" => section(&mut lines, no, line, var_line, problems),
@@ -99,13 +105,10 @@ pub(super) fn read(text: &str, problems: &mut Vec<Problem>) -> File {
                 program = true;
                 break;
             }
-            _ if header(line) => {}
-            _ => problems.push(Problem::file(no, format!(
-                "line {no}: '{}' is not a line of an LDmicro file (its header fields, IO LIST, VAR LIST, PULL-UP LIST, PROGRAM) — save the file again from LDmicro",
-                clip(line)
-            ))),
+            _ => {}
         }
     }
+    stray.flush(problems);
     if !program {
         problems.push(Problem::file(
             0,
@@ -113,20 +116,17 @@ pub(super) fn read(text: &str, problems: &mut Vec<Problem>) -> File {
         ));
         return file;
     }
+    let mut stray = Stray::new(1, "where a RUNG should begin", "where a RUNG should begin");
     while let Some((no, line)) = lines.next() {
         if is_rung(line) {
+            stray.flush(problems);
             rung(&mut lines, no, &mut file, problems);
+            stray.rung = file.rungs.len() + 1;
         } else {
-            problems.push(Problem::at(
-                file.rungs.len() + 1,
-                no,
-                format!(
-                    "line {no}: '{}' where a RUNG should begin — save the file again from LDmicro",
-                    clip(line)
-                ),
-            ));
+            stray.add(no, line);
         }
     }
+    stray.flush(problems);
     if file.elements > MAX_ELEMENTS {
         problems.push(Problem::file(0, format!(
             "file: {} elements; uTile reads up to {MAX_ELEMENTS} (its program holds 256 lines) — is it the right file?",
@@ -205,20 +205,21 @@ fn section(
     mut good: impl FnMut(&str) -> bool,
     problems: &mut Vec<Problem>,
 ) {
+    let one = format!("is not a line of the {what}");
+    let many = format!("that are not lines of the {what}");
+    let mut stray = Stray::new(0, &one, &many);
     for (no, line) in lines.by_ref() {
         if line == "END" {
+            stray.flush(problems);
             return;
         }
-        if !good(line) {
-            problems.push(Problem::file(
-                no,
-                format!(
-                "line {no}: '{}' is not a line of the {what} — save the file again from LDmicro",
-                clip(line)
-            ),
-            ));
+        if good(line) {
+            stray.flush(problems);
+        } else {
+            stray.add(no, line);
         }
     }
+    stray.flush(problems);
     problems.push(Problem::file(
         start,
         format!("line {start}: the {what} has no END — save the file again from LDmicro"),
@@ -306,5 +307,60 @@ fn node(kind: Kind, line: usize, words: Vec<String>) -> Node {
         line,
         children: Vec::new(),
         words,
+    }
+}
+
+/// A run of lines that are not understood, given as one problem (a file of them is one
+/// reason, not a million).
+struct Stray<'a> {
+    /// The rung the run is before (0: the file's).
+    rung: usize,
+    one: &'a str,
+    many: &'a str,
+    /// The run's first and last line, its length, its first line's text.
+    first: usize,
+    last: usize,
+    count: usize,
+    text: String,
+}
+
+impl<'a> Stray<'a> {
+    fn new(rung: usize, one: &'a str, many: &'a str) -> Stray<'a> {
+        Stray {
+            rung,
+            one,
+            many,
+            first: 0,
+            last: 0,
+            count: 0,
+            text: String::new(),
+        }
+    }
+
+    fn add(&mut self, no: usize, line: &str) {
+        if self.count == 0 {
+            self.first = no;
+            self.text = clip(line);
+        }
+        self.last = no;
+        self.count += 1;
+    }
+
+    fn flush(&mut self, problems: &mut Vec<Problem>) {
+        let (first, last, text) = (self.first, self.last, &self.text);
+        let what = match self.count {
+            0 => return,
+            1 => format!("line {first}: '{text}' {}", self.one),
+            n => format!(
+                "lines {first}–{last}: {n} lines {}, the first '{text}'",
+                self.many
+            ),
+        };
+        problems.push(Problem::at(
+            self.rung,
+            first,
+            format!("{what} — save the file again from LDmicro"),
+        ));
+        self.count = 0;
     }
 }
