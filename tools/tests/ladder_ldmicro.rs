@@ -55,12 +55,7 @@ fn a_0_2_file_runs_as_its_ladder_says() {
     for k in 0..100 {
         let events = random_events(&mut rng, 0x3F, until, 30);
         let engine = run(&prog, &events, until + TICK_MS, 4);
-        let mut r = fresh.clone();
-        let reference: Vec<u8> = engine
-            .iter()
-            .enumerate()
-            .map(|(t, s)| r.scan(t as u32, s.inputs))
-            .collect();
+        let reference = fresh.outputs(&engine);
         if let Some((t, e, r)) = disagreement(&engine, &reference) {
             panic!("timeline {k}: at {t} ms the engine's outputs are {e:08b}, LDmicro's {r:08b}\nevents: {events:?}\nlisting:\n{listing_text}");
         }
@@ -84,13 +79,7 @@ fn the_reference_sees_a_wrong_program() {
     let caught = (0..50).any(|_| {
         let events = random_events(&mut rng, 0x3F, 2000, 30);
         let engine = run(&prog, &events, 2000 + TICK_MS, 4);
-        let mut r = fresh.clone();
-        let reference: Vec<u8> = engine
-            .iter()
-            .enumerate()
-            .map(|(t, s)| r.scan(t as u32, s.inputs))
-            .collect();
-        disagreement(&engine, &reference).is_some()
+        disagreement(&engine, &fresh.outputs(&engine)).is_some()
     });
     assert!(caught);
 }

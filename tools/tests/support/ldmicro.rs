@@ -13,6 +13,8 @@
 
 use std::collections::HashMap;
 
+use super::ladder::Sample;
+
 /// A rung's node.
 #[derive(Clone, Debug)]
 enum El {
@@ -120,6 +122,16 @@ impl LdReference {
             }
         }
         out
+    }
+
+    /// The outputs of a fresh run, one scan a ms on the inputs the engine's scans saw.
+    pub fn outputs(&self, samples: &[Sample]) -> Vec<u8> {
+        let mut r = self.clone();
+        samples
+            .iter()
+            .enumerate()
+            .map(|(t, s)| r.scan(t as u32, s.inputs))
+            .collect()
     }
 
     fn bit(&self, name: &str) -> bool {
