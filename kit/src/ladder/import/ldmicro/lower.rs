@@ -262,85 +262,10 @@ impl Lowering<'_> {
                 let v = if negated { Expr::negate(v) } else { v };
                 Wire(Expr::and(p, v), size + 1)
             }
-            Element::Coil { name, kind } => {
-                let push = self.var(&name)?;
-                if pop_of(push).is_none() {
-                    return Err(format!(
-                        "{name} is an input and cannot be a coil — use a Y or R name"
-                    ));
-                }
-                self.share(&p);
-                let mode = match kind {
-                    CoilKind::Normal => CoilMode::Normal,
-                    CoilKind::Negated => CoilMode::Negated,
-                    CoilKind::Set => CoilMode::Set,
-                    CoilKind::Reset => CoilMode::Reset,
-                    CoilKind::Toggle => {
-                        self.read_once(&p, "T-trigger coil")?;
-                        // On the power's rising edge the name becomes its complement.
-                        let edge = self.push(Stmt::Trig {
-                            clk: p.clone(),
-                            rising: true,
-                        });
-                        let flip = Expr::Xor(Box::new(Expr::Var(push)), Box::new(edge));
-                        self.coil(flip, push, CoilMode::Normal);
-                        return Ok(Wire(p, size));
-                    }
-                };
-                self.coil(p.clone(), push, mode);
-                Wire(p, size)
-            }
-            Element::Timer { kind, name, us } => {
-                if self.timers.contains(&name) {
-                    return Err(format!(
-                        "timer {name} is used twice — give each timer its own name"
-                    ));
-                }
-                if kind == TimerKind::Ton {
-                    self.read_once(&p, "TON")?;
-                }
-                self.timers.push(name);
-                if us % 1000 != 0 || us / 1000 > u64::from(u32::MAX) {
-                    return Err(format!(
-                        "a delay of {us} µs is not whole ms — uTile's timers count 0.1 s or more; round it"
-                    ));
-                }
-                let out = self.push(Stmt::Timer {
-                    kind,
-                    input: p,
-                    pt_ms: (us / 1000) as u32,
-                    what: what.into(),
-                });
-                Wire(out, 1)
-            }
-            Element::Counter { name, max } => {
-                if self.counters.contains_key(&name) {
-                    return Err(format!(
-                        "counter {name} counts in two places — uTile's counters have one count input"
-                    ));
-                }
-                let out = self.push(Stmt::Counter {
-                    cu: p,
-                    reset: Expr::Const(false),
-                    pv: max,
-                    what: what.into(),
-                });
-                self.counters.insert(name, self.stmts.len() - 1);
-                Wire(out, 1)
-            }
-            Element::Reset { name } => {
-                let Some(&counter) = self.counters.get(&name) else {
-                    return Err(format!(
-                        "RES of {name}: uTile resets only a counter counted above it (CTU in an earlier rung) — move the CTU up, or drop the RES"
-                    ));
-                };
-                self.share(&p);
-                self.stmts.push(Stmt::CounterReset {
-                    counter,
-                    power: p.clone(),
-                });
-                Wire(p, size)
-            }
+            Element::Coil { name, kind } => self.coil_element(&name, kind, Wire(p, size))?,
+            Element::Timer { kind, name, us } => self.timer(kind, name, us, what, p)?,
+            Element::Counter { name, max } => self.counter(name, max, what, p)?,
+            Element::Reset { name } => self.reset(&name, Wire(p, size))?,
             Element::OneShot { rising } => {
                 self.read_once(&p, if rising { "OSR" } else { "OSF" })?;
                 Wire(self.push(Stmt::Trig { clk: p, rising }), 1)
@@ -365,6 +290,102 @@ impl Lowering<'_> {
                 Wire(p, size)
             }
         })
+    }
+
+    /// A coil: its statement(s); the power goes on.
+    fn coil_element(&mut self, name: &str, kind: CoilKind, power: Wire) -> Result<Wire, String> {
+        let Wire(p, size) = power;
+        let push = self.var(name)?;
+        if pop_of(push).is_none() {
+            return Err(format!(
+                "{name} is an input and cannot be a coil — use a Y or R name"
+            ));
+        }
+        self.share(&p);
+        let mode = match kind {
+            CoilKind::Normal => CoilMode::Normal,
+            CoilKind::Negated => CoilMode::Negated,
+            CoilKind::Set => CoilMode::Set,
+            CoilKind::Reset => CoilMode::Reset,
+            CoilKind::Toggle => {
+                self.read_once(&p, "T-trigger coil")?;
+                // On the power's rising edge the name becomes its complement.
+                let edge = self.push(Stmt::Trig {
+                    clk: p.clone(),
+                    rising: true,
+                });
+                let flip = Expr::Xor(Box::new(Expr::Var(push)), Box::new(edge));
+                self.coil(flip, push, CoilMode::Normal);
+                return Ok(Wire(p, size));
+            }
+        };
+        self.coil(p.clone(), push, mode);
+        Ok(Wire(p, size))
+    }
+
+    /// TON or TOF: the timer's statement; its Q goes on.
+    fn timer(
+        &mut self,
+        kind: TimerKind,
+        name: String,
+        us: u64,
+        what: &str,
+        p: Expr,
+    ) -> Result<Wire, String> {
+        if self.timers.contains(&name) {
+            return Err(format!(
+                "timer {name} is used twice — give each timer its own name"
+            ));
+        }
+        if kind == TimerKind::Ton {
+            self.read_once(&p, "TON")?;
+        }
+        self.timers.push(name);
+        if !us.is_multiple_of(1000) || us / 1000 > u64::from(u32::MAX) {
+            return Err(format!(
+                "a delay of {us} µs is not whole ms — uTile's timers count 0.1 s or more; round it"
+            ));
+        }
+        let out = self.push(Stmt::Timer {
+            kind,
+            input: p,
+            pt_ms: (us / 1000) as u32,
+            what: what.into(),
+        });
+        Ok(Wire(out, 1))
+    }
+
+    /// CTU: the counter's statement; its Q goes on.
+    fn counter(&mut self, name: String, max: u16, what: &str, p: Expr) -> Result<Wire, String> {
+        if self.counters.contains_key(&name) {
+            return Err(format!(
+                "counter {name} counts in two places — uTile's counters have one count input"
+            ));
+        }
+        let out = self.push(Stmt::Counter {
+            cu: p,
+            reset: Expr::Const(false),
+            pv: max,
+            what: what.into(),
+        });
+        self.counters.insert(name, self.stmts.len() - 1);
+        Ok(Wire(out, 1))
+    }
+
+    /// RES of a counter above; the power goes on.
+    fn reset(&mut self, name: &str, power: Wire) -> Result<Wire, String> {
+        let Wire(p, size) = power;
+        let Some(&counter) = self.counters.get(name) else {
+            return Err(format!(
+                "RES of {name}: uTile resets only a counter counted above it (CTU in an earlier rung) — move the CTU up, or drop the RES"
+            ));
+        };
+        self.share(&p);
+        self.stmts.push(Stmt::CounterReset {
+            counter,
+            power: p.clone(),
+        });
+        Ok(Wire(p, size))
     }
 
     fn var(&self, name: &str) -> Result<u8, String> {
