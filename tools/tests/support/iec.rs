@@ -9,7 +9,11 @@
 //! everything evaluated after it; a P or N contact is R_TRIG or F_TRIG on its variable, whose
 //! memory starts at the variable's value at start for an input (uTile reads its inputs at
 //! RUN, so an input already on is no edge) and at FALSE for the rest; CTU's count input
-//! starts as on (uTile counts no edge in the first scan).
+//! starts as on (uTile counts no edge in the first scan). A variable starts at its initial
+//! value (a BOOL's `initialValue`); an `externalVars` entry is the global of its name (its
+//! address). A wire back to a function block being evaluated (a loop, IEC's feedback) reads
+//! that block's output of its previous evaluation; each element is evaluated once a scan,
+//! so everything on the loop sees that one value.
 
 use std::collections::HashMap;
 use std::rc::Rc;
@@ -93,6 +97,8 @@ pub struct Reference {
     /// Per element: this scan's output (memo), the edge or block state.
     memo: Vec<Option<bool>>,
     eno: Vec<bool>,
+    /// Elements being evaluated this scan (a wire back to one is a loop).
+    busy: Vec<bool>,
     edge_mem: Vec<Option<bool>>,
     fb: Vec<FbState>,
     now: u32,
@@ -149,11 +155,14 @@ impl Reference {
         let doc = Document::parse(xml).unwrap();
         let mut names: Vec<String> = Vec::new();
         let mut pins = Vec::new();
+        let mut start = Vec::new();
         let mut consts: HashMap<String, String> = HashMap::new();
-        for v in doc
-            .descendants()
-            .filter(|n| n.tag_name().name() == "variable" && n.attribute("name").is_some())
-        {
+        for v in doc.descendants().filter(|n| {
+            n.tag_name().name() == "variable"
+                && n.attribute("name").is_some()
+                // An external is its global, declared with its address elsewhere.
+                && n.parent().map(|p| p.tag_name().name()) != Some("externalVars")
+        }) {
             let name = v.attribute("name").unwrap().to_string();
             let ty = child(v, "type")
                 .unwrap()
@@ -177,6 +186,11 @@ impl Reference {
                     Pin::Mem
                 });
                 names.push(name);
+                let init = v
+                    .descendants()
+                    .find(|n| n.tag_name().name() == "simpleValue")
+                    .and_then(|sv| sv.attribute("value"));
+                start.push(matches!(init, Some("TRUE" | "true" | "1")));
             } else if let Some(sv) = v
                 .descendants()
                 .find(|n| n.tag_name().name() == "simpleValue")
@@ -343,7 +357,8 @@ impl Reference {
         Reference {
             els: els.into(),
             sinks,
-            values: vec![false; pins.len()],
+            values: start,
+            busy: vec![false; n],
             pins,
             memo: vec![None; n],
             eno: vec![true; n],
@@ -368,6 +383,15 @@ impl Reference {
         if let Some(v) = self.memo[i] {
             return v;
         }
+        if self.busy[i] {
+            // IEC's feedback: the block's output of its previous evaluation.
+            assert!(
+                matches!(self.els[i], El::Fb { .. }),
+                "a loop through no function block"
+            );
+            return self.fb[i].q;
+        }
+        self.busy[i] = true;
         let els = Rc::clone(&self.els);
         let v = match &els[i] {
             El::Rail => true,
@@ -497,6 +521,7 @@ impl Reference {
                 self.fb[i].q
             }
         };
+        self.busy[i] = false;
         self.memo[i] = Some(v);
         v
     }

@@ -3,13 +3,12 @@
 //! sections, the rungs as trees, without recursion), resolving the names (`resolve.rs`:
 //! X and Y names to pins in the IO LIST's order, R names to memory bits) and lowering the
 //! rungs (`lower.rs`, with LDmicro's instruction set in `elements.rs`: every element is
-//! run or refused by name). [`decode`] reads the bytes: UTF-8 (with or without its BOM),
-//! else Windows-1252, as LDmicro writes on Windows.
+//! run or refused by name). The bytes are read as text by
+//! [`super::decode::utf8_or_windows_1252`] (LDmicro writes on Windows).
 //!
 //! Every problem is collected, then given once each, in the order of the rungs and lines.
 //! Delays are in µs.
 
-use std::borrow::Cow;
 use std::string::String;
 use std::vec::Vec;
 
@@ -47,19 +46,6 @@ impl Problem {
 
     fn at(rung: usize, line: usize, text: String) -> Problem {
         Problem { rung, line, text }
-    }
-}
-
-/// The text of an LDmicro file: UTF-8 (its BOM left out), else Windows-1252.
-pub fn decode(bytes: &[u8]) -> Cow<'_, str> {
-    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
-    match std::str::from_utf8(bytes) {
-        Ok(text) => Cow::Borrowed(text),
-        Err(_) => {
-            encoding_rs::WINDOWS_1252
-                .decode_without_bom_handling(bytes)
-                .0
-        }
     }
 }
 

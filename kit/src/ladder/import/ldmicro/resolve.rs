@@ -10,9 +10,6 @@ use super::text::{File, Kind};
 use super::Problem;
 use crate::ladder::import::Signals;
 
-/// The name of the master control relay's memory bit (no LDmicro name starts with `$`).
-pub(super) const MCR: &str = "$MCR";
-
 /// Declare every name the program's contacts and coils use; the master control relay's
 /// bit (its push opcode) if the program has one.
 pub(super) fn resolve(
@@ -49,7 +46,10 @@ pub(super) fn resolve(
     let memory: Vec<&str> = used
         .iter()
         .copied()
-        .filter(|n| n.starts_with('R') || signals.is_mapped(n))
+        .filter(|n| {
+            let key = n.to_ascii_uppercase();
+            n.starts_with('R') || signals.mapped().iter().any(|(m, _)| *m == key)
+        })
         .collect();
     for n in memory {
         if let Err(why) = signals.declare(n, None) {
@@ -59,13 +59,11 @@ pub(super) fn resolve(
     if !relay {
         return None;
     }
-    match signals.declare(MCR, None) {
-        Ok(()) => signals.get(MCR),
-        Err(_) => {
-            problems.push(Problem::file(0, "MASTER_RELAY: it needs a memory bit and uTile's 16 (U0..U7, V0..V7) are taken — map some relays to outputs with --map NAME=SIGNAL".into()));
-            None
-        }
+    let bit = signals.take_free_bit();
+    if bit.is_none() {
+        problems.push(Problem::file(0, "MASTER_RELAY: it needs a memory bit and uTile's 16 (U0..U7, V0..V7) are taken — map some relays to outputs with --map NAME=SIGNAL".into()));
     }
+    bit
 }
 
 /// The inputs at `%IX0.0`.., the outputs at `%QX0.0`..; past uTile's pins, said so.
