@@ -45,7 +45,10 @@ fn refused(name: &str, text: &[u8]) -> Vec<String> {
     // Several reasons end with their count.
     if lines.len() > 1 {
         let count = lines.pop().unwrap();
-        assert_eq!(count, format!("{} reasons, each above; nothing imported", lines.len()));
+        assert_eq!(
+            count,
+            format!("{} reasons, each above; nothing imported", lines.len())
+        );
     }
     lines
 }
