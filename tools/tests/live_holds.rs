@@ -87,11 +87,25 @@ impl Plant {
         self.live.unit(1)["state"].clone()
     }
 
-    /// Waits until uTile 1 runs freely again: how long after `since` it was seen so.
-    fn runs_again(&self, what: &str, since: Instant) -> Duration {
+    /// Holds uTile 1 through the API (no page) and waits until its card says held.
+    fn hold(&self) {
+        let (code, body) = self.scan(json!({"action": "hold"}));
+        assert_eq!(code, 200, "{body}");
+        self.live
+            .wait("uTile 1 held", T, |s| s["units"][0]["state"] == "held");
+    }
+
+    /// Waits until uTile 1 runs freely again, a lease of 10 s after `since` (at most `most`
+    /// after it).
+    fn runs_after_the_lease(&self, what: &str, since: Instant, most: Duration) {
         self.live
             .wait(what, T * 2, |s| s["units"][0]["state"] == "online");
-        since.elapsed()
+        let after = since.elapsed();
+        assert!(
+            after >= Duration::from_millis(9_500),
+            "{what}: after {after:?}"
+        );
+        assert!(after <= most, "{what}: only after {after:?}");
     }
 }
 
@@ -110,24 +124,14 @@ fn an_api_hold_with_no_page_open_stays_held_while_asked_and_ends_10_s_after() {
                 "the hold ended {i} × 4 s in, while asked"
             );
         }
-        let (code, body) = p.scan(json!({"action": "hold"}));
-        assert_eq!(code, 200, "{body}");
+        p.hold();
         last = Instant::now();
-        p.live
-            .wait("uTile 1 held", T, |s| s["units"][0]["state"] == "held");
         p.live.settled_scans(1, 3);
     }
     let outputs = rig_state(&p.socket)["outputs"].clone();
     // The script stops asking: 10 s after its last request, the uTile runs freely again.
-    let after = p.runs_again("uTile 1 runs again after the script's last request", last);
-    assert!(
-        after >= Duration::from_millis(9_500),
-        "ended after {after:?}"
-    );
-    assert!(
-        after <= Duration::from_secs(15),
-        "ended only after {after:?}"
-    );
+    let what = "uTile 1 runs again after the script's last request";
+    p.runs_after_the_lease(what, last, Duration::from_secs(15));
     assert_ne!(rig_state(&p.socket)["outputs"], outputs, "the scan runs");
 }
 
@@ -135,10 +139,7 @@ fn an_api_hold_with_no_page_open_stays_held_while_asked_and_ends_10_s_after() {
 fn a_step_of_10_whose_reply_is_lost_lands_exactly_once() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let p = Plant::start("holds-step-lost", true);
-    let (code, body) = p.scan(json!({"action": "hold"}));
-    assert_eq!(code, 200, "{body}");
-    p.live
-        .wait("uTile 1 held", T, |s| s["units"][0]["state"] == "held");
+    p.hold();
     let held = p.live.settled_scans(1, 3);
     // The step reaches the uTile, which runs its 10 scans; its answer is lost on the way back.
     p.between().lose_replies_to(1, &STEP_10, ECHO, 1);
@@ -170,40 +171,23 @@ fn a_hold_whose_replies_are_lost_still_ends_with_its_lease() {
         .wait("uTile 1 held", T, |s| s["units"][0]["state"] == "held");
     // utile live's polls renew the firmware's lease without end: utile live's own lease
     // must end the hold it recorded before the write went.
-    let after = p.runs_again("uTile 1 runs again after the lost hold's lease", asked);
-    assert!(
-        after >= Duration::from_millis(9_500),
-        "ended after {after:?}"
-    );
-    assert!(
-        after <= Duration::from_secs(16),
-        "ended only after {after:?}"
-    );
+    let what = "uTile 1 runs again after the lost hold's lease";
+    p.runs_after_the_lease(what, asked, Duration::from_secs(16));
 }
 
 #[test]
 fn a_run_lost_on_its_way_is_sent_again_until_the_utile_runs() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let p = Plant::start("holds-run-lost", true);
-    let (code, body) = p.scan(json!({"action": "hold"}));
-    assert_eq!(code, 200, "{body}");
+    p.hold();
     let asked = Instant::now();
-    p.live
-        .wait("uTile 1 held", T, |s| s["units"][0]["state"] == "held");
     // The lease's Run never reaches the uTile, twice.
     p.between().lose_requests(1, &RUN, 2);
-    let after = p.runs_again("uTile 1 runs again after its Run was lost twice", asked);
+    let what = "uTile 1 runs again after its Run was lost twice";
+    p.runs_after_the_lease(what, asked, Duration::from_secs(18));
     assert!(
         p.between().all_lost(Duration::ZERO),
         "the Runs were not lost"
-    );
-    assert!(
-        after >= Duration::from_millis(9_500),
-        "ended after {after:?}"
-    );
-    assert!(
-        after <= Duration::from_secs(18),
-        "ended only after {after:?}"
     );
     let writes: Vec<_> = p
         .between()
@@ -342,15 +326,8 @@ fn a_pages_hold_ends_10_s_after_the_page_closed() {
         held,
         "held as the page closes"
     );
-    let after = p.runs_again("uTile 1 runs again after its page closed", closed);
-    assert!(
-        after >= Duration::from_millis(9_500),
-        "ended after {after:?}"
-    );
-    assert!(
-        after <= Duration::from_secs(15),
-        "ended only after {after:?}"
-    );
+    let what = "uTile 1 runs again after its page closed";
+    p.runs_after_the_lease(what, closed, Duration::from_secs(15));
     assert_ne!(rig_state(&p.socket)["outputs"], held, "the scan runs");
 }
 
@@ -358,10 +335,7 @@ fn a_pages_hold_ends_10_s_after_the_page_closed() {
 fn utile_live_killed_while_held_the_lease_frees_the_utile_within_10_s() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let mut p = Plant::start("holds-killed", false);
-    let (code, body) = p.scan(json!({"action": "hold"}));
-    assert_eq!(code, 200, "{body}");
-    p.live
-        .wait("uTile 1 held", T, |s| s["units"][0]["state"] == "held");
+    p.hold();
     let socket = p.socket.clone();
     let held = rig_state(&socket)["outputs"].clone();
     // Held for 2 s while utile live polls (and so keeps the lease).
