@@ -101,6 +101,7 @@ impl Plant {
         self.live
             .wait(what, T * 2, |s| s["units"][0]["state"] == "online");
         let after = since.elapsed();
+        eprintln!("{what}: after {after:?}");
         assert!(
             after >= Duration::from_millis(9_500),
             "{what}: after {after:?}"
