@@ -701,9 +701,18 @@ def single(p, a):
     ask("kill")
     p.wait(1, "online", 0)
     p.wait_text('.card[data-unit="1"] .state', "offline")
+    step("a key typed while the port is closed: refused in words under the terminal, not kept")
+    p.tab("terminal")
+    p.page.click("#xterm")
+    p.page.keyboard.type("/")
+    p.wait_text("#terminal-refused", "keys not typed: the serial port is closed")
+    p.tab("plant")
     ask("start")
     p.wait(1, "online", 1, timeout=60_000)
     p.wait(1, "A6", 409)
+    p.fresh(1, pictures=20)
+    if p.page.get_attribute('.card[data-unit="1"] .state', "data-state") != "online":
+        fail("the key typed while the port was closed reached the uTile: its program stopped")
 
 
 def bus(p, a):

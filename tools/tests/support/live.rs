@@ -212,6 +212,52 @@ impl Live {
         }
     }
 
+    /// Snapshots of uTile `addr` taken so far, and the scan count in the latest.
+    pub fn scans(&self, addr: u64) -> (u64, u64) {
+        let u = self.unit(addr);
+        (
+            u["snapshots"].as_u64().unwrap_or(0),
+            u["values"]["scans"].as_u64().unwrap_or(0),
+        )
+    }
+
+    /// The scan count of uTile `addr` once `pictures` newer snapshots have come, each
+    /// showing the same count (asserted: the scan is held).
+    pub fn settled_scans(&self, addr: u64, pictures: u64) -> u64 {
+        let (seen, scans) = self.scans(addr);
+        self.wait("newer snapshots", Duration::from_secs(30), |s| {
+            s["units"].as_array().is_some_and(|u| {
+                u.iter().any(|u| {
+                    u["addr"] == addr && u["snapshots"].as_u64().unwrap_or(0) >= seen + pictures
+                })
+            })
+        });
+        let (_, now) = self.scans(addr);
+        assert_eq!(now, scans, "the scan count moved while held");
+        now
+    }
+
+    /// A page following the events (`GET /api/events`, `?page=NAME` when named), open while
+    /// the stream lives.
+    pub fn open_page(&self, page: Option<&str>) -> TcpStream {
+        let mut s = TcpStream::connect(self.http).expect("connect to the page's server");
+        let query = page.map(|p| format!("?page={p}")).unwrap_or_default();
+        write!(
+            s,
+            "GET /api/events{query} HTTP/1.1\r\nHost: {}\r\nAccept: text/event-stream\r\n\r\n",
+            self.http
+        )
+        .expect("ask for the events");
+        let mut head = [0u8; 512];
+        let n = s.read(&mut head).expect("the events' head");
+        assert!(
+            head[..n].starts_with(b"HTTP/1.1 200"),
+            "{}",
+            String::from_utf8_lossy(&head[..n])
+        );
+        s
+    }
+
     /// Waits until uTile `addr` shows `signal` = `value`.
     pub fn wait_value(&self, addr: u64, signal: &str, value: u64) -> Value {
         self.wait(
@@ -234,15 +280,48 @@ impl Drop for Live {
     }
 }
 
+/// The rig's state from the virtual Nano's control socket: no Modbus frame (which would
+/// renew a hold's lease).
+pub fn rig_state(socket: &Path) -> Value {
+    let mut stream = std::os::unix::net::UnixStream::connect(socket).expect("the rig's socket");
+    stream.write_all(b"{}\n").expect("ask the rig");
+    let mut line = String::new();
+    BufReader::new(stream)
+        .read_line(&mut line)
+        .expect("the rig's answer");
+    serde_json::from_str(&line).unwrap_or_else(|e| panic!("{e}: {line}"))
+}
+
 /// One HTTP/1.1 request, `Connection: close`: the status and the body as JSON (`Null` if the
 /// body is not JSON).
 pub fn request(addr: SocketAddr, method: &str, path: &str, body: Option<&[u8]>) -> (u16, Value) {
+    request_of(
+        addr,
+        method,
+        path,
+        "application/json",
+        body.unwrap_or_default(),
+    )
+}
+
+/// Keys typed by a script: `POST /api/terminal` with the bytes as they are.
+pub fn post_keys(addr: SocketAddr, keys: &[u8]) -> (u16, Value) {
+    request_of(
+        addr,
+        "POST",
+        "/api/terminal",
+        "application/octet-stream",
+        keys,
+    )
+}
+
+/// [`request`] with a body of content type `kind`.
+fn request_of(addr: SocketAddr, method: &str, path: &str, kind: &str, body: &[u8]) -> (u16, Value) {
     let mut s = TcpStream::connect(addr).expect("connect to utile live");
     s.set_read_timeout(Some(Duration::from_secs(15))).unwrap();
-    let body = body.unwrap_or_default();
     let head = format!(
         "{method} {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\
-         Content-Type: application/json\r\nContent-Length: {}\r\n\r\n",
+         Content-Type: {kind}\r\nContent-Length: {}\r\n\r\n",
         body.len()
     );
     s.write_all(head.as_bytes()).unwrap();

@@ -13,12 +13,15 @@
 //! - [`ldmicro`]: a reference evaluator of LDmicro's rungs, scan by scan (`ladder_ldmicro`);
 //! - [`live`]: `utile live` on the virtual Nano, an HTTP client for its API, a raw Modbus
 //!   TCP client (`live_*`);
+//! - [`between`]: a line between `utile live` and the virtual Nano that loses the replies or
+//!   requests a test tells it to (`live_holds`);
 //! - [`mqtt`]: mosquitto on loopback (password file, TLS listener, certificates), an MQTT
 //!   client that subscribes and publishes (`live_mqtt`).
 //!
 //! Each test binary uses only part of it.
 #![allow(dead_code, unused_imports)]
 
+pub mod between;
 pub mod iec;
 pub mod ladder;
 pub mod ldmicro;
