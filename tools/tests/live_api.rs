@@ -877,7 +877,8 @@ fn open_page(live: &Live) -> TcpStream {
     let mut s = TcpStream::connect(live.http).expect("connect to the page's server");
     write!(
         s,
-        "GET /api/events HTTP/1.1\r\nHost: test\r\nAccept: text/event-stream\r\n\r\n"
+        "GET /api/events HTTP/1.1\r\nHost: {}\r\nAccept: text/event-stream\r\n\r\n",
+        live.http
     )
     .expect("ask for the events");
     let mut head = [0u8; 512];

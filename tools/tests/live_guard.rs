@@ -15,49 +15,17 @@ use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use serde_json::Value;
-
-use support::live::{mbap, tank_with_remote, Live, NanoSpec, UTILE};
+use support::live::{exchange, mbap, tank_with_remote, Answer, Live, NanoSpec, UTILE};
 use support::vnano::scratch;
 
 const T: Duration = Duration::from_secs(30);
 
-/// An answer: status, headers (lower-case names), body as JSON (`Null` if not).
-struct Answer {
-    status: u16,
-    head: String,
-    body: Value,
-}
-
-/// One HTTP/1.1 request with extra header lines.
+/// One HTTP/1.1 request (Host, and a JSON body) with extra header lines.
 fn http(addr: SocketAddr, method: &str, path: &str, headers: &[&str], body: &str) -> Answer {
-    let mut s = TcpStream::connect(addr).expect("connect");
-    s.set_read_timeout(Some(Duration::from_secs(15))).unwrap();
-    let mut head = format!(
-        "{method} {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\
-         Content-Type: application/json\r\nContent-Length: {}\r\n",
-        body.len()
-    );
-    for h in headers {
-        head.push_str(h);
-        head.push_str("\r\n");
-    }
-    head.push_str("\r\n");
-    s.write_all(head.as_bytes()).unwrap();
-    s.write_all(body.as_bytes()).unwrap();
-    let mut got = Vec::new();
-    let _ = s.read_to_end(&mut got);
-    let text = String::from_utf8_lossy(&got).into_owned();
-    let (head, body) = text.split_once("\r\n\r\n").unwrap_or((&text, ""));
-    Answer {
-        status: head
-            .split_whitespace()
-            .nth(1)
-            .and_then(|c| c.parse().ok())
-            .unwrap_or(0),
-        head: head.to_ascii_lowercase(),
-        body: serde_json::from_str(body).unwrap_or(Value::Null),
-    }
+    let host = format!("Host: {addr}");
+    let mut all = vec![host.as_str(), "Content-Type: application/json"];
+    all.extend_from_slice(headers);
+    exchange(addr, method, path, &all, body.as_bytes())
 }
 
 /// `utile live` on a port that does not exist (no uTile needed: the rules are the server's)

@@ -59,6 +59,9 @@ pub enum ApiError {
     /// `--read-only`, for keys.
     #[error("read-only: keys are refused")]
     ReadOnlyKeys,
+    /// Keys sent as JSON that is not `{"keys": "…"}`.
+    #[error("keys as JSON are {{\"keys\": \"EX0\\r\"}}: {0}")]
+    KeysBody(String),
     /// The line's owner is gone.
     #[error("the line has stopped")]
     LineStopped,
@@ -98,6 +101,7 @@ impl ApiError {
             ApiError::BadAddress(_)
             | ApiError::BadPath(_)
             | ApiError::NotANumber(_)
+            | ApiError::KeysBody(_)
             | ApiError::Refused(_) => StatusCode::BAD_REQUEST,
             ApiError::BadBody { status, .. } => *status,
             ApiError::ReadOnly | ApiError::ReadOnlyKeys => StatusCode::FORBIDDEN,
@@ -188,6 +192,14 @@ pub struct WriteDone {
     pub waited_ms: f64,
     /// Its time on the line, ms.
     pub on_line_ms: f64,
+}
+
+/// `POST /api/terminal`'s body as JSON (`Content-Type: application/json`): the keys as text.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KeysBody {
+    /// What is typed, e.g. `"EX0\r"`.
+    pub keys: String,
 }
 
 /// Keys sent.

@@ -11,18 +11,19 @@ use axum::body::Bytes;
 use axum::extract::rejection::{JsonRejection, PathRejection};
 use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
 use axum::extract::{Path, State};
-use axum::http::{header, Method, StatusCode, Uri};
+use axum::http::{header, HeaderMap, Method, StatusCode, Uri};
 use axum::response::sse::{Event, KeepAlive, Sse};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
 use axum::{Json, Router};
 use futures_util::stream::{self, Stream};
 
-use super::api::{ApiError, KeysSent, TrendDoc, WriteBody, WriteDone};
+use super::api::{ApiError, KeysBody, KeysSent, TrendDoc, WriteBody, WriteDone};
 use super::assets;
 use super::check;
 use super::hub::{Hub, Input};
 use super::ladder;
+use super::origin::{self, Door};
 use super::queue::{Done, Job, Origin};
 use super::rig;
 use super::rtu;
@@ -37,8 +38,9 @@ const EVENT_GAP: Duration = Duration::from_millis(20);
 /// The longest a page's write waits for the line.
 const WRITE_WAIT: Duration = Duration::from_secs(5);
 
-/// The routes: one line each (hold and step, a program sent, a rig panel go here too).
-pub fn router(hub: Arc<Hub>) -> Router {
+/// The routes: one line each (hold and step, a program sent, a rig panel go here too), behind
+/// `door`'s rules (`origin.rs`: what another web page could send is refused first).
+pub fn router(hub: Arc<Hub>, door: Door) -> Router {
     Router::new()
         .route("/api/state", get(state))
         .route("/api/events", get(events))
@@ -54,6 +56,10 @@ pub fn router(hub: Arc<Hub>) -> Router {
         .fallback(file)
         .method_not_allowed_fallback(wrong_method)
         .with_state(hub)
+        .layer(axum::middleware::from_fn_with_state(
+            Arc::new(door),
+            origin::check,
+        ))
 }
 
 /// Serializes each new view once (at most one per [`EVENT_GAP`]) for every page that
@@ -255,13 +261,27 @@ async fn trend(
     }))
 }
 
-/// `POST /api/terminal`: the body's bytes typed into the terminal (for scripts).
-async fn keys(State(hub): State<Arc<Hub>>, body: Bytes) -> Result<Json<KeysSent>, ApiError> {
+/// `POST /api/terminal`: the body's bytes typed into the terminal (for scripts), or with
+/// `Content-Type: application/json` the text of `{"keys": "…"}` (the door lets no other type
+/// through).
+async fn keys(
+    State(hub): State<Arc<Hub>>,
+    headers: HeaderMap,
+    body: Bytes,
+) -> Result<Json<KeysSent>, ApiError> {
     if hub.read_only {
         return Err(ApiError::ReadOnlyKeys);
     }
+    let keys = if origin::keys_as_json(&headers) {
+        serde_json::from_slice::<KeysBody>(&body)
+            .map_err(|e| ApiError::KeysBody(e.to_string()))?
+            .keys
+            .into_bytes()
+    } else {
+        body.to_vec()
+    };
     hub.inputs
-        .send(Input::Keys(body.to_vec()))
+        .send(Input::Keys(keys))
         .map_err(|_| ApiError::LineStopped)?;
     Ok(Json(KeysSent { ok: true }))
 }
