@@ -2,8 +2,8 @@
 //! object a line) worked from the page. A task keeps the socket open (and opens it again when
 //! the virtual Nano restarts), asks the rig's state every [`ASK_EVERY`] and carries out the
 //! page's requests: `POST /api/units/{addr}/rig` takes the socket's own JSON (`{"press": 0}`,
-//! `{"release": 0}`, `{"a6": 2.5}`, `{"d8": true}`, `{"reset": true}`, `{}`) and answers the
-//! rig's state after it. The line's owner publishes the latest [`RigView`] with its view
+//! `{"release": 0}`, `{"a6": 2.5}`, `{"d8": true}`, `{"reset": true}`, `{}`: the socket's
+//! [`RigRequest`], the one struct both ends use) and answers the rig's state after it. The line's owner publishes the latest [`RigView`] with its view
 //! (`/api/state`'s `rig`), so the page shows its rig panel only while a rig answers.
 //!
 //! On a bus (`cargo nano --bus N --control PATH`) the socket serves N Nanos, Nano k being
@@ -29,6 +29,7 @@ use tokio::sync::{mpsc, oneshot, watch};
 
 use super::api::{ApiError, ErrorDoc};
 use super::hub::Hub;
+use crate::vnano::control::RigRequest;
 
 /// How often the rig's state is asked when the page asks nothing (the plant and the
 /// terminal's rig keys move it too).
@@ -82,7 +83,7 @@ pub struct RigView {
 }
 
 /// One request for the rig and where its answer goes.
-type Request = (Value, oneshot::Sender<Result<RigState, RigError>>);
+type Request = (RigRequest, oneshot::Sender<Result<RigState, RigError>>);
 
 /// The rig's client: its requests and its latest view.
 pub struct Rig {
@@ -140,7 +141,7 @@ impl Rig {
     }
 
     /// Carries `request` out on the rig: its state after it.
-    pub async fn ask(&self, request: Value) -> Result<RigState, RigError> {
+    pub async fn ask(&self, request: RigRequest) -> Result<RigState, RigError> {
         let (tx, rx) = oneshot::channel();
         self.requests
             .send((request, tx))
@@ -170,9 +171,12 @@ pub enum RigError {
     /// The socket does not answer.
     #[error("the rig does not answer: {0}")]
     NotConnected(String),
-    /// The body is no JSON object.
-    #[error("a rig request is one JSON object, e.g. {{\"press\": 0}}")]
-    NotAnObject,
+    /// The body is no rig request.
+    #[error(
+        "a rig request is one JSON object of press, release (switches 0..5), a6, a7 (volts), \
+         d8, d9 (true or false), reset, e.g. {{\"press\": 0}}: {0}"
+    )]
+    NotARequest(String),
     /// The page named the Nano itself.
     #[error("the uTile's address picks its Nano: leave \"nano\" out")]
     NanoGiven,
@@ -198,7 +202,7 @@ impl IntoResponse for RigError {
             RigError::Api(e) => e.status(),
             RigError::NoRig | RigError::NoNano { .. } => StatusCode::NOT_FOUND,
             RigError::NotConnected(_) => StatusCode::SERVICE_UNAVAILABLE,
-            RigError::NotAnObject | RigError::NanoGiven | RigError::Refused(_) => {
+            RigError::NotARequest(_) | RigError::NanoGiven | RigError::Refused(_) => {
                 StatusCode::BAD_REQUEST
             }
             RigError::NoAnswer => StatusCode::GATEWAY_TIMEOUT,
@@ -278,7 +282,7 @@ async fn serve(
     let mut nanos: Vec<RigState> = Vec::new();
     let mut tick = tokio::time::interval(ASK_EVERY);
     loop {
-        let asks: Vec<(Value, Option<_>)> = tokio::select! {
+        let asks: Vec<(RigRequest, Option<_>)> = tokio::select! {
             r = rx.recv() => match r {
                 Some((request, reply)) => vec![(request, Some(reply))],
                 None => return "utile live is stopping".into(),
@@ -324,11 +328,10 @@ async fn serve(
 
 /// The periodic request for Nano `k` of `count`: `{}` for a single one (or before the first
 /// answer), `{"nano": k}` on a bus.
-fn ask_of(k: usize, count: usize) -> Value {
-    if count > 1 {
-        serde_json::json!({ "nano": k })
-    } else {
-        serde_json::json!({})
+fn ask_of(k: usize, count: usize) -> RigRequest {
+    RigRequest {
+        nano: (count > 1).then(|| u8::try_from(k).unwrap_or(u8::MAX)),
+        ..RigRequest::default()
     }
 }
 
@@ -341,9 +344,9 @@ struct Socket<'a> {
 
 impl Socket<'_> {
     /// Sends one request line and reads its answer; why not, in words.
-    async fn exchange(&mut self, request: &Value) -> Result<String, String> {
+    async fn exchange(&mut self, request: &RigRequest) -> Result<String, String> {
         let name = self.name;
-        let mut text = request.to_string();
+        let mut text = serde_json::to_string(request).map_err(|e| format!("{name}: {e}"))?;
         text.push('\n');
         if let Err(e) = self.write.write_all(text.as_bytes()).await {
             return Err(format!("{name}: {e}"));
@@ -364,19 +367,21 @@ impl Socket<'_> {
 pub async fn post(
     State(hub): State<Arc<Hub>>,
     addr: Result<Path<u8>, PathRejection>,
-    body: Result<Json<Value>, JsonRejection>,
+    body: Result<Json<RigRequest>, JsonRejection>,
 ) -> Result<Json<RigState>, RigError> {
     let Path(addr) = addr.map_err(ApiError::from)?;
     hub.view().unit(addr).ok_or(ApiError::NoUnit(addr))?;
-    let Json(body) = body.map_err(ApiError::from)?;
+    let Json(mut request) = body.map_err(|r| match r {
+        JsonRejection::JsonDataError(_) | JsonRejection::JsonSyntaxError(_) => {
+            RigError::NotARequest(r.body_text())
+        }
+        other => ApiError::from(other).into(),
+    })?;
     if hub.read_only {
         return Err(ApiError::ReadOnly.into());
     }
     let rig = hub.rig.as_ref().ok_or(RigError::NoRig)?;
-    let Value::Object(mut request) = body else {
-        return Err(RigError::NotAnObject);
-    };
-    if request.contains_key("nano") {
+    if request.nano.is_some() {
         return Err(RigError::NanoGiven);
     }
     let view = rig.view();
@@ -388,9 +393,9 @@ pub async fn post(
         nanos: view.nanos.len(),
     })?;
     if view.nanos.len() > 1 {
-        request.insert("nano".into(), nano.into());
+        request.nano = Some(nano);
     }
-    Ok(Json(rig.ask(Value::Object(request)).await?))
+    Ok(Json(rig.ask(request).await?))
 }
 
 #[cfg(test)]
