@@ -207,6 +207,72 @@ fn public_read_opens_reads_only_and_a_token_file_gives_the_token() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("at least 16"));
 }
 
+/// `utile live` beyond loopback with `token` in its `--token-file`: whether it started (it
+/// is stopped at once), and its console.
+fn start_with_token(dir: &Path, token: &str) -> (bool, String) {
+    let file = dir.join("token");
+    std::fs::write(&file, format!("{token}\n")).unwrap();
+    let mut child = Command::new(UTILE)
+        .args([
+            "live",
+            "--port",
+            "/nonexistent/x",
+            "--http",
+            "0.0.0.0:0",
+            "--no-tcp",
+        ])
+        .arg("--token-file")
+        .arg(&file)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut err = child.stderr.take().unwrap();
+    // It ends at once when it refuses; started, it prints its page's URL with the token.
+    let mut said = String::new();
+    let mut buf = [0u8; 4096];
+    let t0 = Instant::now();
+    while !said.contains("?token=") && t0.elapsed() < T {
+        match err.read(&mut buf) {
+            Ok(0) | Err(_) => break,
+            Ok(n) => said.push_str(&String::from_utf8_lossy(&buf[..n])),
+        }
+    }
+    let started = said.contains("?token=");
+    let _ = child.kill();
+    let status = child.wait().unwrap();
+    assert!(
+        started || !status.success(),
+        "refused, yet it ended well: {said}"
+    );
+    (started, said)
+}
+
+#[test]
+fn a_token_with_characters_the_url_paste_or_cookie_would_change_is_refused_at_start() {
+    let dir = scratch("guard-token-characters");
+    let (started, said) = start_with_token(&dir, "A-Token_of.its~own-42");
+    assert!(started, "{said}");
+    assert!(said.contains("?token=A-Token_of.its~own-42"), "{said}");
+    for bad in [
+        "token+with+plus+signs",
+        "token&with=a&query-x",
+        "token%41percent-xxxx",
+        "token#with-a-hash-xx",
+        "token\"quoted\"-xxxxx",
+        "token,with,commas-xx",
+        "token\\backslash-xxxx",
+    ] {
+        let (started, said) = start_with_token(&dir, bad);
+        assert!(!started, "{bad} was taken: {said}");
+        assert!(
+            said.contains("a letter (A-Z, a-z), a digit, '-', '.', '_' or '~'"),
+            "{bad}: {said}"
+        );
+    }
+}
+
 #[test]
 fn the_gateway_beyond_loopback_takes_only_the_allowed_networks() {
     // Without --tcp-allow it does not start.
