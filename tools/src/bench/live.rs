@@ -59,10 +59,25 @@ fn program() -> utile_core::engine::Program {
 
 /// The virtual Nano (`units` of them on a bus when more than one), autostarting the program.
 pub(crate) fn start_nano(dir: &Path, link: &Path, units: usize) -> Result<Child, BenchError> {
-    spawn_nano(dir, link, units).map_err(BenchError::Live)
+    start_nano_with(dir, link, units, &program())
 }
 
-fn spawn_nano(dir: &Path, link: &Path, units: usize) -> Result<Child, String> {
+/// The virtual Nano as [`start_nano`] starts it, autostarting `prog`.
+pub(crate) fn start_nano_with(
+    dir: &Path,
+    link: &Path,
+    units: usize,
+    prog: &utile_core::engine::Program,
+) -> Result<Child, BenchError> {
+    spawn_nano(dir, link, units, prog).map_err(BenchError::Live)
+}
+
+fn spawn_nano(
+    dir: &Path,
+    link: &Path,
+    units: usize,
+    prog: &utile_core::engine::Program,
+) -> Result<Child, String> {
     let vnano = std::env::current_exe()
         .map_err(|e| e.to_string())?
         .with_file_name("vnano");
@@ -72,7 +87,7 @@ fn spawn_nano(dir: &Path, link: &Path, units: usize) -> Result<Child, String> {
             vnano.display()
         ));
     }
-    let eeprom = stored_eeprom(&program(), 1).map_err(|e| format!("STORE: {e:?}"))?;
+    let eeprom = stored_eeprom(prog, 1).map_err(|e| format!("STORE: {e:?}"))?;
     let ee = dir.join("live-bench.eeprom");
     std::fs::write(&ee, eeprom).map_err(|e| e.to_string())?;
     let elf = utile_kit::setup::firmware_elf();
