@@ -367,16 +367,16 @@ impl Socket<'_> {
 pub async fn post(
     State(hub): State<Arc<Hub>>,
     addr: Result<Path<u8>, PathRejection>,
-    body: Result<Json<RigRequest>, JsonRejection>,
+    body: Result<Json<Value>, JsonRejection>,
 ) -> Result<Json<RigState>, RigError> {
     let Path(addr) = addr.map_err(ApiError::from)?;
     hub.view().unit(addr).ok_or(ApiError::NoUnit(addr))?;
-    let Json(mut request) = body.map_err(|r| match r {
-        JsonRejection::JsonDataError(_) | JsonRejection::JsonSyntaxError(_) => {
-            RigError::NotARequest(r.body_text())
-        }
-        other => ApiError::from(other).into(),
-    })?;
+    let Json(body) = body.map_err(ApiError::from)?;
+    // Read as the socket reads it (a JSON array would make a struct by position).
+    let Value::Object(fields) = body else {
+        return Err(RigError::NotARequest(format!("not {body}")));
+    };
+    let mut request = RigRequest::from_object(&fields).map_err(RigError::NotARequest)?;
     if hub.read_only {
         return Err(ApiError::ReadOnly.into());
     }

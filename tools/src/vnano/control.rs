@@ -67,6 +67,7 @@ pub struct RigRequest {
 
 impl RigRequest {
     /// The request a JSON object makes, or why not in words, naming the field at fault.
+    /// Always read from an object: serde would take a JSON array as the fields by position.
     pub fn from_object(fields: &serde_json::Map<String, Value>) -> Result<RigRequest, String> {
         RigRequest::deserialize(Value::Object(fields.clone())).map_err(|e| {
             // serde names no field for a wrong value: try each alone to say which.
@@ -323,4 +324,35 @@ pub fn state(nano: &Chip, analog_mv: &[u32; 2]) -> Value {
         "outputs": leds,
         "seconds": nano.seconds(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn object(text: &str) -> serde_json::Map<String, Value> {
+        match serde_json::from_str(text).unwrap() {
+            Value::Object(m) => m,
+            other => panic!("{other}"),
+        }
+    }
+
+    #[test]
+    fn a_request_is_written_and_read_by_its_field_names() {
+        assert_eq!(serde_json::to_string(&RigRequest::default()).unwrap(), "{}");
+        let press = RigRequest {
+            nano: Some(2),
+            press: Some(0),
+            ..RigRequest::default()
+        };
+        let text = serde_json::to_string(&press).unwrap();
+        assert_eq!(text, r#"{"nano":2,"press":0}"#);
+        assert_eq!(RigRequest::from_object(&object(&text)).unwrap(), press);
+        let e = RigRequest::from_object(&object(r#"{"a6": 1.0, "press": 300}"#)).unwrap_err();
+        assert!(e.starts_with("press: "), "{e}");
+        let e = RigRequest::from_object(&object(r#"{"d8": 1}"#)).unwrap_err();
+        assert!(e.starts_with("d8: "), "{e}");
+        let e = RigRequest::from_object(&object(r#"{"prss": 1}"#)).unwrap_err();
+        assert!(e.starts_with("unknown field `prss`"), "{e}");
+    }
 }
