@@ -188,23 +188,8 @@ fn public_read_opens_reads_only_and_a_token_file_gives_the_token() {
     drop(live);
 
     // A token file with too short a token is refused at start.
-    std::fs::write(&file, "short\n").unwrap();
-    let out = Command::new(UTILE)
-        .args([
-            "live",
-            "--port",
-            "/nonexistent/x",
-            "--http",
-            "0.0.0.0:0",
-            "--no-tcp",
-        ])
-        .arg("--token-file")
-        .arg(&file)
-        .stdin(Stdio::null())
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("at least 16"));
+    let (started, said) = start_with_token(&dir, "short");
+    assert!(!started && said.contains("at least 16"), "{said}");
 }
 
 /// `utile live` beyond loopback with `token` in its `--token-file`: whether it started (it

@@ -65,14 +65,13 @@ fn connect(socket: &Path) -> (UnixStream, BufReader<UnixStream>) {
     (stream, reader)
 }
 
-#[test]
-fn a_client_presses_a0_and_the_pin_and_the_program_follow() {
-    // Y0 is A0 as the program reads it: a pressed switch pulls its pin low.
-    let prog = listing::commands(&["A0.", ".Y0", "A0.", "!", ".Y1", "END"]);
-    let ee = eeprom_file("control.eeprom", &prog);
-    let socket = scratch("control").join("rig.sock");
+/// A virtual Nano autostarting the program of `words`, its rig on a control socket in a
+/// scratch folder named `name`: the Nano and the socket's path.
+fn running_with_control(name: &str, words: &[&str]) -> (PtyNano, std::path::PathBuf) {
+    let ee = eeprom_file(&format!("{name}.eeprom"), &listing::commands(words));
+    let socket = scratch(name).join("rig.sock");
     let elf = firmware_elf();
-    let _n = PtyNano::start(&[
+    let nano = PtyNano::start(&[
         "--elf",
         elf.to_str().unwrap(),
         "--eeprom",
@@ -81,6 +80,13 @@ fn a_client_presses_a0_and_the_pin_and_the_program_follow() {
         "--control",
         socket.to_str().unwrap(),
     ]);
+    (nano, socket)
+}
+
+#[test]
+fn a_client_presses_a0_and_the_pin_and_the_program_follow() {
+    // Y0 is A0 as the program reads it: a pressed switch pulls its pin low.
+    let (_n, socket) = running_with_control("control", &["A0.", ".Y0", "A0.", "!", ".Y1", "END"]);
     let (mut stream, mut reader) = connect(&socket);
     let free = until(&mut stream, &mut reader, "running", |s| {
         s["outputs"][0] != s["outputs"][1]
@@ -290,19 +296,7 @@ fn a_path_that_is_no_free_socket_is_refused_and_left_as_it_was() {
 
 #[test]
 fn an_over_long_line_is_discarded_to_its_newline_and_answered_with_an_error() {
-    let prog = listing::commands(&["A0.", ".Y0", "END"]);
-    let ee = eeprom_file("control-long.eeprom", &prog);
-    let socket = scratch("control-long").join("rig.sock");
-    let elf = firmware_elf();
-    let _n = PtyNano::start(&[
-        "--elf",
-        elf.to_str().unwrap(),
-        "--eeprom",
-        ee.to_str().unwrap(),
-        "--d8-low",
-        "--control",
-        socket.to_str().unwrap(),
-    ]);
+    let (_n, socket) = running_with_control("control-long", &["A0.", ".Y0", "END"]);
     let (mut stream, mut reader) = connect(&socket);
     assert_eq!(ask(&mut stream, &mut reader, "{}")["switches"][0], false);
     // 1,100 bytes of a line without its end; a second client's answer proves the virtual
