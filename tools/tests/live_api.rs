@@ -766,7 +766,10 @@ fn the_rig_through_the_api_presses_a0_and_moves_a6() {
     assert_eq!(live.post("/api/units/1/rig", &json!({})).1["a6"], 1.0);
     let (code, body) = live.post("/api/units/1/rig", &json!([1, 2]));
     assert_eq!(code, 400, "{body}");
-    assert!(body["error"].as_str().unwrap().contains("one JSON object"));
+    assert!(
+        body["error"].as_str().unwrap().contains("one JSON object"),
+        "{body}"
+    );
     let (code, body) = live.post("/api/units/7/rig", &json!({"press": 0}));
     assert_eq!(code, 404, "{body}");
     assert_eq!(body["error"], "no uTile 7 on this line");

@@ -61,10 +61,25 @@ fn program() -> utile_core::engine::Program {
 
 /// The virtual Nano (`units` of them on a bus when more than one), autostarting the program.
 pub(crate) fn start_nano(dir: &Path, link: &Path, units: usize) -> Result<Child, BenchError> {
-    spawn_nano(dir, link, units).map_err(BenchError::Live)
+    start_nano_with(dir, link, units, &program())
 }
 
-fn spawn_nano(dir: &Path, link: &Path, units: usize) -> Result<Child, String> {
+/// The virtual Nano as [`start_nano`] starts it, autostarting `prog`.
+pub(crate) fn start_nano_with(
+    dir: &Path,
+    link: &Path,
+    units: usize,
+    prog: &utile_core::engine::Program,
+) -> Result<Child, BenchError> {
+    spawn_nano(dir, link, units, prog).map_err(BenchError::Live)
+}
+
+fn spawn_nano(
+    dir: &Path,
+    link: &Path,
+    units: usize,
+    prog: &utile_core::engine::Program,
+) -> Result<Child, String> {
     let vnano = std::env::current_exe()
         .map_err(|e| e.to_string())?
         .with_file_name("vnano");
@@ -74,7 +89,7 @@ fn spawn_nano(dir: &Path, link: &Path, units: usize) -> Result<Child, String> {
             vnano.display()
         ));
     }
-    let eeprom = stored_eeprom(&program(), 1).map_err(|e| format!("STORE: {e:?}"))?;
+    let eeprom = stored_eeprom(prog, 1).map_err(|e| format!("STORE: {e:?}"))?;
     let ee = dir.join("live-bench.eeprom");
     std::fs::write(&ee, eeprom).map_err(|e| e.to_string())?;
     let elf = utile_kit::setup::firmware_elf();
@@ -340,7 +355,7 @@ fn post(http: std::net::SocketAddr, path: &str, body: &str) -> Result<(), String
     s.set_nodelay(true).map_err(|e| e.to_string())?;
     write!(
         s,
-        "POST {path} HTTP/1.1\r\nHost: bench\r\nContent-Type: application/json\r\n\
+        "POST {path} HTTP/1.1\r\nHost: {http}\r\nContent-Type: application/json\r\n\
          Content-Length: {}\r\nConnection: close\r\n\r\n{body}",
         body.len()
     )

@@ -173,6 +173,25 @@ fn shown(seen: &[u8], from: usize) -> String {
     joined.get(skip..).unwrap_or(&joined).to_string()
 }
 
+/// READ's answer, up to the [`FOR_MENU`] that ends it: the file taken, or refused with the
+/// reason between [`READ_ERROR`] and [`FOR_MENU`]. Bytes garbled on the line (a reason lost,
+/// the two texts overlapping) make a strange answer in words, never a slice out of range.
+fn read_answer(answer: &[u8]) -> Result<(), LinkError> {
+    if find(answer, READ_DONE).is_some() {
+        return Ok(());
+    }
+    let why = find(answer, READ_ERROR).and_then(|at| {
+        let end = answer.len().checked_sub(FOR_MENU.len())?;
+        answer.get(at + READ_ERROR.len()..end)
+    });
+    match why {
+        Some(why) if !why.is_empty() => Err(LinkError::Refused(
+            String::from_utf8_lossy(why).into_owned(),
+        )),
+        _ => Err(LinkError::StrangeAnswer(shown(answer, 0))),
+    }
+}
+
 impl Session {
     /// Opens `path`, waits out the boot loader and finds the editor's page. Refuses a
     /// running program unless `opts.stop`, and says so when nothing answers.
@@ -397,18 +416,10 @@ impl Session {
         let Some((_, end)) = self.port.wait_for(from, &[FOR_MENU], self.waits.drawn)? else {
             return Err(LinkError::NotConfirmed(shown(&self.port.seen, from)));
         };
-        let answer = &self.port.seen[from..end];
-        let result = if find(answer, READ_DONE).is_some() {
+        let result = read_answer(&self.port.seen[from..end]);
+        if result.is_ok() {
             progress("READ took the file");
-            Ok(())
-        } else if let Some(at) = find(answer, READ_ERROR) {
-            let why = &answer[at + READ_ERROR.len()..answer.len() - FOR_MENU.len()];
-            Err(LinkError::Refused(
-                String::from_utf8_lossy(why).into_owned(),
-            ))
-        } else {
-            Err(LinkError::StrangeAnswer(shown(answer, 0)))
-        };
+        }
         self.back_to_page(progress)?;
         result?;
         Ok(hex)
@@ -517,6 +528,29 @@ mod tests {
             return false;
         };
         t < p && out.ends_with(b"H") && out.len() - p <= PARK.len() + 3
+    }
+
+    #[test]
+    fn a_garbled_read_answer_is_told_in_words_never_a_panic() {
+        let refused = [READ_ERROR, b"checksum", FOR_MENU].concat();
+        assert!(matches!(read_answer(&refused), Err(LinkError::Refused(w)) if w == "checksum"));
+        let done = [b"\x1b[24;2H".as_slice(), READ_DONE, FOR_MENU].concat();
+        assert!(read_answer(&done).is_ok());
+        // The reason lost on the line: the error's " - " is the menu's, the indices cross.
+        let garbled = [READ_ERROR, FOR_MENU].concat();
+        let garbled = &garbled[..];
+        let crossed = [&b"Read error! - 'CR' for menu -->"[..], garbled];
+        for answer in crossed {
+            match read_answer(answer) {
+                Err(LinkError::StrangeAnswer(shown)) => assert!(shown.contains("Read error")),
+                other => panic!("{:?}: {other:?}", String::from_utf8_lossy(answer)),
+            }
+        }
+        // Every cut of a refusal, as a garbled line may leave it, ending with the menu's text.
+        for cut in 0..refused.len() {
+            let answer = [&refused[cut..], FOR_MENU].concat();
+            let _ = read_answer(&answer);
+        }
     }
 
     #[test]

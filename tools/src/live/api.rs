@@ -46,9 +46,12 @@ pub enum RigError {
     /// Too many requests wait for the rig.
     #[error("too many requests are waiting for the rig: nothing was sent; try again")]
     Busy,
-    /// The body is no JSON object.
-    #[error("a rig request is one JSON object, e.g. {{\"press\": 0}}")]
-    NotAnObject,
+    /// The body is no rig request.
+    #[error(
+        "a rig request is one JSON object of press, release (switches 0..5), a6, a7 (volts), \
+         d8, d9 (true or false), reset, e.g. {{\"press\": 0}}: {0}"
+    )]
+    NotARequest(String),
     /// The page named the Nano itself.
     #[error("the uTile's address picks its Nano: leave \"nano\" out")]
     NanoGiven,
@@ -103,6 +106,9 @@ pub enum ApiError {
     /// `--read-only`, for keys.
     #[error("read-only: keys are refused")]
     ReadOnlyKeys,
+    /// Keys sent as JSON that is not `{"keys": "…"}`.
+    #[error("keys as JSON are {{\"keys\": \"EX0\\r\"}}: {0}")]
+    KeysBody(String),
     /// The line did not carry the request out, or got no reply.
     #[error(transparent)]
     Line(#[from] Failure),
@@ -150,6 +156,9 @@ pub enum ApiError {
     /// The state could not be written as JSON (a bug).
     #[error("the state cannot be serialized: {0}")]
     Unserializable(String),
+    /// Refused at the door: what another web page could send (`origin.rs`).
+    #[error(transparent)]
+    Door(#[from] super::origin::Refused),
     /// No such route.
     #[error("there is no {0} in this API: see docs/LIVE.md")]
     NoRoute(String),
@@ -169,13 +178,14 @@ impl ApiError {
             ApiError::BadAddress(_)
             | ApiError::BadPath(_)
             | ApiError::NotANumber(_)
+            | ApiError::KeysBody(_)
             | ApiError::Refused(_)
             | ApiError::Scan(ScanError::Action(_) | ScanError::Steps(_))
             | ApiError::Listing { .. }
             | ApiError::Page(_)
-            | ApiError::Rig(RigError::NotAnObject | RigError::NanoGiven | RigError::Refused(_)) => {
-                StatusCode::BAD_REQUEST
-            }
+            | ApiError::Rig(
+                RigError::NotARequest(_) | RigError::NanoGiven | RigError::Refused(_),
+            ) => StatusCode::BAD_REQUEST,
             ApiError::BadBody { status, .. } => *status,
             ApiError::ReadOnly | ApiError::ReadOnlyKeys => StatusCode::FORBIDDEN,
             ApiError::Line(Failure::Editing)
@@ -196,6 +206,7 @@ impl ApiError {
                 StatusCode::UNPROCESSABLE_ENTITY
             }
             ApiError::Unserializable(_) => StatusCode::INTERNAL_SERVER_ERROR,
+            ApiError::Door(r) => r.status(),
             ApiError::Method(_) => StatusCode::METHOD_NOT_ALLOWED,
         }
     }
@@ -275,6 +286,14 @@ pub struct WriteDone {
     pub waited_ms: f64,
     /// Its time on the line, ms.
     pub on_line_ms: f64,
+}
+
+/// `POST /api/terminal`'s body as JSON (`Content-Type: application/json`): the keys as text.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KeysBody {
+    /// What is typed, e.g. `"EX0\r"`.
+    pub keys: String,
 }
 
 /// Keys sent.

@@ -13,7 +13,7 @@ use axum::body::Bytes;
 use axum::extract::rejection::{JsonRejection, PathRejection};
 use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
 use axum::extract::{FromRef, Path, Query, State};
-use axum::http::{header, Method, StatusCode, Uri};
+use axum::http::{header, HeaderMap, Method, StatusCode, Uri};
 use axum::response::sse::{Event, KeepAlive, Sse};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
@@ -22,7 +22,7 @@ use futures_util::stream::{self, Stream};
 use serde::{Deserialize, Serialize};
 use tokio::sync::mpsc;
 
-use super::api::{ApiError, KeysSent, TrendDoc, WriteBody, WriteDone};
+use super::api::{ApiError, KeysBody, KeysSent, TrendDoc, WriteBody, WriteDone};
 use super::assets;
 use super::check;
 use super::gateway::{Counters, Figures};
@@ -30,6 +30,7 @@ use super::hub::Hub;
 use super::job::{Done, Job, TAKEN_WAIT};
 use super::ladder;
 use super::lease::PageId;
+use super::origin::{self, Door};
 use super::rig::{self, Rig, RigView};
 use super::rtu;
 use super::scan_control;
@@ -105,8 +106,9 @@ impl App {
     }
 }
 
-/// The routes: one line each (hold and step, a program sent, a rig panel go here too).
-pub fn router(app: App) -> Router {
+/// The routes: one line each (hold and step, a program sent, a rig panel go here too), behind
+/// `door`'s rules (`origin.rs`: what another web page could send is refused first).
+pub fn router(app: App, door: Door) -> Router {
     Router::new()
         .route("/api/state", get(state))
         .route("/api/events", get(events))
@@ -122,6 +124,10 @@ pub fn router(app: App) -> Router {
         .fallback(file)
         .method_not_allowed_fallback(wrong_method)
         .with_state(app)
+        .layer(axum::middleware::from_fn_with_state(
+            Arc::new(door),
+            origin::check,
+        ))
 }
 
 /// Serializes the state once per change of the line's view, the gateway's figures or the
@@ -373,15 +379,26 @@ async fn trend(
     }))
 }
 
-/// `POST /api/terminal`: the body's bytes typed into the terminal (for scripts), once they
-/// went; refused while the port is closed (never kept for later).
-async fn keys(State(hub): State<Arc<Hub>>, body: Bytes) -> Result<Json<KeysSent>, ApiError> {
+/// `POST /api/terminal`: the body's bytes typed into the terminal (for scripts), or with
+/// `Content-Type: application/json` the text of `{"keys": "…"}` (the door lets no other type
+/// through), once they went; refused while the port is closed (never kept for later).
+async fn keys(
+    State(hub): State<Arc<Hub>>,
+    headers: HeaderMap,
+    body: Bytes,
+) -> Result<Json<KeysSent>, ApiError> {
     if hub.read_only {
         return Err(ApiError::ReadOnlyKeys);
     }
-    hub.keys(body.to_vec())?
-        .answer(WRITE_WAIT, TAKEN_WAIT)
-        .await?;
+    let keys = if origin::keys_as_json(&headers) {
+        serde_json::from_slice::<KeysBody>(&body)
+            .map_err(|e| ApiError::KeysBody(e.to_string()))?
+            .keys
+            .into_bytes()
+    } else {
+        body.to_vec()
+    };
+    hub.keys(keys)?.answer(WRITE_WAIT, TAKEN_WAIT).await?;
     Ok(Json(KeysSent { ok: true }))
 }
 

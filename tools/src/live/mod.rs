@@ -28,6 +28,7 @@
 //! | `terminal.rs` | the terminal's output for the pages (xterm.js) |
 //! | `http.rs` | the web server: its routes, the events, the terminal WebSocket |
 //! | `gateway.rs` | the Modbus TCP gateway |
+//! | `origin.rs` | on every bind: what another web page could send is refused (Host, Origin, the keys' type) |
 //! | `guard.rs`, `allow.rs` | beyond loopback: the page's token; the gateway's networks |
 //! | `mqtt/` | the MQTT publisher, Home Assistant discovery, `set` commands |
 //! | `assets.rs`, `page/` | the page's files, built into the binary |
@@ -48,6 +49,7 @@ pub mod lease;
 pub mod line;
 pub mod line_use;
 pub mod mqtt;
+pub mod origin;
 pub mod port;
 pub mod program;
 pub mod queue;
@@ -228,7 +230,8 @@ pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Ru
     };
     tokio::spawn(http::serialize_views(app.clone()));
     let token_url = guard.url(&http_addr, &mqtt::options::host_name());
-    let router = guard::layer(http::router(app.clone()), guard);
+    let door = origin::Door::new(http_addr, &opts.allow_host);
+    let router = guard::layer(http::router(app.clone(), door), guard);
     tokio::spawn(async move {
         if let Err(e) = axum::serve(http, router).await {
             tracing::error!(error = %e, "the web server stopped");

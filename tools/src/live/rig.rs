@@ -2,9 +2,10 @@
 //! object a line) worked from the page. A task keeps the socket open (and opens it again when
 //! the virtual Nano restarts), asks the rig's state every [`ASK_EVERY`] and carries out the
 //! page's requests: `POST /api/units/{addr}/rig` takes the socket's own JSON (`{"press": 0}`,
-//! `{"release": 0}`, `{"a6": 2.5}`, `{"d8": true}`, `{"reset": true}`, `{}`) and answers the
-//! rig's state after it. The client publishes the latest [`RigView`] (a `watch` it owns; the
-//! state's `rig`), so the page shows its rig panel only while a rig answers.
+//! `{"release": 0}`, `{"a6": 2.5}`, `{"d8": true}`, `{"reset": true}`, `{}`: the socket's
+//! [`RigRequest`], the one struct both ends use) and answers the rig's state after it. The
+//! client publishes the latest [`RigView`] (a `watch` it owns; the state's `rig`), so the page
+//! shows its rig panel only while a rig answers.
 //!
 //! On a bus (`cargo nano --bus N --control PATH`) the socket serves N Nanos, Nano k being
 //! the one at slave address k: each is asked in turn, the view holds each one's state, and
@@ -26,6 +27,7 @@ use tokio::sync::{mpsc, oneshot, watch};
 
 use super::api::{ApiError, RigError};
 use super::hub::Hub;
+use crate::vnano::control::RigRequest;
 
 /// At most this many requests wait for the rig (a page's buttons and sliders); more are
 /// refused as busy.
@@ -82,7 +84,7 @@ pub struct RigView {
 }
 
 /// One request for the rig and where its answer goes.
-type Request = (Value, oneshot::Sender<Result<RigState, RigError>>);
+type Request = (RigRequest, oneshot::Sender<Result<RigState, RigError>>);
 
 /// The rig's client: its requests and its latest view.
 pub struct Rig {
@@ -126,7 +128,7 @@ impl Rig {
     }
 
     /// Carries `request` out on the rig: its state after it.
-    pub async fn ask(&self, request: Value) -> Result<RigState, RigError> {
+    pub async fn ask(&self, request: RigRequest) -> Result<RigState, RigError> {
         let (tx, rx) = oneshot::channel();
         self.requests.try_send((request, tx)).map_err(|e| match e {
             mpsc::error::TrySendError::Full(_) => RigError::Busy,
@@ -205,7 +207,7 @@ async fn serve(
     let mut nanos: Vec<RigState> = Vec::new();
     let mut tick = tokio::time::interval(ASK_EVERY);
     loop {
-        let asks: Vec<(Value, Option<_>)> = tokio::select! {
+        let asks: Vec<(RigRequest, Option<_>)> = tokio::select! {
             r = rx.recv() => match r {
                 Some((request, reply)) => vec![(request, Some(reply))],
                 None => return "utile live is stopping".into(),
@@ -251,11 +253,10 @@ async fn serve(
 
 /// The periodic request for Nano `k` of `count`: `{}` for a single one (or before the first
 /// answer), `{"nano": k}` on a bus.
-fn ask_of(k: usize, count: usize) -> Value {
-    if count > 1 {
-        serde_json::json!({ "nano": k })
-    } else {
-        serde_json::json!({})
+fn ask_of(k: usize, count: usize) -> RigRequest {
+    RigRequest {
+        nano: (count > 1).then(|| u8::try_from(k).unwrap_or(u8::MAX)),
+        ..RigRequest::default()
     }
 }
 
@@ -268,9 +269,9 @@ struct Socket<'a> {
 
 impl Socket<'_> {
     /// Sends one request line and reads its answer; why not, in words.
-    async fn exchange(&mut self, request: &Value) -> Result<String, String> {
+    async fn exchange(&mut self, request: &RigRequest) -> Result<String, String> {
         let name = self.name;
-        let mut text = request.to_string();
+        let mut text = serde_json::to_string(request).map_err(|e| format!("{name}: {e}"))?;
         text.push('\n');
         if let Err(e) = self.write.write_all(text.as_bytes()).await {
             return Err(format!("{name}: {e}"));
@@ -297,14 +298,16 @@ pub async fn post(
     let Path(addr) = addr?;
     hub.view().unit(addr).ok_or(ApiError::NoUnit(addr))?;
     let Json(body) = body?;
+    // Read as the socket reads it (a JSON array would make a struct by position).
+    let Value::Object(fields) = body else {
+        return Err(RigError::NotARequest(format!("not {body}")).into());
+    };
+    let mut request = RigRequest::from_object(&fields).map_err(RigError::NotARequest)?;
     if hub.read_only {
         return Err(ApiError::ReadOnly);
     }
     let rig = rig.as_ref().ok_or(RigError::NoRig)?;
-    let Value::Object(mut request) = body else {
-        return Err(RigError::NotAnObject.into());
-    };
-    if request.contains_key("nano") {
+    if request.nano.is_some() {
         return Err(RigError::NanoGiven.into());
     }
     let view = rig.view();
@@ -316,9 +319,9 @@ pub async fn post(
         nanos: view.nanos.len(),
     })?;
     if view.nanos.len() > 1 {
-        request.insert("nano".into(), nano.into());
+        request.nano = Some(nano);
     }
-    Ok(Json(rig.ask(Value::Object(request)).await?))
+    Ok(Json(rig.ask(request).await?))
 }
 
 #[cfg(test)]
