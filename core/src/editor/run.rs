@@ -34,6 +34,13 @@ impl Editor {
         Mode::Run
     }
 
+    /// The screen is to be drawn again whole, step by step from the next
+    /// [`Editor::after_scan`] (RUN mode: terminal bytes were dropped for a Modbus reply, and
+    /// the main loop lets the editor draw again once the master is quiet, SPEC §13).
+    pub fn redraw(&mut self) {
+        self.left = STEPS;
+    }
+
     /// Whether [`Editor::after_scan`] has anything to do: a deferred redraw or a PPx/PBS
     /// request. The main loop asks first, so an idle scan pays only these tests.
     #[inline(always)]
