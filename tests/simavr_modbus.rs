@@ -675,3 +675,40 @@ fn a_stray_byte_during_a_reply_changes_nothing_in_it() {
     let (_, reply) = line.transact(&[0x04, 0, 7, 0, 1]);
     assert_eq!(pdu(&reply), vec![0x04, 2, 0, 0], "no frame dropped");
 }
+
+/// Issue 40: a byte that came after a frame's closing silence but before the main loop had
+/// judged the frame was glued onto it, so with a scan of 0.5 ms another slave's reply and a
+/// request to this one 3.5 characters after it were both lost. Now a frame is closed in the
+/// silence's interrupt: the foreign reply is counted there, and the request is answered,
+/// whatever the phase of the scan when the silence ends.
+#[test]
+fn a_request_three_and_a_half_characters_after_another_slaves_reply_is_answered() {
+    let mut line = Line::new(&data_listing("slowest_scan.utl"));
+    let c = char_cycles();
+    let read = [0x04, 0, 7, 0, 1];
+    // Another slave's reply to FC03 x 2 (address 9), then ours 3.5 characters after its
+    // last stop bit, at 32 phases of the 0.5 ms scan.
+    let foreign = modbus::frame(9, &[0x03, 4, 0x12, 0x34, 0x56, 0x78]);
+    let (_, first) = line.transact(&read);
+    let mut dropped = modbus::registers(&pdu(&first))[0];
+    let mut wrong = Vec::new();
+    for k in 0..32u64 {
+        line.run(20 * CYCLES_PER_MS + k * CYCLES_PER_MS / 64);
+        line.nano.chip.take_output_timed();
+        line.send(4 * c, &foreign);
+        let end = line.send(7 * c / 2, &modbus::frame(ADDRESS, &read));
+        line.run(end.saturating_sub(line.nano.chip.cycle()));
+        let reply = line.collect();
+        match modbus::reply_pdu(ADDRESS, &bytes(&reply)) {
+            Ok(p) if p.len() == 4 => {
+                let now = u16::from_be_bytes([p[2], p[3]]);
+                if now != dropped + 1 {
+                    wrong.push(format!("phase {k}: {} frames counted, not 1", now - dropped));
+                }
+                dropped = now;
+            }
+            _ => wrong.push(format!("phase {k}: no answer ({:02X?})", bytes(&reply))),
+        }
+    }
+    assert!(wrong.is_empty(), "{}", wrong.join("; "));
+}
