@@ -250,7 +250,11 @@ fn a_lone_slash_stops_a_held_program_with_key_and_leaves_the_hold_of_one_without
         assert_eq!(line.nano.outputs(), pins, "{name}: every pin stays");
         let now = picture(&mut line);
         assert_eq!(now, held, "{name}: still held, not one scan more");
-        assert_eq!(scan_control(&mut line), [1, 0], "{name}: register 32 reads 1");
+        assert_eq!(
+            scan_control(&mut line),
+            [1, 0],
+            "{name}: register 32 reads 1"
+        );
     }
 }
 

@@ -703,7 +703,10 @@ fn a_request_three_and_a_half_characters_after_another_slaves_reply_is_answered(
             Ok(p) if p.len() == 4 => {
                 let now = u16::from_be_bytes([p[2], p[3]]);
                 if now != dropped + 1 {
-                    wrong.push(format!("phase {k}: {} frames counted, not 1", now - dropped));
+                    wrong.push(format!(
+                        "phase {k}: {} frames counted, not 1",
+                        now - dropped
+                    ));
                 }
                 dropped = now;
             }

@@ -51,7 +51,10 @@ fn ask(bus: &mut Bus) -> Answer {
     let request = modbus::frame(1, &[0x03, 0, 0, 0, 4]);
     let end = bus.cycle() + (4 + request.len() as u64) * char_cycles();
     bus.send_after(4 * char_cycles(), &request);
-    assert!(bus.run_for(80 * CYCLES_PER_MS).is_none(), "the chip stopped");
+    assert!(
+        bus.run_for(80 * CYCLES_PER_MS).is_none(),
+        "the chip stopped"
+    );
     let got = bus.take_master();
     let first_start = got.first().map_or(u64::MAX, |b| b.cycle - char_cycles());
     Answer {
@@ -76,7 +79,10 @@ fn check(a: &Answer, when: &str, wrong: &mut Vec<String>) -> f64 {
 
 /// Run the bus `ms` milliseconds.
 fn run_ms(bus: &mut Bus, ms: u64) {
-    assert!(bus.run_for(ms * CYCLES_PER_MS).is_none(), "the chip stopped");
+    assert!(
+        bus.run_for(ms * CYCLES_PER_MS).is_none(),
+        "the chip stopped"
+    );
 }
 
 /// The program of these tests: the remote start of SPEC §13's examples.

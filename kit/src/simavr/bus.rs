@@ -207,9 +207,7 @@ impl Bus {
                 .map(|b| b.stop)
                 .min()
                 .unwrap_or(u64::MAX);
-            let horizon = end
-                .min(next.saturating_add(self.lookahead()))
-                .min(unjudged);
+            let horizon = end.min(next.saturating_add(self.lookahead())).min(unjudged);
             let (de, de_on) = (self.de, self.de_on[i]);
             let state = self.chips[i].run_while(horizon, |c| {
                 c.output_len() > 0 || (de && c.drives_high(DE_PORT, DE_BIT) != de_on)

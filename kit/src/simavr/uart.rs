@@ -161,7 +161,12 @@ unsafe extern "C" fn on_uart_output(_irq: *mut ffi::avr_irq_t, value: u32, param
             0 => {
                 ffi::avr_raise_interrupt(link.avr, &mut (*module).udrc);
                 if link.uart.pump.is_some() && pump_ticking(link.avr, link.uart.pump, module) {
-                    ffi::avr_cycle_timer_register(link.avr, 10 * bit, link.uart.pump, module.cast());
+                    ffi::avr_cycle_timer_register(
+                        link.avr,
+                        10 * bit,
+                        link.uart.pump,
+                        module.cast(),
+                    );
                 }
             }
             // It waits in UDR0 until the byte on the wire has left, one cycle after simavr's

@@ -1,6 +1,6 @@
 //! `cargo nano --bus N`: N virtual Nanos on one RS-485 line (the kit's [`Bus`]), the line on
 //! a pty whose client is the Modbus master (an HMI, pymodbus, mbpoll). Each Nano has slave
-//! address i + 1 (`ADDR`'s EEPROM cell), the D8 jumper fitted, and the `--eeprom` program
+//! address i + 1 (`ADDR`'s EEPROM cells), the D8 jumper fitted, and the `--eeprom` program
 //! (by default `PU. .PY KEY END`: outputs Y0..Y7 follow coils 8..15). `--a6`/`--a7` and
 //! `--press` set every Nano's rig at start; the console's rig keys (as with `--pty`) work the
 //! Nano that `@N` picked last (Nano 1 until then), and each change prints its status line.
@@ -11,7 +11,7 @@ use std::io::Write;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use utile_core::store::ADDR_CELL;
+use utile_core::store::address_cells;
 use utile_kit::listing;
 use utile_kit::sim::stored_eeprom;
 use utile_kit::simavr::{Bus, Chip, RigPin, F_CPU};
@@ -38,10 +38,9 @@ fn eeprom(o: &Options, i: usize) -> Result<Vec<u8>, VnanoError> {
         }
     };
     ee.resize(1024, 0xFF);
-    let a = (i + 1) as u8;
-    let at = usize::from(ADDR_CELL);
-    ee[at] = a;
-    ee[at + 1] = !a;
+    for (cell, value) in address_cells((i + 1) as u8) {
+        ee[usize::from(cell)] = value;
+    }
     Ok(ee)
 }
 
