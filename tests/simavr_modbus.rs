@@ -249,7 +249,7 @@ fn a_lone_slash_typed_after_line_noise_breaks_key_in_the_virtual_nano_too() {
 }
 
 #[test]
-fn the_terminal_is_quiet_while_a_master_is_active_and_resumes_after_three_seconds() {
+fn the_terminal_is_quiet_while_a_master_is_active_and_redrawn_whole_three_seconds_after() {
     // PPA every scan: RUN mode shows the port byte every 100 ms.
     let mut line = Line::new(&listing::commands(&["PPA", "KEY", "END"]));
     line.run(300 * CYCLES_PER_MS);
@@ -272,10 +272,20 @@ fn the_terminal_is_quiet_while_a_master_is_active_and_resumes_after_three_second
             "the terminal is quiet"
         );
     }
-    line.run(3_100 * CYCLES_PER_MS);
+    // After 3 s the RUN screen is drawn again whole (SPEC §13: a reply may have dropped
+    // terminal bytes), title and status line included, and the displays go on.
+    // (The last request was 0.4 s ago.)
+    line.run(2_500 * CYCLES_PER_MS);
+    assert!(line.nano.chip.take_output().is_empty(), "quiet for 3 s");
+    line.run(1_500 * CYCLES_PER_MS);
+    let text = String::from_utf8_lossy(&line.nano.chip.take_output()).into_owned();
+    for part in ["u T I L E", "Running User File Program"] {
+        assert!(text.contains(part), "redrawn whole after 3 s: {text:?}");
+    }
+    line.run(300 * CYCLES_PER_MS);
     assert!(
         !line.nano.chip.take_output().is_empty(),
-        "the displays resumed after 3 s"
+        "the displays resumed"
     );
 }
 

@@ -344,6 +344,41 @@ fn three_chips_share_one_rs485_line() {
 }
 
 #[test]
+fn the_bus_takes_a_byte_only_if_its_driver_enable_was_up_over_its_whole_wire_time() {
+    let chips: Vec<Chip> = (0..2u8)
+        .map(|addr| {
+            let mut c = Chip::load(&app()).expect("load");
+            c.set_eeprom(0, &[addr]);
+            c
+        })
+        .collect();
+    let mut bus = Bus::new(chips, 19_200).with_driver_enable();
+    bus.run_for(20 * CYCLES_PER_MS);
+    // Chip 1 raises D10, writes "H\r\n" and drops D10 at once: 'H' has left whole, '\r'
+    // is on the wire (half on), '\n' waits in UDR0 and goes out with D10 low (off the line).
+    bus.send(b"\"");
+    bus.run_for(10 * CYCLES_PER_MS);
+    let got = bus.take_master();
+    assert_eq!(
+        got.iter().map(|b| (b.byte, b.from)).collect::<Vec<_>>(),
+        vec![(b'H', 1)],
+        "only the byte sent whole under D10"
+    );
+    let half = bus.half_on();
+    assert_eq!(half.len(), 1, "{half:?}");
+    assert_eq!((half[0].byte, half[0].from), (b'\r', 1));
+    // 10 bits of 16 × (UBRR0 51 + 1) cycles.
+    assert_eq!(half[0].stop - half[0].start, 10 * 16 * 52, "{half:?}");
+    assert_eq!(half[0].start, got[0].cycle, "'\\r' right after 'H': double-buffered");
+    // Chip 0 heard 'H' (and the master's bytes), not the half byte: its count shows it.
+    bus.send(b"x");
+    bus.run_for(10 * CYCLES_PER_MS);
+    let text: Vec<u8> = bus.take_master().iter().map(|b| b.byte).collect();
+    assert_eq!(text, b"R0=03\r\n", "'\"', 'H', 'x'");
+    assert!(bus.collisions().is_empty());
+}
+
+#[test]
 fn dropping_chips_frees_simavr() {
     // Each chip's simulator (its avr_t, 32 KB of flash, RAM, I/O modules) is freed on
     // drop. simavr keeps about 10 KB per chip of its own (IRQ tables and names it never
