@@ -5,7 +5,9 @@
 //! `--press` set every Nano's rig at start; the console's rig keys (as with `--pty`) work the
 //! Nano that `@N` picked last (Nano 1 until then), and each change prints its status line.
 //! `--control PATH` works each Nano's rig from another program: a request names its Nano
-//! (`{"nano": 2, "press": 0}`, Nano N being the one at slave address N).
+//! (`{"nano": 2, "press": 0}`, Nano N being the one at slave address N). A Nano's byte
+//! reaches the line only if its D10 was high over the byte's whole wire time; two drivers
+//! at once and a byte half on the line (D10 changed inside it) are reported.
 
 use std::io::Write;
 use std::path::Path;
@@ -77,6 +79,7 @@ pub fn run(o: &Options, n: usize, elf: &Path) -> Result<(), VnanoError> {
     let limit = o.run_for.map(|secs| (secs * F_CPU as f64) as u64);
     let (wall0, sim0) = (Instant::now(), bus.cycle());
     let mut collisions = 0;
+    let mut half_on = 0;
     let mut arrivals = Arrivals::default();
     let mut keys = Keys {
         selected: 0,
@@ -123,6 +126,18 @@ pub fn run(o: &Options, n: usize, elf: &Path) -> Result<(), VnanoError> {
         if bus.collisions().len() != collisions {
             collisions = bus.collisions().len();
             let _ = writeln!(out, "vnano: {collisions} collisions (two drivers at once)");
+            let _ = out.flush();
+        }
+        if bus.half_on().len() != half_on {
+            half_on = bus.half_on().len();
+            let b = bus.half_on()[half_on - 1];
+            let _ = writeln!(
+                out,
+                "vnano: {half_on} bytes half on the line (Nano {}'s D10 changed while 0x{:02X} \
+                 was on the wire)",
+                b.from + 1,
+                b.byte
+            );
             let _ = out.flush();
         }
         if !o.fast {
