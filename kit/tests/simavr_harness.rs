@@ -369,7 +369,10 @@ fn the_bus_takes_a_byte_only_if_its_driver_enable_was_up_over_its_whole_wire_tim
     assert_eq!((half[0].byte, half[0].from), (b'\r', 1));
     // 10 bits of 16 × (UBRR0 51 + 1) cycles.
     assert_eq!(half[0].stop - half[0].start, 10 * 16 * 52, "{half:?}");
-    assert_eq!(half[0].start, got[0].cycle, "'\\r' right after 'H': double-buffered");
+    assert_eq!(
+        half[0].start, got[0].cycle,
+        "'\\r' right after 'H': double-buffered"
+    );
     // Chip 0 heard 'H' (and the master's bytes), not the half byte: its count shows it.
     bus.send(b"x");
     bus.run_for(10 * CYCLES_PER_MS);

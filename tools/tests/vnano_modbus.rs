@@ -364,10 +364,6 @@ fn three_nanos_on_one_line_are_polled_through_one_pty() {
     assert!(out.contains("ALL OK"), "{out}");
     n.console.collect_for(Duration::from_millis(200));
     for report in ["collisions", "half on the line"] {
-        assert!(
-            !n.console.text().contains(report),
-            "{}",
-            n.console.text()
-        );
+        assert!(!n.console.text().contains(report), "{}", n.console.text());
     }
 }

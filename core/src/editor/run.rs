@@ -56,6 +56,10 @@ impl Editor {
         if self.left != 0 {
             // One step per visit: the scan waits for at most one step's work.
             if b.tx_room() >= STEP_MAX {
+                if self.left == STEPS {
+                    // A screen cut short for a Modbus reply may have left reverse video on.
+                    normal(b);
+                }
                 self.step(STEPS - self.left, eng, b);
                 self.left -= 1;
             }
