@@ -78,12 +78,12 @@ impl Server {
         self.overruns_at_start = board.rx_overruns();
         // No reply (`started` is set with each reply).
         self.pending = false;
-        line::serve(Some(store::slave_address(board)));
+        line::serve(store::slave_address(board));
     }
 
     /// RUN ends: the line goes back to the terminal.
     pub fn end(&mut self) {
-        line::serve(None);
+        line::serve(0);
     }
 
     /// Whether the terminal must wait: a master talked to this slave within the last 3 s,

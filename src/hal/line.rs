@@ -28,12 +28,9 @@ struct Line {
     last: u16,
     /// The whole reply is in the transmit ring: transmit complete ends it.
     queued: bool,
-    /// The line serves Modbus (RUN mode); in EDIT mode bytes go to the ring.
-    serving: bool,
-    /// This slave's address, for the frames closed at their silence.
+    /// This slave's address (RUN mode: the line serves Modbus), for the frames closed at
+    /// their silence; 0 in EDIT mode, where bytes go to the ring.
     address: u8,
-    /// A frame closed at its silence waits for the main loop.
-    frame_end: bool,
 }
 
 /// The slave and its timing, shared with the receive, timer and transmit interrupts.
@@ -41,9 +38,7 @@ static LINE: IsrCell<Line> = IsrCell::new(Line {
     slave: Slave::new(),
     last: 0,
     queued: false,
-    serving: false,
     address: 0,
-    frame_end: false,
 });
 
 /// From the receive interrupt: in RUN mode the byte goes to the slave and the silence after
@@ -51,7 +46,7 @@ static LINE: IsrCell<Line> = IsrCell::new(Line {
 #[inline(always)]
 pub(crate) fn on_byte(cs: CriticalSection, byte: u8) -> bool {
     // SAFETY: the closure does not re-enter LINE.
-    if !unsafe { LINE.with(cs, |l| l.serving) } {
+    if unsafe { LINE.with(cs, |l| l.address) } == 0 {
         return false;
     }
     let dp = regs();
@@ -86,13 +81,7 @@ pub fn on_silence(cs: CriticalSection) {
     // TIMSK1: compare B off until the next byte.
     wr!(regs().TC1.timsk1(), 0);
     // SAFETY: the closure does not re-enter LINE.
-    let wanted = unsafe {
-        LINE.with(cs, |l| {
-            l.frame_end = l.slave.close(l.address);
-            l.frame_end
-        })
-    };
-    if wanted {
+    if unsafe { LINE.with(cs, |l| l.slave.close(l.address)) } {
         want::now(cs);
     }
 }
@@ -130,18 +119,16 @@ fn reply_over(cs: CriticalSection) {
     serial::transmit_complete(cs, false);
 }
 
-/// Switch the line between the terminal's ring (EDIT mode) and the Modbus slave at
-/// `address` (RUN mode, `Some`). Either way the slave starts from a clean line.
-pub(crate) fn serve(address: Option<u8>) {
+/// Switch the line between the terminal's ring (EDIT mode, `address` 0) and the Modbus
+/// slave at `address` (RUN mode, 1..247). Either way the slave starts from a clean line.
+pub(crate) fn serve(address: u8) {
     interrupt::free(|cs| {
         // TIMSK1: no pending silence.
         wr!(regs().TC1.timsk1(), 0);
         // SAFETY: the closure does not re-enter LINE.
         unsafe {
             LINE.with(cs, |l| {
-                l.serving = address.is_some();
-                l.address = address.unwrap_or(0);
-                l.frame_end = false;
+                l.address = address;
                 l.slave = Slave::new();
             })
         };
@@ -149,14 +136,14 @@ pub(crate) fn serve(address: Option<u8>) {
 }
 
 /// The main loop is back between two scans: whether a frame closed at its silence waits to
-/// be carried out (reported once). A wish of the line from now on wants the main loop at
-/// the next END. While a reply is being made no frame closes (the slave ignores the bytes):
-/// the reply's snapshot and the request it echoes stay as they are.
+/// be carried out ([`judge`] carries it out). A wish of the line from now on wants the main
+/// loop at the next END. While a reply is being made no frame closes (the slave ignores
+/// the bytes): the reply's snapshot and the request it echoes stay as they are.
 pub(crate) fn take_frame_end() -> bool {
     interrupt::free(|cs| {
         want::taken(cs);
         // SAFETY: the closure does not re-enter LINE.
-        unsafe { LINE.with(cs, |l| core::mem::take(&mut l.frame_end)) }
+        unsafe { LINE.with(cs, |l| l.slave.closed()) }
     })
 }
 

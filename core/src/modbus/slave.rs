@@ -84,6 +84,11 @@ impl Slave {
         }
     }
 
+    /// Whether a frame closed by [`Slave::close`] waits for [`Slave::judge`].
+    pub fn closed(&self) -> bool {
+        self.closed
+    }
+
     /// Whether bytes of an unfinished frame wait for their silence.
     pub fn receiving(&self) -> bool {
         !self.rx.is_empty()

@@ -359,7 +359,9 @@ pub fn measure_during_screen(elf: &Path) -> Result<(Spread, usize), BenchError> 
         bus.run_for(100 * CYCLES_PER_MS);
         let got = bus.take_master();
         stray += got.len().saturating_sub(len) + bus.half_on().len();
-        let Some(reply) = got.get(got.len().saturating_sub(len)..).filter(|r| r.len() == len)
+        let Some(reply) = got
+            .get(got.len().saturating_sub(len)..)
+            .filter(|r| r.len() == len)
         else {
             return Err(BenchError::NoReply(frame.clone()));
         };
