@@ -1,5 +1,7 @@
 //! The chip's serial port (USART0): bytes into the firmware, paced as chosen, and bytes out
-//! of it, each with the cycle its stop bit ends.
+//! of it, each with the cycle its stop bit ends, from a transmitter double-buffered as the
+//! datasheet's (UDRE0 as soon as a byte moves into the shift register; simavr's own raises
+//! it only when the line is idle, see [`on_uart_output`]).
 
 use super::chip::{Chip, Link};
 use super::{ioctl_def, LoadError, CYCLES_PER_BYTE, F_CPU, RX_FIXED_CYCLES_PER_BYTE};
