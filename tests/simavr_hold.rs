@@ -15,7 +15,7 @@ mod support;
 
 use support::chip::CYCLES_PER_MS;
 use support::master::{char_cycles, pdu, read_input, Line};
-use utile_core::engine::Program;
+use support::scenario::listing as listing_of;
 use utile_core::modbus::hold::{STATUS_HELD, STATUS_LAPSED};
 use utile_core::modbus::plc::{STATUS_RUNNING, STATUS_STORED};
 use utile_core::modbus::snapshot::SNAPSHOT;
@@ -23,18 +23,9 @@ use utile_core::opcodes::{END, KEY};
 use utile_kit::listing;
 use utile_kit::modbus;
 
-/// A listing of `tests/data/`.
-fn data_listing(name: &str) -> Program {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name);
-    let text = std::fs::read_to_string(&path).expect("the listing");
-    listing::parse(name, &text).unwrap_or_else(|e| panic!("{e}"))
-}
-
 /// The scan counter, running (autostarted).
 fn counter() -> Line {
-    Line::new(&data_listing("scan_counter.utl"))
+    Line::new(&listing_of("scan_counter"))
 }
 
 /// What one snapshot read shows: status, Y0..Y7, TQ0..TQF, scans since RUN.
@@ -231,13 +222,13 @@ fn a_lone_slash_stops_a_held_program_with_key_and_leaves_the_hold_of_one_without
     // lone `/` (or a noise byte 0x2F between two silences) changes nothing, the plant
     // stays frozen and the master still reads it held.
     let after_end = {
-        let mut p = data_listing("scan_counter.utl");
+        let mut p = listing_of("scan_counter");
         let end = p.uf.iter().position(|&op| op == END).expect("END");
         p.uf[end + 1] = KEY;
         p
     };
     for (name, prog) in [
-        ("no KEY", data_listing("scan_counter.utl")),
+        ("no KEY", listing_of("scan_counter")),
         ("KEY after END", after_end),
     ] {
         let mut line = Line::new(&prog);

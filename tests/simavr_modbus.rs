@@ -9,6 +9,7 @@ mod support;
 
 use support::chip::CYCLES_PER_MS;
 use support::master::{bytes, char_cycles, pdu, read_input, stored, Line, ADDRESS};
+use support::scenario::listing as listing_of;
 use utile_core::engine::Program;
 use utile_core::modbus::plc::{STATUS_RUNNING, STATUS_STORED};
 use utile_core::modbus::snapshot::{self, Snapshot, PROGRAM, SNAPSHOT, SNAPSHOT_LEN};
@@ -437,19 +438,10 @@ fn the_snapshot_and_the_program_of_a_listing_are_read_whole_and_its_fingerprint_
     }
 }
 
-/// A test program from `tests/data/`.
-fn data_listing(name: &str) -> Program {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name);
-    let text = std::fs::read_to_string(&path).expect("the listing");
-    listing::parse(name, &text).unwrap_or_else(|e| panic!("{e}"))
-}
-
 #[test]
 fn a_reply_streamed_over_many_scans_shows_the_bits_of_one_scan() {
     // Y0..Y7 count the scans; U and V copy them; every Q and TQ follows Y0.
-    let mut line = Line::new(&data_listing("scan_counter.utl"));
+    let mut line = Line::new(&listing_of("scan_counter"));
     for (k, qty) in [8u16, SNAPSHOT_LEN, 8, SNAPSHOT_LEN, 8]
         .into_iter()
         .enumerate()
@@ -477,7 +469,7 @@ fn the_longest_programs_still_answer_within_the_spec_and_without_gaps() {
     // 256 lines scanned (no END), and 255 of the slowest lines there are (each restarts
     // TF: a 32-bit deadline), about 0.5 ms a scan.
     let no_end = listing::commands(&["Y0.", "!", ".Y0"]);
-    let slowest = data_listing("slowest_scan.utl");
+    let slowest = listing_of("slowest_scan");
     let mut write = vec![0x10, 0, 0, 0, 16, 32];
     for _ in 0..16 {
         write.extend_from_slice(&[0, 10]);
@@ -648,7 +640,7 @@ fn a_reply_keeps_d10_up_to_its_last_stop_bit_whatever_the_interleaving() {
 /// the reply and emptied the request an echo reply is still built from.
 #[test]
 fn a_stray_byte_during_a_reply_changes_nothing_in_it() {
-    let mut line = Line::new(&data_listing("scan_counter.utl"));
+    let mut line = Line::new(&listing_of("scan_counter"));
     let c = char_cycles();
     // Diagnostics echoes its request: 52 bytes of PDU, over many visits.
     let mut echo = vec![0x08, 0, 0];
@@ -693,7 +685,7 @@ fn a_stray_byte_during_a_reply_changes_nothing_in_it() {
 /// whatever the phase of the scan when the silence ends.
 #[test]
 fn a_request_three_and_a_half_characters_after_another_slaves_reply_is_answered() {
-    let mut line = Line::new(&data_listing("slowest_scan.utl"));
+    let mut line = Line::new(&listing_of("slowest_scan"));
     let c = char_cycles();
     let read = [0x04, 0, 7, 0, 1];
     // Another slave's reply to FC03 x 2 (address 9), then ours 3.5 characters after its

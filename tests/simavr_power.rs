@@ -10,22 +10,13 @@ mod support;
 
 use support::chip::{static_address, Board, Rig, CYCLES_PER_MS};
 use support::master::{char_cycles, pdu, read_input, Line, ADDRESS};
-use utile_core::engine::Program;
+use support::scenario::listing as listing_of;
 use utile_core::modbus::snapshot::{self, SNAPSHOT};
 use utile_core::store;
 use utile_kit::listing;
 use utile_kit::modbus;
 use utile_kit::sim::SimBoard;
 use utile_kit::simavr::RxPacing;
-
-/// A test program from `tests/data/`.
-fn data_listing(name: &str) -> Program {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name);
-    let text = std::fs::read_to_string(&path).expect("the listing");
-    listing::parse(name, &text).unwrap_or_else(|e| panic!("{e}"))
-}
 
 /// Holding register 0 (T0's preset) as the master reads it.
 fn preset_t0(line: &mut Line) -> u16 {
@@ -66,7 +57,7 @@ fn typed(line: &mut Line, text: &str, ms: u64) {
 #[test]
 fn the_kept_program_survives_a_warm_reset_at_any_moment_after_a_preset_written_over_modbus() {
     // 0.5 ms a scan: the visits of a reply are far apart.
-    let prog = data_listing("slowest_scan.utl");
+    let prog = listing_of("slowest_scan");
     let mut b = SimBoard::new();
     store::store(&prog, &mut b).expect("STORE");
     let eeprom: &'static [u8] = Box::leak(b.eeprom.into_boxed_slice());

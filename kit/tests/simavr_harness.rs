@@ -286,16 +286,22 @@ fn uart_bytes_are_received_and_timed_at_9600_and_38400_baud() {
     echo_timing(38_400, 25);
 }
 
-#[test]
-fn three_chips_share_one_rs485_line() {
-    let chips: Vec<Chip> = (0..3u8)
+/// `n` chips running the fixture at bus addresses 0..n, on one line whose driver enables
+/// are watched.
+fn bus_of_apps(n: u8) -> Bus {
+    let chips: Vec<Chip> = (0..n)
         .map(|addr| {
             let mut c = Chip::load(&app()).expect("load");
             c.set_eeprom(0, &[addr]);
             c
         })
         .collect();
-    let mut bus = Bus::new(chips, 19_200).with_driver_enable();
+    Bus::new(chips, 19_200).with_driver_enable()
+}
+
+#[test]
+fn three_chips_share_one_rs485_line() {
+    let mut bus = bus_of_apps(3);
     assert_eq!(bus.len(), 3);
     bus.run_for(20 * CYCLES_PER_MS);
     assert!(bus.take_master().is_empty(), "silent until addressed");
@@ -345,14 +351,7 @@ fn three_chips_share_one_rs485_line() {
 
 #[test]
 fn the_bus_takes_a_byte_only_if_its_driver_enable_was_up_over_its_whole_wire_time() {
-    let chips: Vec<Chip> = (0..2u8)
-        .map(|addr| {
-            let mut c = Chip::load(&app()).expect("load");
-            c.set_eeprom(0, &[addr]);
-            c
-        })
-        .collect();
-    let mut bus = Bus::new(chips, 19_200).with_driver_enable();
+    let mut bus = bus_of_apps(2);
     bus.run_for(20 * CYCLES_PER_MS);
     // Chip 1 raises D10, writes "H\r\n" and drops D10 at once: 'H' has left whole, '\r'
     // is on the wire (half on), '\n' waits in UDR0 and goes out with D10 low (off the line).
