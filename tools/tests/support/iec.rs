@@ -9,7 +9,9 @@
 //! everything evaluated after it; a P or N contact is R_TRIG or F_TRIG on its variable, whose
 //! memory starts at the variable's value at start for an input (uTile reads its inputs at
 //! RUN, so an input already on is no edge) and at FALSE for the rest; CTU's count input
-//! starts as on (uTile counts no edge in the first scan).
+//! starts as on (uTile counts no edge in the first scan). A block whose EN is wired runs
+//! only while EN is TRUE (a function block keeps its state, a function its last output) and
+//! gives EN as ENO; a wire's route (`<position>`s) changes nothing.
 
 use std::collections::HashMap;
 use std::rc::Rc;
@@ -62,6 +64,8 @@ enum El {
     Func {
         kind: String,
         inputs: Vec<Vec<Src>>,
+        /// EN's connections (none: always enabled).
+        en: Vec<Src>,
     },
     Fb {
         kind: String,
@@ -88,6 +92,10 @@ enum Pin {
 pub struct Reference {
     els: Rc<[El]>,
     sinks: Vec<usize>,
+    /// The BOOL variables' names (index: as `pins` and `values`).
+    names: Rc<[String]>,
+    /// Each function block's instance name and element.
+    instances: Rc<[(String, usize)]>,
     pins: Vec<Pin>,
     values: Vec<bool>,
     /// Per element: this scan's output (memo), the edge or block state.
@@ -295,6 +303,11 @@ impl Reference {
                         consts.get(&e).cloned().unwrap_or(e)
                     };
                     if matches!(kind.as_str(), "AND" | "OR" | "XOR" | "NOT") {
+                        let en = ins
+                            .iter()
+                            .find(|(f, _)| f == "EN")
+                            .map(|(_, s)| s.clone())
+                            .unwrap_or_default();
                         El::Func {
                             kind,
                             inputs: ins
@@ -302,6 +315,7 @@ impl Reference {
                                 .filter(|(f, _)| f != "EN")
                                 .map(|(_, s)| s)
                                 .collect(),
+                            en,
                         }
                     } else {
                         let pt = if kind.starts_with('T') {
@@ -339,10 +353,17 @@ impl Reference {
             .filter(|&i| matches!(els[i], El::Coil { .. } | El::OutVar { .. } | El::Fb { .. }))
             .collect();
         sinks.sort_by_key(|&i| pos(nodes[i]));
+        let instances: Vec<(String, usize)> = nodes
+            .iter()
+            .enumerate()
+            .filter_map(|(i, b)| b.attribute("instanceName").map(|n| (n.to_string(), i)))
+            .collect();
         let n = els.len();
         Reference {
             els: els.into(),
             sinks,
+            names: names.into(),
+            instances: instances.into(),
             values: vec![false; pins.len()],
             pins,
             memo: vec![None; n],
@@ -361,8 +382,16 @@ impl Reference {
         p
     }
 
+    /// Whether block `i` runs this scan: its EN (TRUE when not wired), given as its ENO.
+    fn enabled(&mut self, i: usize, en: Option<&Vec<Src>>) -> bool {
+        let on = en.is_none_or(|s| s.is_empty() || self.power(s));
+        self.eno[i] = on;
+        on
+    }
+
     fn out(&mut self, i: usize, formal: &str) -> bool {
         if formal == "ENO" {
+            self.out(i, "");
             return self.eno[i];
         }
         if let Some(v) = self.memo[i] {
@@ -409,14 +438,21 @@ impl Reference {
                 negated,
             } => var.map_or(constant, |v| self.values[v]) != negated,
             &El::Continuation { connector } => self.out(connector, ""),
-            El::Func { kind, inputs } => {
+            El::Func { kind, inputs, en } => {
+                if !self.enabled(i, Some(en)) {
+                    // Not called: its output keeps the last call's value.
+                    self.memo[i] = Some(self.fb[i].q);
+                    return self.fb[i].q;
+                }
                 let vals: Vec<bool> = inputs.iter().map(|s| self.power(s)).collect();
-                match kind.as_str() {
+                let v = match kind.as_str() {
                     "NOT" => !vals[0],
                     "AND" => vals.iter().all(|&v| v),
                     "OR" => vals.iter().any(|&v| v),
                     _ => vals.iter().fold(false, |a, &b| a ^ b),
-                }
+                };
+                self.fb[i].q = v;
+                v
             }
             &El::Fb {
                 ref kind,
@@ -425,6 +461,11 @@ impl Reference {
                 pv,
             } => {
                 let get = |me: &mut Self, f: &str| inputs.get(f).is_some_and(|s| me.power(s));
+                if !self.enabled(i, inputs.get("EN")) {
+                    // Not called: its state and Q stay as the last call left them.
+                    self.memo[i] = Some(self.fb[i].q);
+                    return self.fb[i].q;
+                }
                 let now = self.now;
                 match kind.as_str() {
                     "TON" => {
@@ -501,7 +542,36 @@ impl Reference {
         v
     }
 
-    /// One scan at `now` with the inputs' levels; the outputs after it.
+    /// The element of the function block instance `name`, for [`Reference::q`].
+    pub fn block(&self, name: &str) -> Option<usize> {
+        self.instances
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|&(_, i)| i)
+    }
+
+    /// The Q (Q1) of function block `block` as its last call left it.
+    pub fn q(&self, block: usize) -> bool {
+        self.fb[block].q
+    }
+
+    /// The index of the BOOL variable `name`, if the file declares it, for
+    /// [`Reference::value`] and [`Reference::set`].
+    pub fn var(&self, name: &str) -> Option<usize> {
+        self.names.iter().position(|n| n == name)
+    }
+
+    /// The value of BOOL variable `var`.
+    pub fn value(&self, var: usize) -> bool {
+        self.values[var]
+    }
+
+    /// Give the unlocated BOOL `var` the value of a bit the runtime provides (uTile's
+    /// `CLKA`, `H6`, `AD0`, which the export declares as plain BOOLs).
+    pub fn set(&mut self, var: usize, v: bool) {
+        self.values[var] = v;
+    }
+
     /// One scan at `now` ms with the inputs A0..A5 (bit n = An), giving Y0..Y7.
     pub fn scan(&mut self, now: u32, inputs: u8) -> u8 {
         self.now = now;

@@ -10,6 +10,9 @@
 //!   (`ladder_*`);
 //! - [`iec`]: a reference evaluator of IEC 61131-3 ladder in PLCopen XML, scan by scan
 //!   (`ladder_equivalence`, `ladder_export`);
+//! - [`scans`]: a program on the engine one scan at a time beside the reference, the
+//!   outputs compared after every scan (`ladder_export`);
+//! - [`routes`]: every connection of an exported LD body has its route (`ladder_export`);
 //! - [`live`]: `utile live` on the virtual Nano, an HTTP client for its API, a raw Modbus
 //!   TCP client (`live_*`);
 //! - [`mqtt`]: mosquitto on loopback (password file, TLS listener, certificates), an MQTT
@@ -22,5 +25,7 @@ pub mod iec;
 pub mod ladder;
 pub mod live;
 pub mod mqtt;
+pub mod routes;
+pub mod scans;
 pub mod utile;
 pub mod vnano;
