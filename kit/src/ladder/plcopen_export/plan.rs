@@ -67,15 +67,7 @@ impl Plan {
     /// Flip-flop m: set/reset coils on `Qm` where IEC's agree with uTile's END update (one
     /// `.Sm` above one `.Rm`, `Qm.` read only above them), else at END.
     fn flip_flop(&mut self, parts: &Parts, m: u8) {
-        let lines = |op: u8| -> Vec<u8> {
-            parts
-                .coils
-                .iter()
-                .filter(|k| k.op == op)
-                .map(|k| coil_line(k))
-                .collect()
-        };
-        let (sets, resets) = (lines(POP_S + m), lines(POP_R + m));
+        let (sets, resets) = (pop_lines(parts, POP_S + m), pop_lines(parts, POP_R + m));
         let mut reads = parts
             .contacts
             .iter()
@@ -103,15 +95,7 @@ impl Plan {
     /// one `.CRm` right after or before it with nothing written or `CQm.` read between,
     /// `CQm.` read only above them), else at END.
     fn counter(&mut self, parts: &Parts, m: u8) {
-        let lines = |op: u8| -> Vec<u8> {
-            parts
-                .coils
-                .iter()
-                .filter(|k| k.op == op)
-                .map(|k| coil_line(k))
-                .collect()
-        };
-        let (counts, resets) = (lines(POP_CU + m), lines(POP_CR + m));
+        let (counts, resets) = (pop_lines(parts, POP_CU + m), pop_lines(parts, POP_CR + m));
         if counts.is_empty() {
             return;
         }
@@ -139,6 +123,16 @@ impl Plan {
             self.bits += 1 + usize::from(!resets.is_empty());
         }
     }
+}
+
+/// The lines of the coils that pop `op`.
+fn pop_lines(parts: &Parts, op: u8) -> Vec<u8> {
+    parts
+        .coils
+        .iter()
+        .filter(|k| k.op == op)
+        .map(|k| coil_line(k))
+        .collect()
 }
 
 /// The program's own U and V bits (contacts and coils on them).
