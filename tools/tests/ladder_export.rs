@@ -11,7 +11,7 @@ mod support;
 
 use support::iec::Reference;
 use support::ladder::{random_events, run};
-use support::routes::{check_routes, without_routes};
+use support::openplc::{check_modifiers, check_routes, without_routes};
 use support::scans::{export_timers, first_difference, iec_difference, run_scans, SCANS_PER_MS};
 use support::utile::*;
 use utile_core::engine::Program;
@@ -229,8 +229,11 @@ fn counters_and_set_points_read_back() {
         .position(|l| l.contains("instanceName=\"CTU0\""))
         .unwrap();
     assert!(
-        xml.lines().skip(ctu + 1).all(|l| !l.contains("<coil ")),
-        "the CTU is the last output:\n{xml}"
+        xml.lines()
+            .skip(ctu + 1)
+            .filter(|l| l.contains("<coil "))
+            .all(|l| l.contains("<variable>STARTED</variable>")),
+        "the CTU is the last output but STARTED:\n{xml}"
     );
     // CQ0. read only above one .CU0 and .CR0 one after the other: the CTU at their rungs.
     let src = "000 CQ0.\n001 .Y0\n002 A0.\n003 .CU0\n004 A1.\n005 .CR0\n006 END\nC0 = 2\n";
@@ -308,6 +311,31 @@ fn counters_count_where_utile_counts() {
         }
         imports_back_the_same(src, &out, 14, 20, 4000, 0x07);
     }
+}
+
+#[test]
+fn edges_and_counts_start_as_utile_starts() {
+    // uTile reads its inputs at RUN: an input already on (a released button reads 1) is no
+    // edge, a count input already on no count. IEC's edge memories start FALSE, so the
+    // export gates each edge and the CTU's first call with STARTED, set by the last rung.
+    let src = "000 AL0.\n001 .Y0\n002 AT1.\n003 !\n004 .Y1\n005 A2.\n006 .CU0\n007 CQ0.\n008 .Y2\n009 END\nC0 = 1\n";
+    let (xml, out) = export_src("start", src);
+    // `AT1. !`: an edge contact and a NOT (OpenPLC's contact is negated or an edge; its
+    // compiler drops the edge of one that is both).
+    if let Err(why) = check_modifiers(&xml) {
+        panic!("{why}\n{xml}");
+    }
+    let prog = listing::parse("start.utl", src).unwrap();
+    if let Some(why) = iec_difference(&prog, &xml, &mut Rng::new(15), 40, 1000, 0x07) {
+        panic!("{why}\n{xml}");
+    }
+    for want in [
+        "<variable name=\"STARTED\"><type><BOOL/></type></variable>",
+        "<variable>STARTED</variable></coil>",
+    ] {
+        assert!(xml.contains(want), "'{want}' not in:\n{xml}");
+    }
+    imports_back_the_same(src, &out, 16, 40, 1000, 0x07);
 }
 
 /// A random program of rungs of the kinds the export takes (contacts on inputs, outputs,
@@ -412,7 +440,7 @@ fn random_programs_export_and_run_the_same_or_are_refused() {
         let back = listing::parse("back", &text).unwrap();
         // The XML itself on the reference IEC evaluator, every scan; its wires' routes.
         let xml = std::fs::read_to_string(&out).unwrap();
-        if let Err(why) = check_routes(&xml) {
+        if let Err(why) = check_routes(&xml).and(check_modifiers(&xml)) {
             panic!("{why}\n{src}\n{xml}");
         }
         if let Some(why) = iec_difference(&prog, &xml, &mut rng, 2, 4000, 0x0F) {
@@ -443,7 +471,7 @@ fn every_example_runs_as_iec_says_at_every_scan() {
         let t = parse_timeline(&path, &std::fs::read_to_string(&path).unwrap()).unwrap();
         let until = t.until_ms.unwrap_or(10_000);
         let scans = run_scans(&prog, &t.events, &t.analog, until, SCANS_PER_MS);
-        let fresh = Reference::new(&xml);
+        let fresh = Reference::new(&xml).standard_start();
         if let Some(d) = first_difference(&fresh, &scans, export_timers(&fresh)) {
             panic!(
                 "{stem}, its timeline: at scan {} ({} ms) the listing's outputs are {:08b}, IEC's {:08b}\n{xml}",
@@ -482,6 +510,9 @@ fn every_connection_has_its_route_end_points() {
         match check_routes(&xml) {
             Ok(n) => assert!(n > 0, "{stem}: no connections"),
             Err(why) => panic!("{stem}: {why}\n{xml}"),
+        }
+        if let Err(why) = check_modifiers(&xml) {
+            panic!("{stem}: {why}\n{xml}");
         }
     }
     // The checker sees a connection without its route.

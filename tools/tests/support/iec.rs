@@ -9,7 +9,9 @@
 //! everything evaluated after it; a P or N contact is R_TRIG or F_TRIG on its variable, whose
 //! memory starts at the variable's value at start for an input (uTile reads its inputs at
 //! RUN, so an input already on is no edge) and at FALSE for the rest; CTU's count input
-//! starts as on (uTile counts no edge in the first scan). A block whose EN is wired runs
+//! starts as on (uTile counts no edge in the first scan) — or, with
+//! [`Reference::standard_start`], every edge memory and CTU's at FALSE, as the standard and
+//! OpenPLC's runtime start them. A block whose EN is wired runs
 //! only while EN is TRUE (a function block keeps its state, a function its last output) and
 //! gives EN as ENO; a wire's route (`<position>`s) changes nothing.
 
@@ -102,6 +104,8 @@ pub struct Reference {
     memo: Vec<Option<bool>>,
     eno: Vec<bool>,
     edge_mem: Vec<Option<bool>>,
+    /// Edge memories and CTU's count input start at FALSE (the standard's start).
+    standard: bool,
     fb: Vec<FbState>,
     now: u32,
 }
@@ -369,6 +373,7 @@ impl Reference {
             memo: vec![None; n],
             eno: vec![true; n],
             edge_mem: vec![None; n],
+            standard: false,
             fb: vec![FbState::default(); n],
             now: 0,
         }
@@ -414,7 +419,8 @@ impl Reference {
                         let is_input = matches!(self.pins[var], Pin::In(_));
                         // R_TRIG: M holds CLK; F_TRIG: M holds NOT CLK.
                         let clk = if rising { v } else { !v };
-                        let m = self.edge_mem[i].unwrap_or(if is_input { clk } else { false });
+                        let start = is_input && !self.standard && clk;
+                        let m = self.edge_mem[i].unwrap_or(start);
                         self.edge_mem[i] = Some(clk);
                         clk && !m
                     }
@@ -509,7 +515,7 @@ impl Reference {
                         let st = &mut self.fb[i];
                         if r {
                             st.count = 0;
-                        } else if cu && !st.prev.unwrap_or(true) {
+                        } else if cu && !st.prev.unwrap_or(!self.standard) {
                             st.count += 1;
                         }
                         st.prev = Some(cu);
@@ -540,6 +546,14 @@ impl Reference {
         };
         self.memo[i] = Some(v);
         v
+    }
+
+    /// The same file started as the standard starts it (and OpenPLC's runtime does): a P or
+    /// N contact's memory and a CTU's count input at FALSE, so an input already on at the
+    /// first scan is an edge and a count input already on counts.
+    pub fn standard_start(mut self) -> Reference {
+        self.standard = true;
+        self
     }
 
     /// The element of the function block instance `name`, for [`Reference::q`].

@@ -12,7 +12,8 @@
 //!   (`ladder_equivalence`, `ladder_export`);
 //! - [`scans`]: a program on the engine one scan at a time beside the reference, the
 //!   outputs compared after every scan (`ladder_export`);
-//! - [`routes`]: every connection of an exported LD body has its route (`ladder_export`);
+//! - [`openplc`]: what OpenPLC Editor and its compiler need of an exported LD body: each
+//!   connection's route, one modifier a contact or coil (`ladder_export`);
 //! - [`live`]: `utile live` on the virtual Nano, an HTTP client for its API, a raw Modbus
 //!   TCP client (`live_*`);
 //! - [`mqtt`]: mosquitto on loopback (password file, TLS listener, certificates), an MQTT
@@ -25,7 +26,7 @@ pub mod iec;
 pub mod ladder;
 pub mod live;
 pub mod mqtt;
-pub mod routes;
+pub mod openplc;
 pub mod scans;
 pub mod utile;
 pub mod vnano;

@@ -179,9 +179,9 @@ pub fn export_timers(r: &Reference) -> impl Fn(&Reference) -> u16 {
     }
 }
 
-/// The reference IEC evaluator runs `xml` beside `prog` on the engine, every scan of
-/// `timelines` random timelines of `until_ms` on the inputs in `mask`: the first
-/// difference, described.
+/// The reference IEC evaluator runs `xml` (started as the standard starts it) beside `prog`
+/// on the engine, every scan of `timelines` random timelines of `until_ms` on the inputs in
+/// `mask`: the first difference, described.
 pub fn iec_difference(
     prog: &Program,
     xml: &str,
@@ -190,7 +190,7 @@ pub fn iec_difference(
     until_ms: u32,
     mask: u8,
 ) -> Option<String> {
-    let fresh = Reference::new(xml);
+    let fresh = Reference::new(xml).standard_start();
     for k in 0..timelines {
         let events = random_events(rng, mask, until_ms, 30);
         let scans = run_scans(prog, &events, &[], until_ms, SCANS_PER_MS);

@@ -71,6 +71,10 @@ fn counter_reset_name(m: u8) -> String {
     format!("CTU{m}_R")
 }
 
+/// The memory bit that is FALSE in the first scan only (set by the last rung): an edge or a
+/// count needs it where IEC's edge memory starts FALSE and uTile's inputs are read at RUN.
+const STARTED: &str = "STARTED";
+
 /// The program's rungs, and every contact and coil in line order.
 struct Parts<'a> {
     rungs: Vec<&'a Rung>,

@@ -14,7 +14,7 @@ use super::super::model::{Coil, CoilKind};
 use super::graph::{Kind, Src};
 use super::plan::Form;
 use super::rungs::{rail, Writer};
-use super::{coil_push, counter_count_name, counter_reset_name, reset_name, variable};
+use super::{coil_push, counter_count_name, counter_reset_name, reset_name, variable, STARTED};
 
 impl Writer<'_> {
     /// A function block instance: EN from the left rail, then `inputs`; ENO, then `outputs`.
@@ -118,16 +118,17 @@ impl Writer<'_> {
         let [cu, r] = std::mem::take(&mut self.pending[usize::from(m)]);
         let preset = self.ladder.counter_presets[usize::from(m)];
         let pv = self.constant(&preset.to_string());
-        let inputs = std::vec![
-            ("CU", cu.unwrap_or_default()),
-            ("R", r.unwrap_or_default()),
-            ("PV", pv),
-        ];
+        // uTile counts no edge at the first END (its count inputs start as on); IEC's CTU
+        // would count a CU already on: R in the first scan (NOT STARTED) takes that edge.
+        let mut r = r.unwrap_or_default();
+        r.extend(self.below(|w| w.contact(STARTED, true, "none", rail())));
+        let inputs = std::vec![("CU", cu.unwrap_or_default()), ("R", r), ("PV", pv)];
         self.block("CTU", format!("CTU{m}"), inputs, &["Q", "CV"]);
     }
 
     /// What uTile does at END, as last rungs: each flip-flop at END, `Qm := (Qm_S OR Qm)
-    /// AND NOT Qm_R`; then each counter at END, its CTU on `CTUm_CU` and `CTUm_R`.
+    /// AND NOT Qm_R`; then each counter at END, its CTU on `CTUm_CU` and `CTUm_R`; then
+    /// `STARTED := TRUE`.
     pub(super) fn end_rungs(&mut self) {
         let pops = |w: &Self, op: u8| w.parts.coils.iter().any(|k| k.op == op);
         for m in 0..16u8 {
@@ -157,6 +158,10 @@ impl Writer<'_> {
                 self.pending[usize::from(m)][1] = Some(r);
             }
             self.ctu(m);
+        }
+        if self.plan.started {
+            self.g.start_rung();
+            self.coil(STARTED, false, "none", rail());
         }
     }
 }

@@ -11,7 +11,7 @@ use utile_core::opcodes::{
     POP_CR, POP_CU, POP_R, POP_S, POP_U, POP_V, PUSH_CQ, PUSH_Q, PUSH_U, PUSH_V,
 };
 
-use super::super::model::CoilKind;
+use super::super::model::{CoilKind, ContactKind};
 
 use super::{coil_line, first_line, Parts};
 
@@ -36,7 +36,12 @@ pub(super) struct Plan {
     pub(super) counters: [Form; 8],
     /// The timers reset by `.TRm` (a memory bit `TOFm_R` each).
     pub(super) resets: [bool; 16],
-    /// The memory bits the flip-flops, counters, resets and the program's own U/V take.
+    /// Whether the program reads an edge or counts: a memory bit `STARTED`, set by a last
+    /// rung, keeps the first scan from seeing an edge or a count (IEC's edge memories
+    /// start FALSE, uTile reads its inputs at RUN).
+    pub(super) started: bool,
+    /// The memory bits the flip-flops, counters, resets, `STARTED` and the program's own U/V
+    /// take.
     pub(super) bits: usize,
 }
 
@@ -47,6 +52,7 @@ impl Plan {
             flip_flops: [Form::Unused; 16],
             counters: [Form::Unused; 8],
             resets: [false; 16],
+            started: false,
             bits: 0,
         };
         for m in 0..16u8 {
@@ -60,7 +66,14 @@ impl Plan {
                 plan.resets[usize::from(k.unit())] = true;
             }
         }
-        plan.bits += plan.resets.iter().filter(|&&r| r).count() + own_bits(parts);
+        let edges = parts
+            .contacts
+            .iter()
+            .any(|c| matches!(c.kind(), ContactKind::Rising | ContactKind::Falling));
+        plan.started = edges || plan.counters.iter().any(|&f| f != Form::Unused);
+        plan.bits += plan.resets.iter().filter(|&&r| r).count()
+            + usize::from(plan.started)
+            + own_bits(parts);
         plan
     }
 

@@ -11,7 +11,7 @@ use utile_core::opcodes::{AND, CLR, OR, PUSH_AL, PUSH_AT, PUSH_CQ, PUSH_TQ, SET}
 use super::super::model::{Contact, Flow, Ladder, Net, Step};
 use super::graph::{Graph, Kind, Src, RAIL};
 use super::plan::{Form, Plan};
-use super::{counter_reset_name, reset_name, variable, Parts};
+use super::{counter_reset_name, reset_name, variable, Parts, STARTED};
 
 /// The export's state while it writes the rungs.
 pub(super) struct Writer<'a> {
@@ -147,26 +147,26 @@ impl<'a> Writer<'a> {
                 p
             }
             Net::Xor(a, b, _) => {
-                let x = self.operand(a, &input);
+                let x = self.operand(&input, |w| w.net(a, rail()));
                 let y = self.below(|w| w.net(b, rail()));
                 let v = self.function("XOR", std::vec![x, y]);
                 self.and(input, v)
             }
             Net::Not(a, _) => {
-                let x = self.operand(a, &input);
+                let x = self.operand(&input, |w| w.net(a, rail()));
                 let v = self.function("NOT", std::vec![x]);
                 self.and(input, v)
             }
         }
     }
 
-    /// A function's first operand, a network from the rail: on this line when nothing
-    /// arrives before it, else below (the power arriving goes on along this line).
-    fn operand(&mut self, n: &Net, input: &[Src]) -> Vec<Src> {
+    /// Something from the rail that a function combines with `input`: on this line when
+    /// nothing arrives before it, else below (the power arriving goes on along this line).
+    fn operand<T>(&mut self, input: &[Src], f: impl FnOnce(&mut Self) -> T) -> T {
         if input == rail().as_slice() {
-            self.net(n, rail())
+            f(self)
         } else {
-            self.below(|w| w.net(n, rail()))
+            self.below(f)
         }
     }
 
@@ -190,9 +190,22 @@ impl<'a> Writer<'a> {
         let edge = match c.op {
             op if (PUSH_AL..PUSH_AL + 6).contains(&op) => "rising",
             op if (PUSH_AT..PUSH_AT + 6).contains(&op) => "falling",
-            _ => "none",
+            _ => return self.contact(&var, c.negated, "none", input),
         };
-        self.contact(&var, c.negated, edge, input)
+        // uTile sees no edge in the first scan (it reads its inputs at RUN); IEC's edge
+        // memory starts FALSE, so an input already on would be one: the edge AND STARTED.
+        if !c.negated {
+            let e = self.contact(&var, false, edge, input);
+            return self.contact(STARTED, false, "none", e);
+        }
+        // NOT (edge AND STARTED), a NOT function: OpenPLC's contact is negated or an edge,
+        // never both.
+        let e = self.operand(&input, |w| {
+            let e = w.contact(&var, false, edge, rail());
+            w.contact(STARTED, false, "none", e)
+        });
+        let v = self.function("NOT", std::vec![e]);
+        self.and(input, v)
     }
 
     /// `TQm.`: its TOF's Q by name (`TOFm.Q`: IEC's last call's Q, this scan's below the
@@ -227,7 +240,7 @@ impl<'a> Writer<'a> {
             let q = self.contact(name, false, "none", input);
             return self.contact(&gate, true, "none", q);
         }
-        let q = self.below(|w| {
+        let q = self.operand(&input, |w| {
             let q = w.contact(name, false, "none", rail());
             w.contact(&gate, true, "none", q)
         });

@@ -10,7 +10,9 @@ use utile_core::opcodes::{POP_CR, POP_CU, POP_R, POP_S, POP_TK, POP_TR, PUSH_A, 
 
 use super::super::model::Ladder;
 use super::plan::{Form, Plan};
-use super::{coil_push, counter_count_name, counter_reset_name, reset_name, variable, Parts};
+use super::{
+    coil_push, counter_count_name, counter_reset_name, reset_name, variable, Parts, STARTED,
+};
 
 fn boolean(s: &mut String, name: &str, address: Option<&str>) {
     let at = address.map_or_else(String::new, |a| format!(" address=\"{a}\""));
@@ -109,6 +111,9 @@ pub(super) fn declarations(
     }
     for l in latches {
         boolean(&mut s, l, None);
+    }
+    if plan.started {
+        boolean(&mut s, STARTED, None);
     }
     s
 }

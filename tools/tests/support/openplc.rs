@@ -1,5 +1,8 @@
-//! The shape of an exported PLCopen LD body: every connection has its route, as OpenPLC
-//! Editor writes it and its compiler (xml2st) reads it (`ladder_export`).
+//! What OpenPLC Editor and its compiler (xml2st) need of an exported PLCopen LD body
+//! (`ladder_export`): every connection has its route, as the editor writes it and the
+//! compiler reads a block's output; every contact and coil has one modifier (negated, an
+//! edge, set or reset), as the editor draws them — the compiler keeps only the negation of
+//! a contact that is both.
 
 /// An element's absolute point: its position plus a `relPosition`.
 fn point(el: roxmltree::Node, rel: roxmltree::Node) -> (i64, i64) {
@@ -119,4 +122,29 @@ pub fn without_routes(xml: &str) -> String {
     }
     out.push_str(rest);
     out
+}
+
+/// Every contact and coil of an LD body has at most one modifier: negated, a rising or
+/// falling edge, or (a coil) set or reset. The number of contacts and coils.
+pub fn check_modifiers(xml: &str) -> Result<usize, String> {
+    let doc = roxmltree::Document::parse(xml).map_err(|e| e.to_string())?;
+    let mut count = 0;
+    for n in doc
+        .descendants()
+        .filter(|n| n.has_tag_name("contact") || n.has_tag_name("coil"))
+    {
+        count += 1;
+        let set = |a: &str, off: &str| n.attribute(a).is_some_and(|v| v != off);
+        let modifiers = usize::from(set("negated", "false"))
+            + usize::from(set("edge", "none"))
+            + usize::from(set("storage", "none"));
+        if modifiers > 1 {
+            return Err(format!(
+                "{} {:?}: {modifiers} modifiers",
+                n.tag_name().name(),
+                n.attribute("localId")
+            ));
+        }
+    }
+    Ok(count)
 }
