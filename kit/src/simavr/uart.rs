@@ -1,5 +1,7 @@
 //! The chip's serial port (USART0): bytes into the firmware, paced as chosen, and bytes out
-//! of it, each with the cycle its stop bit ends.
+//! of it, each with the cycle its stop bit ends, from a transmitter double-buffered as the
+//! datasheet's (UDRE0 as soon as a byte moves into the shift register; simavr's own raises
+//! it only when the line is idle, see [`on_uart_output`]).
 
 use super::chip::{Chip, Link};
 use super::{ioctl_def, LoadError, CYCLES_PER_BYTE, F_CPU, RX_FIXED_CYCLES_PER_BYTE};
@@ -48,6 +50,10 @@ pub enum RxPacing {
 
 /// The UART callbacks' state (inside the chip's boxed link).
 pub(crate) struct UartLink {
+    /// simavr's USART0 module (its transmit count and data-register-empty flag).
+    module: *mut ffi::avr_uart_t,
+    /// simavr's transmit pump, a timer of the module's own (see [`learn_pump`]).
+    pump: ffi::avr_cycle_timer_t,
     /// Bytes the firmware sent, with the cycle their stop bit ends.
     out: VecDeque<(u8, u64)>,
     /// Cycle at which the firmware wrote its last byte to UDR0.
@@ -63,6 +69,8 @@ pub(crate) struct UartLink {
 impl UartLink {
     pub(crate) fn new() -> Self {
         UartLink {
+            module: std::ptr::null_mut(),
+            pump: None,
             out: VecDeque::with_capacity(4096),
             out_last_cycle: 0,
             tx_free: 0,
@@ -113,6 +121,15 @@ impl Rx {
 }
 
 /// simavr's UART output IRQ: the firmware wrote a byte to UDR0.
+///
+/// The byte starts on the wire when the line is free (at once, or when the byte before it
+/// has left) and takes 10 bit times. The datasheet's transmitter is double-buffered: UDR0
+/// is empty again (UDRE0) as soon as its byte has moved into the shift register, so the
+/// next byte waits in UDR0 and follows without a gap, and transmit complete (TXC0) rises
+/// when the last one has left. simavr raises UDRE0 only when nothing is left to send, so a
+/// firmware's next byte came late and its transmit complete early against these stop bits;
+/// here UDRE0 is raised when the byte moves into the shift register, so that simavr's own
+/// transmit pump (one tick a frame from the first byte) and these stop bits agree.
 unsafe extern "C" fn on_uart_output(_irq: *mut ffi::avr_irq_t, value: u32, param: *mut c_void) {
     // SAFETY: `param` is the `Box<Link>` owned by the `Chip` that registered this callback;
     // simavr only calls it from `avr_run` while the `Chip` is alive and borrowed.
@@ -125,10 +142,119 @@ unsafe extern "C" fn on_uart_output(_irq: *mut ffi::avr_irq_t, value: u32, param
         (*d.add(UCSR0A), ubrr)
     };
     let bit = (ubrr + 1) * if ucsra & U2X0 != 0 { 8 } else { 16 };
-    let stop = now.max(link.uart.tx_free) + 10 * bit;
+    let starts = now.max(link.uart.tx_free);
+    let stop = starts + 10 * bit;
     link.uart.tx_free = stop;
     link.uart.out.push_back((value as u8, stop));
     link.uart.out_last_cycle = now;
+    let module = link.uart.module;
+    if module.is_null() {
+        return;
+    }
+    // SAFETY: the module belongs to the running AVR; simavr calls this from its UDR0 write,
+    // after clearing UDRE0 and before counting the byte (`tx_cnt` is the count before it).
+    unsafe {
+        match (*module).tx_cnt {
+            // Straight into the shift register: UDR0 is empty again. simavr's pump may still
+            // tick from an earlier byte (it goes on while UDRE0's interrupt is enabled, as
+            // when the firmware was slow to give it the next byte): it would count this one
+            // at its next tick, less than a frame from now; like the transmitter, it starts
+            // again from this byte.
+            0 => {
+                ffi::avr_raise_interrupt(link.avr, &mut (*module).udrc);
+                if link.uart.pump.is_some() && pump_ticking(link.avr, link.uart.pump, module) {
+                    ffi::avr_cycle_timer_register(
+                        link.avr,
+                        10 * bit,
+                        link.uart.pump,
+                        module.cast(),
+                    );
+                }
+            }
+            // It waits in UDR0 until the byte on the wire has left, one cycle after simavr's
+            // pump has counted that byte.
+            1 => {
+                if link.uart.pump.is_none() {
+                    link.uart.pump = learn_pump(link.avr, module);
+                }
+                let wait = starts.saturating_sub(now) + 1;
+                ffi::avr_cycle_timer_register(link.avr, wait, Some(udr_moved), param);
+            }
+            // A firmware that wrote UDR0 while it was full: the byte is lost on a real chip.
+            _ => {}
+        }
+    }
+}
+
+/// simavr's transmit pump, found in its timer pool: while a byte is on the wire the pump is
+/// scheduled, and with the receive FIFO empty the module has no other timer (its receive
+/// timer is cancelled when the FIFO is read empty), so the one timer of the module is it.
+/// `None` when that cannot be told yet (the function is static in simavr's C).
+///
+/// # Safety
+/// `avr` and `module` belong together and simavr is not changing its timers meanwhile.
+unsafe fn learn_pump(avr: *mut ffi::avr_t, module: *mut ffi::avr_uart_t) -> ffi::avr_cycle_timer_t {
+    // SAFETY: as the caller promises.
+    unsafe {
+        let fifo = &(*module).input;
+        if fifo.read != fifo.write {
+            return None;
+        }
+        let mut found = None;
+        let mut slot = (*avr).cycle_timers.timer;
+        while !slot.is_null() {
+            if (*slot).param == module.cast() {
+                if found.is_some() {
+                    return None;
+                }
+                found = Some((*slot).timer);
+            }
+            slot = (*slot).next;
+        }
+        found.flatten()
+    }
+}
+
+/// Whether simavr's transmit pump `pump` of `module` is scheduled.
+///
+/// # Safety
+/// As [`learn_pump`].
+unsafe fn pump_ticking(
+    avr: *mut ffi::avr_t,
+    pump: ffi::avr_cycle_timer_t,
+    module: *mut ffi::avr_uart_t,
+) -> bool {
+    let address = |t: ffi::avr_cycle_timer_t| t.map(|f| f as usize);
+    // SAFETY: as the caller promises.
+    unsafe {
+        let mut slot = (*avr).cycle_timers.timer;
+        while !slot.is_null() {
+            if (*slot).param == module.cast() && address((*slot).timer) == address(pump) {
+                return true;
+            }
+            slot = (*slot).next;
+        }
+    }
+    false
+}
+
+/// The byte that waited in UDR0 has moved into the shift register: UDRE0 again (see
+/// [`on_uart_output`]), unless a reset has emptied the transmitter meanwhile.
+unsafe extern "C" fn udr_moved(
+    avr: *mut ffi::avr_t,
+    _when: ffi::avr_cycle_count_t,
+    param: *mut c_void,
+) -> ffi::avr_cycle_count_t {
+    // SAFETY: as in `on_uart_output`: the boxed `Link` outlives the AVR's timers.
+    let link = unsafe { &mut *(param as *mut Link) };
+    let module = link.uart.module;
+    // SAFETY: the module belongs to `avr`, which is running this timer.
+    unsafe {
+        if !module.is_null() && (*module).tx_cnt == 1 {
+            ffi::avr_raise_interrupt(avr, &mut (*module).udrc);
+        }
+    }
+    0
 }
 
 /// simavr's UART XON IRQ: raised whenever its receive FIFO is (or becomes) empty.
@@ -184,6 +310,7 @@ impl Chip {
                 if (*io).irq_ioctl_get == IOCTL_UART0_GETIRQ {
                     // The UART module begins with its `avr_io_t`.
                     self.rx.uart = io as *mut ffi::avr_uart_t;
+                    self.link.uart.module = self.rx.uart;
                 }
                 io = (*io).next;
             }
@@ -315,12 +442,18 @@ impl Chip {
         self.rx.last = self.cycle();
     }
 
-    /// The receive side after a reset: simavr emptied its FIFO; paced input waits for the
-    /// receiver again.
-    pub(crate) fn rx_after_reset(&mut self) {
+    /// The serial port after a reset: simavr emptied its receive FIFO (paced input waits for
+    /// the receiver again) and its transmitter.
+    pub(crate) fn uart_after_reset(&mut self) {
         self.rx.next = self.cycle();
         self.link.uart.rx_empty = true;
         self.link.uart.rx_full = false;
+        // The transmitter is empty after a reset: the next byte starts when it is written.
+        self.link.uart.tx_free = self.link.uart.tx_free.min(self.cycle());
+        let param = &mut *self.link as *mut Link as *mut c_void;
+        // SAFETY: the timer was registered with this AVR and this parameter; simavr is not
+        // running.
+        unsafe { ffi::avr_cycle_timer_cancel(self.avr.as_ptr(), Some(udr_moved), param) };
     }
 
     /// Chooses how input is paced (default [`RxPacing::AfterRead`]).
@@ -399,6 +532,13 @@ impl Chip {
     /// Bytes sent by the firmware and not yet taken.
     pub fn output_len(&self) -> usize {
         self.link.uart.out.len()
+    }
+
+    /// CPU cycles one 8N1 frame of the firmware's own takes, start bit to stop bit, at the
+    /// UBRR0 and U2X0 it set: the wire time [`Chip::take_output_timed`]'s bytes are given.
+    pub fn frame_cycles_set(&self) -> u64 {
+        let ubrr = u64::from(self.peek(UBRR0L)) | u64::from(self.peek(UBRR0H) & 0x0F) << 8;
+        10 * (ubrr + 1) * if self.peek(UCSR0A) & U2X0 != 0 { 8 } else { 16 }
     }
 
     /// The baud rate the firmware set (UBRR0 and U2X0).
