@@ -2,7 +2,9 @@
 //! (`kit/tests/fixtures/*.c`): a boot loader beside the application, reset flags and the
 //! cycle count over resets, the watchdog after a reset and in interrupt-and-system-reset
 //! mode, the ADC in millivolts, UART bytes timed at any baud, several chips on one RS-485
-//! line.
+//! line; and the datasheet's timings simavr leaves out or gets wrong (docs/SIMULATORS.md):
+//! an interrupt's entry, the ADC's conversion time, the CPU's halt after an EEPROM read,
+//! the transmitter's data register in front of its shift register.
 
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -416,4 +418,119 @@ fn eeprom_reads_and_writes_through_one_path() {
     assert_eq!(&ee[1018..], &[0xFF, 0xFF, 1, 2, 3, 4]);
     chip.set_eeprom(0, &[7]);
     assert_eq!(chip.eeprom()[0], 7);
+}
+
+/// Steps until `done` holds after a step, at most `max` cycles; the cycle before and after
+/// that step.
+fn step_until(chip: &mut Chip, max: u64, mut done: impl FnMut(&Chip) -> bool) -> (u64, u64) {
+    let end = chip.cycle() + max;
+    while chip.cycle() < end {
+        let before = chip.cycle();
+        chip.step();
+        if done(chip) {
+            return (before, chip.cycle());
+        }
+    }
+    panic!("not within {max} cycles (PC {:#06x})", chip.pc());
+}
+
+#[test]
+fn an_interrupts_entry_takes_four_cycles() {
+    // 'j': the watchdog's interrupt with interrupts on, main in `for (;;) {}` (an rjmp to
+    // itself, 2 cycles); the vector (6, at 0x18) is reached 2 + 4 cycles after the last
+    // rjmp began: "the interrupt execution response … is four clock cycles minimum".
+    let mut chip = Chip::load(&app()).expect("load");
+    lines(&mut chip, 1, 50);
+    chip.send(b"j");
+    let (before, at) = step_until(&mut chip, 40 * CYCLES_PER_MS, |c| c.pc() == 0x18);
+    assert_eq!(at - before, 2 + 4, "an rjmp, then the interrupt's entry");
+}
+
+/// Cycles from the write of ADSC to ADSC reading 0 again for one 'a' of the app.
+fn conversion_cycles(chip: &mut Chip) -> u64 {
+    const ADCSRA: usize = 0x7A;
+    const ADSC: u8 = 1 << 6;
+    chip.send(b"a");
+    let (_, start) = step_until(chip, 10 * CYCLES_PER_MS, |c| c.peek(ADCSRA) & ADSC != 0);
+    let (_, end) = step_until(chip, 10 * CYCLES_PER_MS, |c| c.peek(ADCSRA) & ADSC == 0);
+    lines(chip, 1, 20);
+    end - start
+}
+
+#[test]
+fn an_adc_conversion_takes_25_adc_clocks_first_then_13() {
+    // The app enables the ADC at boot with clk/128 and converts on each 'a' (ADSC polled).
+    let mut chip = Chip::load(&app()).expect("load");
+    lines(&mut chip, 1, 50);
+    for (clocks, what) in [
+        (25, "the first conversion"),
+        (13, "the next"),
+        (13, "the next"),
+    ] {
+        let took = conversion_cycles(&mut chip);
+        // Within the few cycles of the polling loop around the end.
+        // ADSC is seen set after the instruction that wrote it and clear after the one that
+        // read it: a few cycles either way.
+        assert!(
+            (clocks * 128 - 4..clocks * 128 + 8).contains(&took),
+            "{what}: {took} cycles, {clocks} ADC clocks are {}",
+            clocks * 128
+        );
+    }
+}
+
+#[test]
+fn an_eeprom_read_halts_the_cpu_four_cycles() {
+    // The app reads EEPROM bytes at boot: `sbi EECR, EERE` (2 cycles) halts the CPU for 4
+    // more before the next instruction.
+    const SBI_EECR_EERE: u16 = 0x9AF8;
+    let mut chip = Chip::load(&app()).expect("load");
+    step_until(&mut chip, CYCLES_PER_MS, |c| {
+        c.flash_word(c.pc()) == SBI_EECR_EERE
+    });
+    let from = chip.cycle();
+    chip.step();
+    assert_eq!(chip.cycle() - from, 2 + 4);
+}
+
+#[test]
+fn the_transmitter_takes_a_byte_at_once_on_an_idle_line_and_the_next_after_it() {
+    // UDR0 is a buffer in front of the shift register: on an idle line a byte written moves
+    // on at once and UDRE0 rises again; the byte written behind it waits in UDR0 (UDRE0 0)
+    // until the first has left; TXC0 rises once the last stop bit has ended. The app writes
+    // its boot line polling UDRE0.
+    const UCSR0A: usize = 0xC0;
+    const UDRE0: u8 = 1 << 5;
+    const TXC0: u8 = 1 << 6;
+    let mut chip = Chip::load(&app()).expect("load");
+    let (_, first) = step_until(&mut chip, CYCLES_PER_MS, |c| c.output_len() == 1);
+    step_until(&mut chip, 20, |c| c.peek(UCSR0A) & UDRE0 != 0);
+    assert!(
+        chip.cycle() - first < 20,
+        "UDRE0 rises at once on an idle line"
+    );
+    step_until(&mut chip, 100, |c| c.output_len() == 2);
+    assert_eq!(
+        chip.peek(UCSR0A) & UDRE0,
+        0,
+        "the second byte waits in UDR0"
+    );
+    assert_eq!(chip.peek(UCSR0A) & TXC0, 0, "the first is still being sent");
+    step_until(&mut chip, 10 * CYCLES_PER_MS, |c| {
+        c.peek(UCSR0A) & TXC0 != 0
+    });
+    let out = chip.take_output_timed();
+    let text: Vec<u8> = out.iter().map(|&(b, _)| b).collect();
+    assert!(text.starts_with(b"APP mcusr="), "{text:?}");
+    let frame = 10 * 16 * 52;
+    assert!(
+        out.windows(2).all(|w| w[1].1 - w[0].1 == frame),
+        "back to back"
+    );
+    let last_stop = out.last().expect("bytes").1;
+    assert!(
+        chip.cycle() >= last_stop && chip.cycle() - last_stop < 8,
+        "TXC0 at the last stop bit ({last_stop}), not at {}",
+        chip.cycle()
+    );
 }

@@ -15,5 +15,7 @@ pub mod link;
 /// Every uTile on a line live in the browser, the terminal and a Modbus TCP gateway
 /// (`utile live`).
 pub mod live;
+/// The avr8js cross-check's scenarios and traces, and their runner on simavr (`simtrace`).
+pub mod simtrace;
 /// The virtual Nano (`cargo nano`): firmware in simavr, UART on a terminal or pty.
 pub mod vnano;

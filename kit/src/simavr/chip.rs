@@ -205,6 +205,7 @@ impl Chip {
         };
         chip.attach_uart()?;
         chip.attach_eeprom();
+        chip.attach_adc();
         Ok(chip)
     }
 

@@ -12,14 +12,29 @@ const IOCTL_EEPROM_SET: u32 = ioctl_def(b'e', b'e', b's', b'p');
 const EECR: u16 = 0x3F;
 /// EECR bit: EEPROM write enable (a byte write starts when it is set after EEMPE).
 const EEPE: u8 = 1 << 1;
+/// EECR bit: EEPROM read enable.
+const EERE: u8 = 1 << 0;
+/// Cycles the CPU halts after an EEPROM read (ATmega328P datasheet, EEPROM Read/Write
+/// Access).
+const READ_HALT: u64 = 4;
+/// Cycles the CPU halts after an EEPROM write starts.
+const WRITE_HALT: u64 = 2;
 
-/// simavr's hook on EECR writes: counts EEPROM byte writes and, if asked, models their time.
+/// simavr's hook on EECR writes: counts EEPROM byte writes and, if asked, models their time;
+/// and halts the CPU as the datasheet says, which simavr leaves out: four cycles after a
+/// read (EERE), two after a write starts (EEPE).
 unsafe extern "C" fn on_eecr_write(avr: *mut ffi::avr_t, _addr: u16, v: u8, param: *mut c_void) {
     // SAFETY: `param` is the chip's boxed `Link`, alive while simavr runs.
     let link = unsafe { &mut *(param as *mut Link) };
+    if v & EERE != 0 {
+        // SAFETY: `avr` is the running AVR; its cycle count is plain data.
+        unsafe { (*avr).cycle += READ_HALT };
+    }
     if v & EEPE == 0 {
         return;
     }
+    // SAFETY: as above.
+    unsafe { (*avr).cycle += WRITE_HALT };
     link.ee_writes += 1;
     if link.ee_write_time {
         // simavr has already finished the write; the chip keeps EEPE set while it programs

@@ -1,5 +1,5 @@
-//! Running a [`Chip`]: the one run loop, one instruction at a time, resets, and the
-//! watchdog's interrupt-then-reset rule simavr leaves out. The per-instruction path is a few
+//! Running a [`Chip`]: the one run loop, one instruction at a time, resets, the watchdog's
+//! interrupt-then-reset rule and the interrupt response time simavr leaves out. The per-instruction path is a few
 //! loads and compares unless something is due (BENCHMARKS.md, "The test loop").
 
 use super::chip::{Chip, CpuState, Reset, MCUSR};
@@ -7,11 +7,21 @@ use super::{ioctl_def, F_CPU};
 use simavr_ffi as ffi;
 use std::ffi::c_int;
 
+/// Data-space addresses of DDRB, PORTB, DDRD, PORTD (the output pins' registers).
+const DDRB: usize = 0x24;
+const PORTB: usize = 0x25;
+const DDRD: usize = 0x2A;
+const PORTD: usize = 0x2B;
 /// Data-space address of WDTCSR (the watchdog's control register).
 const WDTCSR: usize = 0x60;
 /// WDTCSR's WDIF, WDIE and WDE: the watchdog's interrupt is pending in interrupt-and-system-
 /// reset mode.
 const WD_PENDING_IN_RESET_MODE: u8 = 0xC8;
+/// End of the ATmega328P's vector table (26 vectors of 4 bytes).
+const VECTOR_TABLE_END: u32 = 26 * 4;
+/// Cycles of an interrupt's entry, the PC pushed ("four clock cycles minimum", ATmega328P
+/// datasheet, Interrupt Response Time); simavr counts none, so the harness adds them.
+const INTERRUPT_RESPONSE: u64 = 4;
 /// The `wdr` instruction.
 const WDR: u16 = 0x95A8;
 /// simavr's watchdog-reset ioctl (the `wdr` instruction): re-arms the watchdog timer.
@@ -28,6 +38,30 @@ impl Chip {
     /// sleep ([`Chip::sleeping`] tells): for a firmware that must never sleep.
     pub fn run_awake_for(&mut self, cycles: u64) -> CpuState {
         self.run_until(self.cycle().saturating_add(cycles), true)
+    }
+
+    /// [`Chip::run_for`] that logs every change of the levels the firmware drives high on
+    /// ports B and D (`PORTx & DDRx`, port B in the high byte), seen after the instruction
+    /// that made it: `(cycle, levels)` pushed to `log`. The avr8js cross-check's record of
+    /// the output pins (Y0..Y7, D10), exact to the instruction.
+    pub fn run_logging_outputs(&mut self, cycles: u64, log: &mut Vec<(u64, u16)>) -> CpuState {
+        let end = self.cycle().saturating_add(cycles);
+        let driven = |c: &Chip| {
+            let (b, d) = (c.io(PORTB) & c.io(DDRB), c.io(PORTD) & c.io(DDRD));
+            u16::from(b) << 8 | u16::from(d)
+        };
+        let mut last = log.last().map_or_else(|| driven(self), |&(_, l)| l);
+        if log.is_empty() {
+            log.push((self.cycle(), last));
+        }
+        self.run_while(end, |c| {
+            let now = driven(c);
+            if now != last {
+                last = now;
+                log.push((c.cycle(), now));
+            }
+            false
+        })
     }
 
     /// The one run loop: steps until cycle `end`, a stop, or (`awake`) a sleep. Kept out of
@@ -93,6 +127,10 @@ impl Chip {
         // harness never attaches gdb, so `run` is always this function.
         // SAFETY: `avr` is valid; callbacks it fires only touch our boxed `Link`.
         unsafe { ffi::avr_callback_run_raw(self.avr.as_ptr()) };
+        if self.entered_interrupt() {
+            // SAFETY: `avr` is valid and not running; simavr's timers see the time pass.
+            unsafe { self.avr.as_mut().cycle += INTERRUPT_RESPONSE };
+        }
         let state = self.avr().state as u32;
         if self.avr().cycle < before {
             // simavr reset the chip (and its counter) during this step.
@@ -112,6 +150,14 @@ impl Chip {
             ffi::cpu_Done | ffi::cpu_Stopped => CpuState::Done,
             _ => CpuState::Running,
         }
+    }
+
+    /// simavr has just served an interrupt: the step ended at an interrupt vector other than
+    /// reset's with I clear. (Nothing in an image jumps into the vector table but to 0.)
+    #[inline(always)]
+    fn entered_interrupt(&self) -> bool {
+        let pc = self.pc();
+        pc != 0 && pc < VECTOR_TABLE_END && pc % 4 == 0 && !self.interrupts_on()
     }
 
     /// Resets the chip as a real one would: registers cleared, SRAM and EEPROM kept, MCUSR

@@ -1,7 +1,6 @@
 //! The chip's serial port (USART0): bytes into the firmware, paced as chosen, and bytes out
 //! of it, each with the cycle its stop bit ends, from a transmitter double-buffered as the
-//! datasheet's (UDRE0 as soon as a byte moves into the shift register; simavr's own raises
-//! it only when the line is idle, see [`on_uart_output`]).
+//! datasheet's in place of simavr's (see [`on_udr_write`]).
 
 use super::chip::{Chip, Link};
 use super::{ioctl_def, LoadError, CYCLES_PER_BYTE, F_CPU, RX_FIXED_CYCLES_PER_BYTE};
@@ -11,6 +10,11 @@ use std::ffi::{c_int, c_void};
 
 const UCSR0A: usize = 0xC0;
 const UCSR0B: usize = 0xC1;
+const UDR0: usize = 0xC6;
+/// UCSR0A bit: the data register is empty.
+const UDRE0: u8 = 1 << 5;
+/// UCSR0B bit: transmitter enabled.
+const TXEN0: u8 = 1 << 3;
 const UBRR0L: usize = 0xC4;
 const UBRR0H: usize = 0xC5;
 /// UCSR0A bit: double speed.
@@ -50,16 +54,17 @@ pub enum RxPacing {
 
 /// The UART callbacks' state (inside the chip's boxed link).
 pub(crate) struct UartLink {
-    /// simavr's USART0 module (its transmit count and data-register-empty flag).
-    module: *mut ffi::avr_uart_t,
-    /// simavr's transmit pump, a timer of the module's own (see [`learn_pump`]).
-    pump: ffi::avr_cycle_timer_t,
     /// Bytes the firmware sent, with the cycle their stop bit ends.
     out: VecDeque<(u8, u64)>,
     /// Cycle at which the firmware wrote its last byte to UDR0.
     out_last_cycle: u64,
-    /// Cycle at which the transmitter's line is free again.
+    /// Cycle at which the last byte's stop bit ends: the transmitter's line is free again
+    /// (its shift register empty), and transmit complete then, unless another byte followed.
     tx_free: u64,
+    /// A byte waits in UDR0 for the shift register (UDRE0 is 0 until it moves).
+    udr_full: bool,
+    /// simavr's USART0 module (its UDRE and TXC vectors, its output IRQ).
+    module: *mut ffi::avr_uart_t,
     /// simavr's receive FIFO is empty: the firmware has read every byte we gave it.
     rx_empty: bool,
     /// simavr's receive FIFO is full (XOFF).
@@ -69,11 +74,11 @@ pub(crate) struct UartLink {
 impl UartLink {
     pub(crate) fn new() -> Self {
         UartLink {
-            module: std::ptr::null_mut(),
-            pump: None,
             out: VecDeque::with_capacity(4096),
             out_last_cycle: 0,
             tx_free: 0,
+            udr_full: false,
+            module: std::ptr::null_mut(),
             rx_empty: true,
             rx_full: false,
         }
@@ -120,16 +125,9 @@ impl Rx {
     }
 }
 
-/// simavr's UART output IRQ: the firmware wrote a byte to UDR0.
-///
-/// The byte starts on the wire when the line is free (at once, or when the byte before it
-/// has left) and takes 10 bit times. The datasheet's transmitter is double-buffered: UDR0
-/// is empty again (UDRE0) as soon as its byte has moved into the shift register, so the
-/// next byte waits in UDR0 and follows without a gap, and transmit complete (TXC0) rises
-/// when the last one has left. simavr raises UDRE0 only when nothing is left to send, so a
-/// firmware's next byte came late and its transmit complete early against these stop bits;
-/// here UDRE0 is raised when the byte moves into the shift register, so that simavr's own
-/// transmit pump (one tick a frame from the first byte) and these stop bits agree.
+/// simavr's UART output IRQ: the firmware's byte goes on the wire (raised by
+/// [`on_udr_write`]). It starts when the line is free (at once, or when the byte before it
+/// has left) and takes 10 bit times at the UBRR0 and U2X0 the firmware set.
 unsafe extern "C" fn on_uart_output(_irq: *mut ffi::avr_irq_t, value: u32, param: *mut c_void) {
     // SAFETY: `param` is the `Box<Link>` owned by the `Chip` that registered this callback;
     // simavr only calls it from `avr_run` while the `Chip` is alive and borrowed.
@@ -142,119 +140,95 @@ unsafe extern "C" fn on_uart_output(_irq: *mut ffi::avr_irq_t, value: u32, param
         (*d.add(UCSR0A), ubrr)
     };
     let bit = (ubrr + 1) * if ucsra & U2X0 != 0 { 8 } else { 16 };
-    let starts = now.max(link.uart.tx_free);
-    let stop = starts + 10 * bit;
+    let stop = now.max(link.uart.tx_free) + 10 * bit;
     link.uart.tx_free = stop;
     link.uart.out.push_back((value as u8, stop));
     link.uart.out_last_cycle = now;
-    let module = link.uart.module;
-    if module.is_null() {
-        return;
-    }
-    // SAFETY: the module belongs to the running AVR; simavr calls this from its UDR0 write,
-    // after clearing UDRE0 and before counting the byte (`tx_cnt` is the count before it).
-    unsafe {
-        match (*module).tx_cnt {
-            // Straight into the shift register: UDR0 is empty again. simavr's pump may still
-            // tick from an earlier byte (it goes on while UDRE0's interrupt is enabled, as
-            // when the firmware was slow to give it the next byte): it would count this one
-            // at its next tick, less than a frame from now; like the transmitter, it starts
-            // again from this byte.
-            0 => {
-                ffi::avr_raise_interrupt(link.avr, &mut (*module).udrc);
-                if link.uart.pump.is_some() && pump_ticking(link.avr, link.uart.pump, module) {
-                    ffi::avr_cycle_timer_register(
-                        link.avr,
-                        10 * bit,
-                        link.uart.pump,
-                        module.cast(),
-                    );
-                }
-            }
-            // It waits in UDR0 until the byte on the wire has left, one cycle after simavr's
-            // pump has counted that byte.
-            1 => {
-                if link.uart.pump.is_none() {
-                    link.uart.pump = learn_pump(link.avr, module);
-                }
-                let wait = starts.saturating_sub(now) + 1;
-                ffi::avr_cycle_timer_register(link.avr, wait, Some(udr_moved), param);
-            }
-            // A firmware that wrote UDR0 while it was full: the byte is lost on a real chip.
-            _ => {}
-        }
-    }
 }
 
-/// simavr's transmit pump, found in its timer pool: while a byte is on the wire the pump is
-/// scheduled, and with the receive FIFO empty the module has no other timer (its receive
-/// timer is cancelled when the FIFO is read empty), so the one timer of the module is it.
-/// `None` when that cannot be told yet (the function is static in simavr's C).
+/// The firmware writes UDR0: the datasheet's transmitter, in place of simavr's handler.
 ///
-/// # Safety
-/// `avr` and `module` belong together and simavr is not changing its timers meanwhile.
-unsafe fn learn_pump(avr: *mut ffi::avr_t, module: *mut ffi::avr_uart_t) -> ffi::avr_cycle_timer_t {
-    // SAFETY: as the caller promises.
+/// On the chip UDR0 is a buffer in front of the shift register: a byte written while the
+/// line is idle moves into the shift register at once and UDRE0 rises again, so the next
+/// byte can follow back to back; a byte written while one is being sent waits in UDR0, and
+/// UDRE0 rises when it moves on; TXC0 rises when the shift register has sent its byte with
+/// nothing in UDR0. simavr instead runs a "pump" timer every frame from the first byte and
+/// raises UDRE0 only on its ticks: after a byte on an idle line the next waited a whole
+/// frame, and the data-register-empty interrupt cleared UDRE0 until the next tick
+/// (docs/SIMULATORS.md). UDRE0 is kept sticky (`attach_uart`): it falls only here.
+unsafe extern "C" fn on_udr_write(avr: *mut ffi::avr_t, _addr: u16, v: u8, param: *mut c_void) {
+    // SAFETY: `param` is the chip's boxed `Link`, `avr` its running AVR, `module` its USART0
+    // (found at load); simavr is inside the write and calls back only from its run.
     unsafe {
-        let fifo = &(*module).input;
-        if fifo.read != fifo.write {
-            return None;
+        let link = &mut *(param as *mut Link);
+        let p = link.uart.module;
+        let d = (*avr).data;
+        if *d.add(UCSR0B) & TXEN0 == 0 {
+            return;
         }
-        let mut found = None;
-        let mut slot = (*avr).cycle_timers.timer;
-        while !slot.is_null() {
-            if (*slot).param == module.cast() {
-                if found.is_some() {
-                    return None;
-                }
-                found = Some((*slot).timer);
-            }
-            slot = (*slot).next;
+        // UDR0 holds the byte: UDRE0 falls, its interrupt is no longer pending.
+        ffi::avr_clear_interrupt(avr, &mut (*p).udrc);
+        *d.add(UCSR0A) &= !UDRE0;
+        // On the line when the byte before it has left (`on_uart_output` logs it and times
+        // its frame); simavr's timers count from the last reset.
+        let start = link.uart.tx_free.saturating_sub(link.base);
+        ffi::avr_raise_irq((*p).io.irq.add(ffi::UART_IRQ_OUTPUT as usize), u32::from(v));
+        let now = (*avr).cycle;
+        let stop = link.uart.tx_free - link.base;
+        if start <= now {
+            link.uart.udr_full = false;
+            ffi::avr_raise_interrupt(avr, &mut (*p).udrc);
+        } else {
+            link.uart.udr_full = true;
+            ffi::avr_cycle_timer_register(avr, start - now, Some(udr_moved), param);
         }
-        found.flatten()
+        ffi::avr_cycle_timer_register(avr, stop - now, Some(tx_done), param);
     }
 }
 
-/// Whether simavr's transmit pump `pump` of `module` is scheduled.
-///
-/// # Safety
-/// As [`learn_pump`].
-unsafe fn pump_ticking(
-    avr: *mut ffi::avr_t,
-    pump: ffi::avr_cycle_timer_t,
-    module: *mut ffi::avr_uart_t,
-) -> bool {
-    let address = |t: ffi::avr_cycle_timer_t| t.map(|f| f as usize);
-    // SAFETY: as the caller promises.
-    unsafe {
-        let mut slot = (*avr).cycle_timers.timer;
-        while !slot.is_null() {
-            if (*slot).param == module.cast() && address((*slot).timer) == address(pump) {
-                return true;
-            }
-            slot = (*slot).next;
-        }
-    }
-    false
-}
-
-/// The byte that waited in UDR0 has moved into the shift register: UDRE0 again (see
-/// [`on_uart_output`]), unless a reset has emptied the transmitter meanwhile.
+/// The byte in UDR0 moves into the shift register: UDRE0 rises.
 unsafe extern "C" fn udr_moved(
     avr: *mut ffi::avr_t,
     _when: ffi::avr_cycle_count_t,
     param: *mut c_void,
 ) -> ffi::avr_cycle_count_t {
-    // SAFETY: as in `on_uart_output`: the boxed `Link` outlives the AVR's timers.
-    let link = unsafe { &mut *(param as *mut Link) };
-    let module = link.uart.module;
-    // SAFETY: the module belongs to `avr`, which is running this timer.
+    // SAFETY: as in `on_udr_write`; simavr runs this timer from its run.
     unsafe {
-        if !module.is_null() && (*module).tx_cnt == 1 {
-            ffi::avr_raise_interrupt(avr, &mut (*module).udrc);
+        let link = &mut *(param as *mut Link);
+        link.uart.udr_full = false;
+        ffi::avr_raise_interrupt(avr, &mut (*link.uart.module).udrc);
+    }
+    0
+}
+
+/// A byte's stop bit has ended: if no byte followed it, TXC0 rises.
+unsafe extern "C" fn tx_done(
+    avr: *mut ffi::avr_t,
+    when: ffi::avr_cycle_count_t,
+    param: *mut c_void,
+) -> ffi::avr_cycle_count_t {
+    // SAFETY: as in `udr_moved`.
+    unsafe {
+        let link = &mut *(param as *mut Link);
+        if link.uart.tx_free == link.base + when && !link.uart.udr_full {
+            ffi::avr_raise_interrupt(avr, &mut (*link.uart.module).txc);
         }
     }
     0
+}
+
+/// After simavr's UCSR0B handler: it raises UDRE0's interrupt whenever UDRIE0 is switched
+/// on and its own pump is still (which, with [`on_udr_write`], it always is); with a byte
+/// still waiting in UDR0 the data register is not empty, so that is undone.
+unsafe extern "C" fn on_ucsr0b_write(avr: *mut ffi::avr_t, _addr: u16, _v: u8, param: *mut c_void) {
+    // SAFETY: as in `on_udr_write`.
+    unsafe {
+        let link = &mut *(param as *mut Link);
+        if link.uart.udr_full {
+            ffi::avr_clear_interrupt(avr, &mut (*link.uart.module).udrc);
+            *(*avr).data.add(UCSR0A) &= !UDRE0;
+        }
+    }
 }
 
 /// simavr's UART XON IRQ: raised whenever its receive FIFO is (or becomes) empty.
@@ -310,10 +284,21 @@ impl Chip {
                 if (*io).irq_ioctl_get == IOCTL_UART0_GETIRQ {
                     // The UART module begins with its `avr_io_t`.
                     self.rx.uart = io as *mut ffi::avr_uart_t;
-                    self.link.uart.module = self.rx.uart;
                 }
                 io = (*io).next;
             }
+            if self.rx.uart.is_null() {
+                return Err(LoadError::NoMcu);
+            }
+            // The datasheet's transmitter in place of simavr's (see `on_udr_write`): UDR0's
+            // write handler replaced, UDRE0 kept when its interrupt runs, UCSR0B's handler
+            // followed by ours.
+            self.link.uart.module = self.rx.uart;
+            (*self.rx.uart).udrc.set_raise_sticky(1);
+            let slot = &mut (*avr).io[UDR0 - 0x20].w;
+            slot.c = Some(on_udr_write);
+            slot.param = param;
+            ffi::avr_register_io_write(avr, UCSR0B as u16, Some(on_ucsr0b_write), param);
         }
         if self.rx.irq.is_null() {
             return Err(LoadError::NoMcu);
@@ -448,12 +433,10 @@ impl Chip {
         self.rx.next = self.cycle();
         self.link.uart.rx_empty = true;
         self.link.uart.rx_full = false;
-        // The transmitter is empty after a reset: the next byte starts when it is written.
+        // The transmitter is empty after a reset (simavr's dropped every timer, so nothing
+        // waits in UDR0 any more): the next byte starts when it is written.
+        self.link.uart.udr_full = false;
         self.link.uart.tx_free = self.link.uart.tx_free.min(self.cycle());
-        let param = &mut *self.link as *mut Link as *mut c_void;
-        // SAFETY: the timer was registered with this AVR and this parameter; simavr is not
-        // running.
-        unsafe { ffi::avr_cycle_timer_cancel(self.avr.as_ptr(), Some(udr_moved), param) };
     }
 
     /// Chooses how input is paced (default [`RxPacing::AfterRead`]).
