@@ -33,6 +33,17 @@ pub enum LadderError {
     Import(ladder::import::Refused),
 }
 
+impl LadderError {
+    /// The exit status: 2 for a usage error (a `--map` that does not fit the file, as
+    /// clap's own), 1 for the rest.
+    pub fn exit_status(&self) -> u8 {
+        match self {
+            LadderError::Import(r) if r.bad_map => 2,
+            _ => 1,
+        }
+    }
+}
+
 /// Each reason an export is refused, on its own line after the file's name.
 fn export_lines(file: &str, reasons: &[String]) -> String {
     let lines: Vec<String> = reasons.iter().map(|r| format!("{file}: {r}")).collect();

@@ -211,7 +211,11 @@ fn usage_errors_name_the_argument() {
         ),
         (VNANO, &["--bootloader", "new"], "old or optiboot, not new"),
         (SIMTRACE, &[], "<SCENARIO.json>"),
-        (SIMTRACE, &["a.json", "b.json"], "unexpected argument 'b.json'"),
+        (
+            SIMTRACE,
+            &["a.json", "b.json"],
+            "unexpected argument 'b.json'",
+        ),
         (
             VNANO,
             &["--persist", "--save-eeprom", "x"],

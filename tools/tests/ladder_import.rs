@@ -4,6 +4,7 @@
 
 mod support;
 
+use support::ladder::import_refused as refused;
 use support::utile::*;
 use utile_kit::ladder;
 use utile_kit::listing;
@@ -86,30 +87,6 @@ fn block(id: u32, ty: &str, from: u32, first: &str, konst: Option<(&str, &str)>,
     s
 }
 
-/// Import must fail with each of `wants` in its message (which starts with the file's
-/// name), exit 1, write nothing and print nothing.
-fn refused(name: &str, text: &[u8], map: Option<&str>, wants: &[&str]) -> String {
-    let path = scratch(name);
-    std::fs::write(&path, text).unwrap();
-    let path = path.to_str().unwrap().to_string();
-    let out = scratch("out.utl");
-    let mut args = vec!["import", path.as_str(), "-o", out.to_str().unwrap()];
-    if let Some(m) = map {
-        args.extend(["--map", m]);
-    }
-    let r = utile(&args);
-    let err = String::from_utf8_lossy(&r.stderr).to_string();
-    assert_eq!(r.status.code(), Some(1), "{name}: {err}");
-    assert!(r.stdout.is_empty());
-    assert!(!out.exists(), "{name}: nothing may be written");
-    assert!(!err.contains("panicked"), "{err}");
-    assert!(err.starts_with(&format!("{path}: ")), "{name}: {err}");
-    for w in wants {
-        assert!(err.contains(w), "{name}: '{w}' not in: {err}");
-    }
-    err
-}
-
 #[test]
 fn every_fixture_imports_to_a_listing_that_reads_back() {
     for f in ["contacts.xml", "timers.xml", "blocks.xml", "fbd.xml"] {
@@ -168,12 +145,10 @@ fn map_names_a_signal() {
     let path = write_scratch("far.xml", &xml);
     let l = utile_ok(&["import", &path, "--map", "valve=Y7,Go=A5"]);
     assert!(l.starts_with("000 A5.\n001 .Y7\n"), "{l}");
-    refused(
-        "far.xml",
-        xml.as_bytes(),
-        Some("Valve=Q9"),
-        &["--map: 'Q9' is not a signal"],
-    );
+    // A --map that is no signal is a usage error: exit 2 (as clap's own).
+    let r = utile(&["import", &path, "--map", "Valve=Q9"]);
+    assert_eq!(r.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("--map: 'Q9' is not a signal"));
 }
 
 #[test]
@@ -315,9 +290,10 @@ fn bad_input_is_refused_cleanly() {
         None,
         &["file: 10485760 bytes is past the 4 MiB an import reads"],
     );
+    // Bytes that are not UTF-8, with no BOM or declaration naming another encoding.
     refused(
         "binary.xml",
-        &[0xff, 0xfe, 0x00, 0x80],
+        &[b'<', b'a', b'>', 0x80, 0xff, b'<', b'/', b'a', b'>'],
         None,
         &["file: not UTF-8 text"],
     );

@@ -19,12 +19,7 @@ const ADPS: u8 = 0x07;
 /// (256 or 1792 cycles at clk/128), which a byte truncates to 0, so every conversion ended
 /// at its sampling: 256 cycles after the start instead of 1,664 (docs/SIMULATORS.md). The
 /// byte is given the prescaler itself, which is what the 11 clocks are counted in.
-unsafe extern "C" fn on_adcsra_write(
-    _avr: *mut ffi::avr_t,
-    _addr: u16,
-    v: u8,
-    param: *mut c_void,
-) {
+unsafe extern "C" fn on_adcsra_write(_avr: *mut ffi::avr_t, _addr: u16, v: u8, param: *mut c_void) {
     let adc = param as *mut ffi::avr_adc_t;
     // simavr: ADPS 0 means 1 (a prescaler of 2).
     let adps = (v & ADPS).max(1);

@@ -161,7 +161,10 @@ mod tests {
             let scenario = read_scenario(&path);
             assert!(!scenario.steps.is_empty(), "{}", path.display());
             assert!(scenario.scan_us > 0);
-            assert_eq!(scenario.image.extension().and_then(|e| e.to_str()), Some("hex"));
+            assert_eq!(
+                scenario.image.extension().and_then(|e| e.to_str()),
+                Some("hex")
+            );
             read += 1;
         }
         assert!(read >= 9, "{read} scenarios");
@@ -174,7 +177,9 @@ mod tests {
     #[test]
     fn a_step_it_does_not_know_is_refused_by_name() {
         let text = r#"{"about": "x", "scan_us": 10, "steps": [{"run_ms": 5}, {"jump": 1}]}"#;
-        let err = serde_json::from_str::<Scenario>(text).unwrap_err().to_string();
+        let err = serde_json::from_str::<Scenario>(text)
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("unknown variant `jump`"), "{err}");
         let steps: Vec<Step> =
             serde_json::from_str(r#"["reset", {"volts": ["A6", 2.5]}, {"type": "EX0\r"}]"#)

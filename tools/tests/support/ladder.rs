@@ -1,10 +1,48 @@
 //! What the ladder tests share: random input timelines, a program run on the core's engine
-//! sampled every ms, and the SVG's elements.
+//! sampled every ms, the SVG's elements, and an import refused as a user sees it.
 
 use utile_core::engine::{Engine, Program};
 use utile_kit::rng::Rng;
 use utile_kit::sim::SimBoard;
 use utile_kit::simulate::Event;
+
+use super::utile::{scratch, utile};
+
+/// `utile import` must fail with each of `wants` in its message (which starts with the
+/// file's name), exit 1, write nothing and print nothing.
+pub fn import_refused(name: &str, text: &[u8], map: Option<&str>, wants: &[&str]) -> String {
+    import_fails(name, text, map, 1, wants)
+}
+
+/// `utile import` must fail with exit status `status` (2: a `--map` that does not fit the
+/// file), each of `wants` in its message, writing and printing nothing.
+pub fn import_fails(
+    name: &str,
+    text: &[u8],
+    map: Option<&str>,
+    status: i32,
+    wants: &[&str],
+) -> String {
+    let path = scratch(name);
+    std::fs::write(&path, text).unwrap();
+    let path = path.to_str().unwrap().to_string();
+    let out = scratch("out.utl");
+    let mut args = vec!["import", path.as_str(), "-o", out.to_str().unwrap()];
+    if let Some(m) = map {
+        args.extend(["--map", m]);
+    }
+    let r = utile(&args);
+    let err = String::from_utf8_lossy(&r.stderr).to_string();
+    assert_eq!(r.status.code(), Some(status), "{name}: {err}");
+    assert!(r.stdout.is_empty());
+    assert!(!out.exists(), "{name}: nothing may be written");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(err.starts_with(&format!("{path}: ")), "{name}: {err}");
+    for w in wants {
+        assert!(err.contains(w), "{name}: '{w}' not in: {err}");
+    }
+    err
+}
 
 /// Random changes of the inputs in `mask` over `until_ms`, at least `min_gap` ms apart on
 /// one input (longer than the debouncer, so every change is seen).

@@ -30,12 +30,13 @@ use utile_core::opcodes::{
     PUSH_AT, PUSH_CQ, PUSH_Q, PUSH_TQ, PUSH_U, SET,
 };
 
-use super::import::{CoilMode, Expr, IecProgram, Stmt, TimerKind};
+use super::import::{CoilMode, Expr, IecProgram, Stmt, TimerKind, MAX_NODES};
 use super::model::{Block, Coil, Contact, Flow, Item, Ladder, Net, Rung, Step};
 use super::Reasons;
 
 mod blocks;
 mod pieces;
+mod resources;
 mod timers;
 mod walk;
 pub use timers::time_text;
@@ -51,6 +52,10 @@ enum Made {
     Q(u8, bool),
 }
 
+/// The most statements (coils, blocks) an imported program may have: each becomes at
+/// least one of uTile's 256 lines.
+pub const MAX_STATEMENTS: usize = 1024;
+
 struct Lowering {
     items: Vec<Item>,
     presets: [u8; UNITS],
@@ -65,14 +70,44 @@ struct Lowering {
     primed: Option<u8>,
     /// The timer chosen for each timer statement.
     timer_of: Vec<Option<u8>>,
+    /// Each R_TRIG/F_TRIG's memory of CLK.
+    trig_mem: Vec<u8>,
 }
 
 /// The rungs of an imported program, or every reason it cannot run on uTile.
 pub fn lower(prog: &IecProgram) -> Result<Ladder, Reasons> {
+    bounded(prog).map_err(|why| Reasons(std::vec![why]))?;
     lower_all(prog).map_err(Reasons)
 }
 
+/// A program within what the lowering walks: at most [`MAX_STATEMENTS`] statements, each
+/// expression at most [`MAX_NODES`] nodes (counted without recursion, so an importer's
+/// deep expression is refused here, never walked).
+fn bounded(prog: &IecProgram) -> Result<(), String> {
+    if prog.stmts.len() > MAX_STATEMENTS {
+        return Err(format!(
+            "program: {} coils and blocks; uTile reads up to {MAX_STATEMENTS} (its 256 lines hold fewer) — split the program",
+            prog.stmts.len()
+        ));
+    }
+    let mut deep = false;
+    for s in &prog.stmts {
+        stmt_exprs(s, &mut |e| deep |= e.nodes_within(MAX_NODES).is_none());
+    }
+    deep |= prog
+        .shared
+        .iter()
+        .any(|e| e.nodes_within(MAX_NODES).is_none());
+    if deep {
+        return Err(format!(
+            "program: an expression of more than {MAX_NODES} contacts and functions; uTile reads up to {MAX_NODES} (its 256 lines hold fewer) — split the rung"
+        ));
+    }
+    Ok(())
+}
+
 fn lower_all(prog: &IecProgram) -> Result<Ladder, Vec<String>> {
+    let n = prog.stmts.len();
     let mut l = Lowering {
         items: Vec::new(),
         presets: [0; UNITS],
@@ -82,228 +117,53 @@ fn lower_all(prog: &IecProgram) -> Result<Ladder, Vec<String>> {
         counters_used: 0,
         flip_flops_used: 0,
         edge_mem: Vec::new(),
-        made: std::vec![Made::None; prog.stmts.len()],
+        made: std::vec![Made::None; n],
         problems: Vec::new(),
         primed: None,
-        timer_of: std::vec![None; prog.stmts.len()],
+        timer_of: std::vec![None; n],
+        trig_mem: std::vec![0; n],
     };
-    // An SR/RS whose Q1 nothing reads below it (in the scan after its call) is uTile's own
-    // flip-flop: Q changes at END, and every read sees the last call's Q, as IEC's would.
-    // uTile has 16 flip-flops; past them, memory bits.
-    let mut own = 0;
-    let own_flip_flop: Vec<bool> = (0..prog.stmts.len())
-        .map(|i| {
-            let yes = own < 16
-                && matches!(prog.stmts[i], Stmt::FlipFlop { .. })
-                && !prog.stmts[i + 1..].iter().any(|s| {
-                    let mut reads = false;
-                    stmt_exprs(s, &mut |e| reads |= reads_out(e, i));
-                    reads
-                });
-            own += usize::from(yes);
-            yes
-        })
-        .collect();
+    let own = resources::own_flip_flops(prog);
     // The rungs: pieces on one wire together (pieces.rs), the edges each reads.
-    let (pieces, block_group) = pieces::plan(prog, &own_flip_flop);
-    let mut edge_vars = std::vec![(0u8, true); prog.edges];
-    let mut edge_groups: Vec<Vec<usize>> = std::vec![Vec::new(); prog.edges];
-    let mut read_in = |e: &Expr, g: usize| {
-        edges_of(e, &mut |id, var, rising| {
-            edge_vars[id] = (var, rising);
-            if !edge_groups[id].contains(&g) {
-                edge_groups[id].push(g);
-            }
-        })
-    };
-    for p in &pieces {
-        read_in(&p.expr, p.group);
-    }
-    for (i, s) in prog.stmts.iter().enumerate() {
-        if let Some(g) = block_group[i] {
-            stmt_exprs(s, &mut |e| read_in(e, g));
-        }
-    }
-    // An edge on an input is uTile's own edge bit (ALn, ATn): one reader each.
-    let is_input = |var: u8| (PUSH_A..PUSH_A + 6).contains(&var);
-    let mut input_edges: Vec<(u8, bool)> = Vec::new();
-    for id in 0..prog.edges {
-        let (var, rising) = edge_vars[id];
-        if !is_input(var) {
-            continue;
-        }
-        let name = super::import::signal_name(var);
-        let pn = if rising { "P" } else { "N" };
-        if input_edges.contains(&(var, rising)) || edge_groups[id].len() > 1 {
-            let what = prog.edge_what.get(id).cloned().unwrap_or_default();
-            l.problems.push(format!(
-                "{what}: a {pn} contact on {name}: uTile keeps one {} edge bit per input, read by one contact in one rung — use one {pn} contact driving a memory coil, and read that coil",
-                if rising { "rising" } else { "falling" }
-            ));
-        }
-        input_edges.push((var, rising));
-    }
-    let memory_edges = (0..prog.edges)
-        .filter(|&id| !is_input(edge_vars[id].0))
-        .count();
-    let needed_bits = memory_edges
-        + prog
-            .stmts
-            .iter()
-            .map(|s| match s {
-                Stmt::Timer {
-                    kind: TimerKind::Tp,
-                    ..
-                }
-                | Stmt::FlipFlop { .. } => 1,
-                Stmt::Trig { .. } => 2,
-                _ => 0,
-            })
-            .sum::<usize>()
-        - own_flip_flop.iter().filter(|&&o| o).count()
-        + usize::from(prog.stmts.iter().any(|s| {
-            matches!(
-                s,
-                Stmt::Timer {
-                    kind: TimerKind::Ton,
-                    ..
-                }
-            )
-        }));
-    let free = 16 - prog.used_uv.count_ones() as usize;
-    if needed_bits > free {
-        return Err(std::vec![format!(
-            "program: edges, pulses, R_TRIG/F_TRIG and flip-flops need {needed_bits} memory bits and {free} of uTile's 16 (U0..U7, V0..V7) are free after the variables — drop some, or map variables to outputs with --map"
-        )]);
+    let (pieces, block_group) = pieces::plan(prog, &own);
+    let (edge_vars, edge_groups) = resources::edge_readers(prog, &pieces, &block_group);
+    l.input_edges(prog, &edge_vars, &edge_groups);
+    if let Err(mut why) = l.bits_needed(prog, &own, &edge_vars) {
+        l.problems.append(&mut why);
+        return Err(l.problems);
     }
     for &(var, _) in &edge_vars {
-        let m = if is_input(var) { None } else { Some(l.bit()) };
+        let m = if resources::is_input(var) {
+            None
+        } else {
+            Some(l.bit())
+        };
         l.edge_mem.push(m);
     }
     // After which statement each edge's memory is brought up to date.
     let mut last_use = std::vec![None; prog.edges];
     for (i, s) in prog.stmts.iter().enumerate() {
-        stmt_exprs(s, &mut |e| edges_in(e, &mut |id| last_use[id] = Some(i)));
-    }
-
-    // Timers: those only one unit holds first, then the finest unit free.
-    let mut order: Vec<(usize, u32)> = prog
-        .stmts
-        .iter()
-        .enumerate()
-        .filter_map(|(i, s)| match s {
-            Stmt::Timer { pt_ms, .. } => Some((i, *pt_ms)),
-            _ => None,
-        })
-        .collect();
-    order.sort_by_key(|&(_, pt)| UNIT_GROUPS.iter().filter(|g| holds(g.0, pt)).count());
-    for (i, pt) in order {
-        match timer_for(pt, l.timers_used) {
-            Ok((m, preset)) => {
-                l.timers_used |= 1 << m;
-                l.presets[usize::from(m)] = preset;
-                l.timer_of[i] = Some(m);
-            }
-            Err(why) => {
-                if let Stmt::Timer { what, .. } = &prog.stmts[i] {
-                    l.problems.push(format!("{what}: {why}"));
+        stmt_exprs(s, &mut |e| {
+            edges_in(e, &mut |id| {
+                if let Some(u) = last_use.get_mut(id) {
+                    *u = Some(i);
                 }
-            }
-        }
+            })
+        });
     }
-
-    // Counters in statement order; a timer's or counter's Q is known before its call (a
-    // read above it is the last call's Q: `TOF0.Q`).
-    for (i, s) in prog.stmts.iter().enumerate() {
-        match s {
-            Stmt::Counter { pv, what, .. } => {
-                let Some(m) = (0..COUNTERS as u8).find(|m| l.counters_used & (1 << m) == 0) else {
-                    l.problems.push(format!(
-                        "{what}: more counters than uTile's {COUNTERS} (C0..C7) — use fewer CTU blocks"
-                    ));
-                    continue;
-                };
-                l.counters_used |= 1 << m;
-                l.counter_presets[usize::from(m)] = *pv;
-                l.made[i] = Made::Q(PUSH_CQ + m, false);
-            }
-            Stmt::Timer { kind, .. } => {
-                if let Some(m) = l.timer_of[i] {
-                    l.made[i] = Made::Q(PUSH_TQ + m, *kind == TimerKind::Ton);
-                }
-            }
-            Stmt::FlipFlop { .. } if own_flip_flop[i] => {
-                // uTile has 16 flip-flops: one each.
-                let m = (0..16u8)
-                    .find(|m| l.flip_flops_used & (1 << m) == 0)
-                    .unwrap_or(15);
-                l.flip_flops_used |= 1 << m;
-                l.made[i] = Made::Q(PUSH_Q + m, false);
-            }
-            Stmt::FlipFlop { .. } => {
-                // Q1 a memory bit, known before the call (read above it: the last call's).
-                let mem = l.bit();
-                l.made[i] = Made::Q(mem, false);
-            }
-            _ => {}
-        }
-    }
-
-    // Statements in scan order: pieces gathered into their rungs, blocks on their own.
-    let mut open: Vec<&pieces::Piece> = Vec::new();
-    let mut done: Vec<usize> = Vec::new();
-    let mut next = pieces.iter().peekable();
-    for (i, s) in prog.stmts.iter().enumerate() {
-        if block_group[i].is_some() {
-            l.flush(prog, &mut open);
-            for k in done.drain(..) {
-                l.after(k, &last_use, &edge_vars);
-            }
-            l.block(i, s);
-            l.after(i, &last_use, &edge_vars);
-            continue;
-        }
-        while let Some(p) = next.next_if(|p| p.stmt == i) {
-            if open.last().is_some_and(|o| o.group != p.group) {
-                l.flush(prog, &mut open);
-                for k in done.drain(..) {
-                    l.after(k, &last_use, &edge_vars);
-                }
-            }
-            open.push(p);
-        }
-        done.push(i);
-    }
-    l.flush(prog, &mut open);
-    for k in done.drain(..) {
-        l.after(k, &last_use, &edge_vars);
-    }
-    if let Some(p) = l.primed {
-        l.rung(
-            contact(SET, false),
-            Flow::Coil(coil(POP_U + p - PUSH_U, false)),
-        );
-    }
-    for op in [KEY, END] {
-        l.items.push(Item::Block(Block {
-            lines: std::vec![(0, op)],
-        }));
-    }
+    l.choose_timers(prog);
+    l.choose_units(prog, &own);
+    l.emit(prog, &pieces, &block_group, &last_use, &edge_vars);
     if !l.problems.is_empty() {
         return Err(l.problems);
     }
+    let fill = if l.items.is_empty() { BLANK } else { NOP };
     Ok(Ladder {
         items: l.items,
-        fill: NOP,
+        fill,
         presets: l.presets,
         counter_presets: l.counter_presets,
         set_points: prog.set_points,
-    })
-    .map(|mut lad: Ladder| {
-        if lad.items.is_empty() {
-            lad.fill = BLANK;
-        }
-        lad
     })
 }
 
@@ -357,6 +217,58 @@ fn coil_flow(s: &Stmt) -> Flow {
 }
 
 impl Lowering {
+    /// Statements in scan order: pieces gathered into their rungs, blocks on their own,
+    /// each edge memory brought up to date after its last reader; then the first-scan
+    /// bit's rung, KEY and END.
+    fn emit(
+        &mut self,
+        prog: &IecProgram,
+        pieces: &[pieces::Piece],
+        block_group: &[Option<usize>],
+        last_use: &[Option<usize>],
+        edge_vars: &[(u8, bool)],
+    ) {
+        let mut open: Vec<&pieces::Piece> = Vec::new();
+        let mut done: Vec<usize> = Vec::new();
+        let mut next = pieces.iter().peekable();
+        for (i, s) in prog.stmts.iter().enumerate() {
+            if block_group[i].is_some() {
+                self.flush(prog, &mut open);
+                for k in done.drain(..) {
+                    self.after(k, last_use, edge_vars);
+                }
+                self.block(i, s);
+                self.after(i, last_use, edge_vars);
+                continue;
+            }
+            while let Some(p) = next.next_if(|p| p.stmt == i) {
+                if open.last().is_some_and(|o| o.group != p.group) {
+                    self.flush(prog, &mut open);
+                    for k in done.drain(..) {
+                        self.after(k, last_use, edge_vars);
+                    }
+                }
+                open.push(p);
+            }
+            done.push(i);
+        }
+        self.flush(prog, &mut open);
+        for k in done.drain(..) {
+            self.after(k, last_use, edge_vars);
+        }
+        if let Some(p) = self.primed {
+            self.rung(
+                contact(SET, false),
+                Flow::Coil(coil(POP_U + p - PUSH_U, false)),
+            );
+        }
+        for op in [KEY, END] {
+            self.items.push(Item::Block(Block {
+                lines: std::vec![(0, op)],
+            }));
+        }
+    }
+
     fn bit(&mut self) -> u8 {
         let b = (0..16).find(|b| self.used_uv & (1 << b) == 0).unwrap_or(15);
         self.used_uv |= 1 << b;

@@ -18,6 +18,7 @@ pub(super) fn stmt_exprs(s: &Stmt, f: &mut dyn FnMut(&Expr)) {
             f(set);
             f(reset);
         }
+        Stmt::FirstScan { .. } => {}
     }
 }
 

@@ -1,31 +1,70 @@
 //! What every import shares: the IEC program an importer reads ([`Expr`], [`Stmt`]), the
-//! signals its variables become ([`Signals`], `--map`), and the refusal
+//! signals its variables become ([`Signals`], `--map`, in `signals.rs`), the file's text
+//! ([`decode`]), and the refusal: every reason, once, sorted, with their count
 //! (`file: element (localId N): why — what to do`).
 //!
 //! [`plcopen`] reads PLCopen TC6 0201 XML (OpenPLC Editor's `plc.xml`), [`ldmicro`] reads
 //! LDmicro's `.ld`; [`super::iec`] builds uTile's rungs from what they read.
 
 use std::fmt;
+use std::format;
 use std::string::String;
 use std::vec::Vec;
 
-use utile_core::opcodes::{self, PUSH_A, PUSH_H, PUSH_U, PUSH_V, PUSH_Y};
-
 use super::model::Ladder;
 
+pub mod decode;
 pub mod ldmicro;
 pub mod plcopen;
+mod signals;
+pub use signals::{
+    located, pop_of, read_only_push, signal_name, signal_push, BadSignal, Located, Signals,
+};
 
 /// The largest file an import reads: real programs are far smaller.
 pub const MAX_BYTES: usize = 4 << 20;
 
-/// A file refused: every reason, one a line, `file: element (localId N): why — what to do`.
+/// The most elements (contacts, functions, block outputs) one expression of an imported
+/// program may have: each becomes at least one of uTile's 256 lines, so a larger one could
+/// never run, and the lowering's walks stay shallow.
+pub const MAX_NODES: usize = 512;
+
+/// A file refused: every reason, one a line, `file: element (localId N): why — what to do`,
+/// in the order of the file (rung, then element), each once; more than one are counted on
+/// a last line.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Refused {
     /// The file's name as the user gave it.
     pub file: String,
-    /// Each reason (`element (localId N): why — what to do`).
+    /// Each reason (`element (localId N): why — what to do`), in order.
     pub reasons: Vec<String>,
+    /// The reasons are about `--map`, not the file: a usage error (`utile import` exits 2).
+    pub bad_map: bool,
+}
+
+impl Refused {
+    /// A refusal with these reasons in this order (each once).
+    pub fn new(file: &str, reasons: Vec<String>) -> Refused {
+        Refused::sorted(file, reasons.into_iter().map(|r| ((), r)).collect())
+    }
+
+    /// A refusal with these reasons sorted by their keys (rung, then element: an LDmicro
+    /// reader's `(rung, line)`, the PLCopen reader's `(rung, localId)`), reasons of equal
+    /// keys in the order given; a reason given twice is said once.
+    pub fn sorted<K: Ord>(file: &str, mut reasons: Vec<(K, String)>) -> Refused {
+        reasons.sort_by(|a, b| a.0.cmp(&b.0));
+        let mut said: Vec<String> = Vec::new();
+        for (_, r) in reasons {
+            if !said.contains(&r) {
+                said.push(r);
+            }
+        }
+        Refused {
+            file: file.into(),
+            reasons: said,
+            bad_map: false,
+        }
+    }
 }
 
 impl fmt::Display for Refused {
@@ -36,11 +75,35 @@ impl fmt::Display for Refused {
             }
             write!(f, "{}: {r}", self.file)?;
         }
+        if self.reasons.len() > 1 {
+            write!(
+                f,
+                "\n{}: {} reasons, each above; nothing imported",
+                self.file,
+                self.reasons.len()
+            )?;
+        }
         Ok(())
     }
 }
 
 impl std::error::Error for Refused {}
+
+/// What a reader found wrong: the file's reasons, or a `--map` that does not fit the file.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Failure {
+    /// The file cannot run on uTile: every reason, in order.
+    File(Vec<String>),
+    /// `--map` names a variable the file does not have, gives one signal two names, or
+    /// gives an input variable an output.
+    Map(Vec<String>),
+}
+
+impl From<super::Reasons> for Failure {
+    fn from(r: super::Reasons) -> Failure {
+        Failure::File(r.0)
+    }
+}
 
 /// A program read by an importer, in IEC 61131-3's terms, before uTile's resources are
 /// chosen.
@@ -117,6 +180,28 @@ impl Expr {
     /// `NOT a`.
     pub fn negate(a: Expr) -> Expr {
         Expr::Not(Box::new(a))
+    }
+
+    /// How many nodes the expression has, counted up to `limit` (a walk without recursion:
+    /// `None` past it, however deep the expression).
+    pub fn nodes_within(&self, limit: usize) -> Option<usize> {
+        let mut stack: Vec<&Expr> = std::vec![self];
+        let mut n = 0;
+        while let Some(e) = stack.pop() {
+            n += 1;
+            if n > limit {
+                return None;
+            }
+            match e {
+                Expr::Not(a) => stack.push(a),
+                Expr::And(a, b) | Expr::Or(a, b) | Expr::Xor(a, b) => {
+                    stack.push(a);
+                    stack.push(b);
+                }
+                _ => {}
+            }
+        }
+        Some(n)
     }
 }
 
@@ -204,6 +289,14 @@ pub enum Stmt {
         /// SR.
         set_dominant: bool,
     },
+    /// A variable TRUE at the first scan until written (a BOOL's `initialValue` TRUE):
+    /// set while the first scan runs, at the top of it.
+    FirstScan {
+        /// The variable's pop opcode.
+        pop: u8,
+        /// Its push opcode.
+        push: u8,
+    },
 }
 
 /// Every expression of a statement, to change.
@@ -220,6 +313,7 @@ pub(crate) fn stmt_exprs_mut(s: &mut Stmt, f: &mut dyn FnMut(&mut Expr)) {
             f(set);
             f(reset);
         }
+        Stmt::FirstScan { .. } => {}
     }
 }
 
@@ -240,189 +334,10 @@ pub(crate) fn resolve_named(e: &mut Expr, emitted: &std::collections::HashMap<u6
     }
 }
 
-/// The signals a program's variables become: input `8a+b` → `A0`..`A5`, output → `Y0`..`Y7`,
-/// unlocated BOOLs and `%MX` → `U0`..`U7`, then `V0`..`V7`, in declaration order; `--map`
-/// first.
-pub struct Signals {
-    map: Vec<(String, u8)>,
-    /// The variables, upper-cased name → push opcode.
-    pub vars: Vec<(String, u8)>,
-    /// The U/V bits taken so far (bit n: `Un`, bit 8+n: `Vn`).
-    pub used_uv: u16,
-}
-
-/// The push opcode of a signal's name (`A0`, `H6`, `Y3`, `U1`, `V7`, any case).
-pub fn signal_push(name: &str) -> Option<u8> {
-    let n = name.trim().to_ascii_uppercase();
-    let (letter, digit) = (n.get(..1)?, n.get(1..)?);
-    let d: u8 = digit.parse().ok()?;
-    let op = match letter {
-        "A" if d < 6 => PUSH_A + d,
-        "H" if d == 6 || d == 7 => PUSH_H + d - 6,
-        "Y" if d < 8 => PUSH_Y + d,
-        "U" if d < 8 => PUSH_U + d,
-        "V" if d < 8 => PUSH_V + d,
-        _ => return None,
-    };
-    Some(op)
-}
-
-/// The push opcode of one of uTile's read-only bits named as the listing names them
-/// (`H6`, `H7`, `CLKA`..`CLKC`, `AD0`..`AD5`, any case): an unlocated BOOL with such a name
-/// reads that bit (`utile export` declares them so).
-pub fn read_only_push(name: &str) -> Option<u8> {
-    let n = name.trim().to_ascii_uppercase();
-    match n.as_str() {
-        "H6" => Some(PUSH_H),
-        "H7" => Some(PUSH_H + 1),
-        "CLKA" => Some(opcodes::CLKA),
-        "CLKB" => Some(opcodes::CLKB),
-        "CLKC" => Some(opcodes::CLKC),
-        _ => {
-            let d: u8 = n.strip_prefix("AD")?.parse().ok()?;
-            (d < 6).then_some(opcodes::PUSH_AD + d)
-        }
-    }
-}
-
-/// The pop opcode that writes the signal a push opcode reads (`Y0.` → `.Y0`), if any.
-pub fn pop_of(push: u8) -> Option<u8> {
-    (PUSH_Y..PUSH_V + 8)
-        .contains(&push)
-        .then(|| push - PUSH_Y + opcodes::POP_Y)
-}
-
-/// A signal's name from its push opcode (`Y0`).
-pub fn signal_name(push: u8) -> String {
-    super::model::op_word(push).trim_end_matches('.').into()
-}
-
-/// A name that cannot be a uTile signal: why, and what to do (the `--map` to give).
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("{0}")]
-pub struct BadSignal(pub String);
-
-impl Signals {
-    /// Signals with the `--map` list (`NAME=SIGNAL,…`) given first.
-    pub fn new(map: &str) -> Result<Signals, BadSignal> {
-        Self::with_map(map).map_err(BadSignal)
-    }
-
-    fn with_map(map: &str) -> Result<Signals, String> {
-        let mut list = Vec::new();
-        for pair in map.split(',').map(str::trim).filter(|p| !p.is_empty()) {
-            let Some((name, sig)) = pair.split_once('=') else {
-                return Err(format!(
-                    "--map: '{pair}' is not NAME=SIGNAL (e.g. --map Start=A0,Lamp=Y1)"
-                ));
-            };
-            let Some(op) = signal_push(sig) else {
-                return Err(format!(
-                    "--map: '{sig}' is not a signal uTile has (A0..A5, H6, H7, Y0..Y7, U0..U7, V0..V7)"
-                ));
-            };
-            list.push((name.trim().to_ascii_uppercase(), op));
-        }
-        let mut s = Signals {
-            map: Vec::new(),
-            vars: Vec::new(),
-            used_uv: 0,
-        };
-        for &(_, op) in &list {
-            s.take(op);
-        }
-        s.map = list;
-        Ok(s)
-    }
-
-    fn take(&mut self, op: u8) {
-        if (PUSH_U..PUSH_V + 8).contains(&op) {
-            self.used_uv |= 1 << (op - PUSH_U);
-        }
-    }
-
-    /// Declare a BOOL variable with its address (`%IX0.1`, `%Q0.2`, `%MX0.0`, or none).
-    /// The error says why it cannot be a uTile signal and what to do.
-    pub fn declare(&mut self, name: &str, address: Option<&str>) -> Result<(), BadSignal> {
-        self.place(name, address).map_err(BadSignal)
-    }
-
-    fn place(&mut self, name: &str, address: Option<&str>) -> Result<(), String> {
-        let key = name.to_ascii_uppercase();
-        if self.vars.iter().any(|(n, _)| *n == key) {
-            return Ok(());
-        }
-        if let Some(&(_, op)) = self.map.iter().find(|(n, _)| *n == key) {
-            self.vars.push((key, op));
-            return Ok(());
-        }
-        let op = match address.map(str::trim).filter(|a| !a.is_empty()) {
-            // uTile's read-only bits by their names (what `utile export` declares).
-            None => match read_only_push(name) {
-                Some(op) => op,
-                None => self.free_uv(name)?,
-            },
-            Some(addr) => {
-                let up = addr.to_ascii_uppercase();
-                let located = |prefix: &str| -> Option<u32> {
-                    let rest = up.strip_prefix(prefix)?;
-                    let rest = rest.strip_prefix('X').unwrap_or(rest);
-                    let (a, b) = rest.split_once('.')?;
-                    let (a, b): (u32, u32) = (a.parse().ok()?, b.parse().ok()?);
-                    (b < 8).then_some(a.saturating_mul(8).saturating_add(b))
-                };
-                let past = |what: &str, have: &str| {
-                    format!(
-                        "variable {name} at {addr}: {what} is past uTile's pins ({have}) — give it one with --map {name}=SIGNAL"
-                    )
-                };
-                if let Some(n) = located("%I") {
-                    if n >= 6 {
-                        return Err(past(&format!("input {n}"), "inputs 0..5 are A0..A5"));
-                    }
-                    PUSH_A + n as u8
-                } else if let Some(n) = located("%Q") {
-                    if n >= 8 {
-                        return Err(past(&format!("output {n}"), "outputs 0..7 are Y0..Y7"));
-                    }
-                    PUSH_Y + n as u8
-                } else if located("%M").is_some() {
-                    self.free_uv(name)?
-                } else {
-                    return Err(format!(
-                        "variable {name} at {addr}: uTile has only bits (%IXa.b, %QXa.b, %MXa.b) — give it one with --map {name}=SIGNAL or drop it"
-                    ));
-                }
-            }
-        };
-        self.take(op);
-        self.vars.push((key, op));
-        Ok(())
-    }
-
-    fn free_uv(&mut self, name: &str) -> Result<u8, String> {
-        match (0..16).find(|b| self.used_uv & (1 << b) == 0) {
-            Some(b) => Ok(PUSH_U + b as u8),
-            None => Err(format!(
-                "variable {name}: more memory bits than uTile's 16 (U0..U7, V0..V7) — map some to outputs with --map {name}=SIGNAL or drop them"
-            )),
-        }
-    }
-
-    /// The push opcode of a declared variable (any case).
-    pub fn get(&self, name: &str) -> Option<u8> {
-        let key = name.trim().to_ascii_uppercase();
-        self.vars.iter().find(|(n, _)| *n == key).map(|&(_, op)| op)
-    }
-}
-
 /// Import a PLCopen XML or LDmicro file (told apart by their first bytes) as a ladder
 /// model, with `map` (`NAME=SIGNAL,…`) choosing signals.
 pub fn import(file: &str, bytes: &[u8], map: &str) -> Result<Ladder, Refused> {
-    let refuse = |why: String| Refused {
-        file: file.into(),
-        reasons: std::vec![why],
-    };
+    let refuse = |why: String| Refused::new(file, std::vec![why]);
     if bytes.len() > MAX_BYTES {
         return Err(refuse(format!(
             "file: {} bytes is past the {} MiB an import reads — a PLC program is far smaller; is it the right file?",
@@ -430,24 +345,23 @@ pub fn import(file: &str, bytes: &[u8], map: &str) -> Result<Ladder, Refused> {
             MAX_BYTES >> 20
         )));
     }
-    let Ok(text) = std::str::from_utf8(bytes) else {
-        return Err(refuse(
-            "file: not UTF-8 text — export the program as PLCopen XML (plc.xml) or save it from LDmicro (.ld)".into(),
-        ));
+    let bad_map = |reasons: Vec<String>| Refused {
+        bad_map: true,
+        ..Refused::new(file, reasons)
     };
-    let signals = Signals::new(map).map_err(|e| refuse(e.0))?;
-    let trimmed = text.trim_start_matches('\u{feff}').trim_start();
-    let prog = if trimmed.starts_with("LDmicro") {
-        ldmicro::read(trimmed, signals)
+    let signals = Signals::new(map).map_err(|e| bad_map(std::vec![e.0]))?;
+    let start = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    let start = &start[start.iter().take_while(|b| b.is_ascii_whitespace()).count()..];
+    let prog = if start.starts_with(b"LDmicro") {
+        let text = decode::utf8_or_windows_1252(start);
+        ldmicro::read(&text, signals).map_err(Failure::from)
     } else {
-        plcopen::read(trimmed, signals)
-    }
-    .map_err(|super::Reasons(reasons)| Refused {
-        file: file.into(),
-        reasons,
+        let text = decode::xml_text(bytes).map_err(refuse)?;
+        plcopen::read(text.trim_start_matches('\u{feff}').trim_start(), signals)
+    };
+    let prog = prog.map_err(|f| match f {
+        Failure::File(reasons) => Refused::new(file, reasons),
+        Failure::Map(reasons) => bad_map(reasons),
     })?;
-    super::iec::lower(&prog).map_err(|super::Reasons(reasons)| Refused {
-        file: file.into(),
-        reasons,
-    })
+    super::iec::lower(&prog).map_err(|super::Reasons(reasons)| Refused::new(file, reasons))
 }

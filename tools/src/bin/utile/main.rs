@@ -105,7 +105,11 @@ fn main() -> ExitCode {
         Err(e) => {
             // The whole cause chain on one line: "file: line 3: why".
             eprintln!("{e:#}");
-            ExitCode::FAILURE
+            // A `--map` that does not fit the file is a usage error, as clap's: 2.
+            match e.downcast_ref::<utile_tools::ladder_cmd::LadderError>() {
+                Some(l) => ExitCode::from(l.exit_status()),
+                None => ExitCode::FAILURE,
+            }
         }
     }
 }

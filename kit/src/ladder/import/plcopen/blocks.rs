@@ -48,30 +48,36 @@ pub fn parse_time(text: &str) -> Option<u32> {
 impl<'a, 'i> Reader<'a, 'i> {
     /// `TOF0.Q`: the Q of the timer or counter block of that instance name, read by name
     /// (above its call: the last call's Q).
-    pub(super) fn instance_output(&self, n: Node, name: &str) -> Res<Expr> {
+    pub(super) fn instance_output(&mut self, n: Node, name: &str) -> Res<Expr> {
+        if let Some(op) = self.signals.get(name) {
+            return Ok(Expr::Var(op)); // a member given a signal with --map
+        }
         let (inst, out) = name.trim().split_once('.').unwrap_or((name, ""));
         let block = self
             .instances
             .iter()
-            .find(|(i, _, _)| i.eq_ignore_ascii_case(inst.trim()));
-        let Some((_, id, ty)) = block else {
-            return Err(format!(
-                "{}: {name} names no block of the body — declare the variable, or name a TON, TOF, TP or CTU block's instance",
-                what(n)
-            ));
+            .find(|(i, _, _)| i.eq_ignore_ascii_case(inst.trim()))
+            .map(|(_, id, ty)| (*id, ty.clone()));
+        let Some((id, ty)) = block else {
+            let key = name.trim().to_ascii_uppercase();
+            if !self.said_vars.insert(key) {
+                return Err(Said);
+            }
+            let why = self.member(name).unwrap_or_default();
+            return Err(self.fail(n, DETAIL, &why));
         };
         let q = match ty.as_str() {
             "TON" | "TOF" | "TP" | "CTU" => "Q",
             "SR" | "RS" => "Q1",
-            _ => "",
+            // A block uTile cannot import: its own reason says so.
+            _ => return Err(Said),
         };
-        if q.is_empty() || !out.trim().eq_ignore_ascii_case(q) {
-            return Err(format!(
-                "{}: {name}: uTile reads only the Q of a TON, TOF, TP or CTU (Q1 of an SR or RS) by name — wire the block's output instead",
-                what(n)
-            ));
+        if !out.trim().eq_ignore_ascii_case(q) {
+            return Err(self.fail(n, DETAIL, &format!(
+                "{name}: uTile reads only the Q of a TON, TOF, TP or CTU (Q1 of an SR or RS) by name — wire the block's output instead"
+            )));
         }
-        Ok(Expr::Named(*id))
+        Ok(Expr::Named(id))
     }
 
     /// A block's input by formal name (`IN`, `PT`, `IN1`, …).
@@ -98,46 +104,43 @@ impl<'a, 'i> Reader<'a, 'i> {
     }
 
     /// A constant input (PT, PV): an inVariable's literal, or a variable's initial value.
-    pub(super) fn constant_input(&self, n: Node, formal: &str) -> Res<String> {
-        let missing = || {
-            format!(
-                "{}: {formal} must come from a constant or a variable with an initial value",
-                what(n)
-            )
-        };
-        let v = self.block_input(n, formal).ok_or_else(missing)?;
-        let conn = child(v, "connectionPointIn")
+    pub(super) fn constant_input(&mut self, n: Node, formal: &str) -> Res<String> {
+        let src = self
+            .block_input(n, formal)
+            .and_then(|v| child(v, "connectionPointIn"))
             .and_then(|p| p.children().find(|c| c.tag_name().name() == "connection"))
-            .ok_or_else(missing)?;
-        let id: u64 = conn
-            .attribute("refLocalId")
-            .and_then(|s| s.trim().parse().ok())
-            .ok_or_else(missing)?;
-        let src = self.elems.get(&id).ok_or_else(|| {
-            format!(
-                "{}: wired to localId {id}, which is not in the body — redraw the wire",
-                what(n)
-            )
-        })?;
-        if src.tag_name().name() != "inVariable" {
-            return Err(missing());
+            .and_then(|c| c.attribute("refLocalId"))
+            .and_then(|s| s.trim().parse::<u64>().ok());
+        let src = src.map(|id| (id, self.elems.get(&id).copied()));
+        match src {
+            Some((id, Some(src))) if src.tag_name().name() == "inVariable" => {
+                self.reached.insert(id);
+                let text = child_text(src, "expression").unwrap_or_default();
+                Ok(self
+                    .vars
+                    .constants
+                    .get(&text.to_ascii_uppercase())
+                    .cloned()
+                    .unwrap_or(text))
+            }
+            Some((id, None)) => Err(self.fail(
+                n,
+                DETAIL,
+                &format!("wired to localId {id}, which is not in the body — redraw the wire"),
+            )),
+            _ => Err(self.fail(
+                n,
+                DETAIL,
+                &format!("{formal} must come from a constant or a variable with an initial value"),
+            )),
         }
-        let text = child_text(*src, "expression").unwrap_or_default();
-        Ok(self
-            .constants
-            .get(&text.to_ascii_uppercase())
-            .cloned()
-            .unwrap_or(text))
     }
 
     pub(super) fn enable_ok(&mut self, n: Node<'a, 'i>) -> Res<()> {
         if self.block_input(n, "EN").is_some() {
             let en = self.bool_input(n, "EN")?;
             if en != Expr::Const(true) {
-                return Err(format!(
-                    "{}: EN from a condition — uTile runs every block every scan; wire the condition into the block's input instead and EN to the left rail",
-                    what(n)
-                ));
+                return Err(self.fail(n, DETAIL, "EN from a condition — uTile runs every block every scan; wire the condition into the block's input instead and EN to the left rail"));
             }
         }
         Ok(())
@@ -150,29 +153,7 @@ impl<'a, 'i> Reader<'a, 'i> {
             return Ok(Expr::Const(true));
         }
         if FUNCTIONS.contains(&ty.as_str()) {
-            self.enable_ok(n)?;
-            let mut ins: Vec<Expr> = Vec::new();
-            let names: Vec<String> = child(n, "inputVariables")
-                .map(|iv| {
-                    iv.children()
-                        .filter(|v| v.tag_name().name() == "variable")
-                        .filter_map(|v| v.attribute("formalParameter").map(str::to_string))
-                        .filter(|f| !f.eq_ignore_ascii_case("EN"))
-                        .collect()
-                })
-                .unwrap_or_default();
-            for f in &names {
-                ins.push(self.bool_input(n, f)?);
-            }
-            let mut it = ins.into_iter();
-            let first = it.next().ok_or_else(|| format!("{}: no inputs", what(n)))?;
-            let e = match ty.as_str() {
-                "NOT" => Expr::negate(first),
-                "AND" => it.fold(first, |a, b| Expr::And(Box::new(a), Box::new(b))),
-                "OR" => it.fold(first, Expr::or),
-                _ => it.fold(first, |a, b| Expr::Xor(Box::new(a), Box::new(b))),
-            };
-            return Ok(e);
+            return self.function(n, &ty);
         }
         if FB_TYPES.contains(&ty.as_str()) {
             let q = if matches!(ty.as_str(), "SR" | "RS") {
@@ -181,9 +162,12 @@ impl<'a, 'i> Reader<'a, 'i> {
                 "Q"
             };
             if !formal.is_empty() && !formal.eq_ignore_ascii_case(q) {
-                return Err(format!(
-                    "{}: its output {formal} has no uTile form (only {q} and ENO) — leave it unwired",
-                    what(n)
+                return Err(self.fail(
+                    n,
+                    DETAIL,
+                    &format!(
+                    "its output {formal} has no uTile form (only {q} and ENO) — leave it unwired"
+                ),
                 ));
             }
             let s = self.block_stmt(n)?;
@@ -192,16 +176,72 @@ impl<'a, 'i> Reader<'a, 'i> {
         Err(self.unknown_block(n, &ty))
     }
 
-    pub(super) fn unknown_block(&self, n: Node, ty: &str) -> String {
-        let why = match ty {
-            "CTD" | "CTUD" => "uTile's counters count up only (CTU)",
-            "GT" | "GE" | "EQ" | "NE" | "LE" | "LT" => "uTile has no comparisons of numbers",
-            "ADD" | "SUB" | "MUL" | "DIV" | "MOD" | "MOVE" | "SEL" | "MUX" | "MAX" | "MIN"
-            | "LIMIT" => "uTile has no arithmetic or moves of numbers",
-            t if t.contains("_TO_") => "uTile has no conversions of numbers",
-            _ => "uTile knows only TON, TOF, TP, CTU, R_TRIG, F_TRIG, SR, RS, AND, OR, XOR, NOT (user function blocks cannot be imported)",
+    /// AND, OR, XOR, NOT of the block's inputs in their order.
+    fn function(&mut self, n: Node<'a, 'i>, ty: &str) -> Res<Expr> {
+        self.enable_ok(n)?;
+        let names: Vec<String> = child(n, "inputVariables")
+            .map(|iv| {
+                iv.children()
+                    .filter(|v| v.tag_name().name() == "variable")
+                    .filter_map(|v| v.attribute("formalParameter").map(str::to_string))
+                    .filter(|f| !f.eq_ignore_ascii_case("EN"))
+                    .collect()
+            })
+            .unwrap_or_default();
+        let mut ins: Vec<Expr> = Vec::new();
+        let mut failed = false;
+        for f in &names {
+            match self.bool_input(n, f) {
+                Ok(e) => ins.push(e),
+                Err(Said) => failed = true,
+            }
+        }
+        if failed {
+            return Err(Said);
+        }
+        let mut it = ins.into_iter();
+        let Some(first) = it.next() else {
+            return Err(self.fail(n, DETAIL, "no inputs"));
         };
-        format!("{}: {ty}: {why} — redraw it with those", what(n))
+        let e = match ty {
+            "NOT" => Expr::negate(first),
+            "AND" => it.fold(first, |a, b| Expr::And(Box::new(a), Box::new(b))),
+            "OR" => it.fold(first, Expr::or),
+            _ => it.fold(first, |a, b| Expr::Xor(Box::new(a), Box::new(b))),
+        };
+        if e.nodes_within(MAX_NODES).is_none() {
+            return Err(self.too_big(n));
+        }
+        Ok(e)
+    }
+
+    /// A block uTile has no form for, named as what it is (a user function block, with its
+    /// body's language).
+    pub(super) fn unknown_block(&mut self, n: Node, ty: &str) -> Said {
+        let user = self.pous.get(ty).cloned();
+        let is_user = user.is_some() && !FUNCTIONS.contains(&ty) && !ty.contains("_TO_");
+        let why = match ty {
+            "CTD" | "CTUD" => "uTile's counters count up only (CTU)".into(),
+            "GT" | "GE" | "EQ" | "NE" | "LE" | "LT" => "uTile has no comparisons of numbers".into(),
+            "ADD" | "SUB" | "MUL" | "DIV" | "MOD" | "MOVE" | "SEL" | "MUX" | "MAX" | "MIN"
+            | "LIMIT" => "uTile has no arithmetic or moves of numbers".into(),
+            t if t.contains("_TO_") => "uTile has no conversions of numbers".into(),
+            _ => match user {
+                Some((kind, lang)) => format!(
+                    "a user {} of this project (its body {lang}); uTile imports only the program, with TON, TOF, TP, CTU, R_TRIG, F_TRIG, SR, RS, AND, OR, XOR, NOT (user function blocks cannot be imported) — draw its logic in the program",
+                    if kind == "function" { "function" } else { "function block" }
+                ),
+                None => "uTile knows only TON, TOF, TP, CTU, R_TRIG, F_TRIG, SR, RS, AND, OR, XOR, NOT (user function blocks cannot be imported)".into(),
+            },
+        };
+        let id = local_id(n).unwrap_or(0);
+        self.failed_blocks.insert(id);
+        let what_to_do = if is_user {
+            ""
+        } else {
+            " — redraw it with those"
+        };
+        self.fail(n, CAUSE, &format!("{ty}: {why}{what_to_do}"))
     }
 
     /// The statement of a function block, emitted once (its inputs first).
@@ -210,16 +250,44 @@ impl<'a, 'i> Reader<'a, 'i> {
         if let Some(&s) = self.emitted.get(&id) {
             return Ok(s);
         }
-        self.enable_ok(n)?;
+        if self.failed_blocks.contains(&id) {
+            return Err(Said);
+        }
+        let mark = self.fed_back.len();
+        self.in_block.insert(id);
+        let stmt = self.block_inputs(n);
+        self.in_block.remove(&id);
+        // What the block's inputs read fed back is theirs: its Q is this scan's.
+        self.fed_back.truncate(mark);
+        let Ok(stmt) = stmt else {
+            self.failed_blocks.insert(id);
+            return Err(Said);
+        };
+        self.stmts.push(stmt);
+        let s = self.stmts.len() - 1;
+        self.emitted.insert(id, s);
+        Ok(s)
+    }
+
+    /// A function block's statement from its inputs.
+    fn block_inputs(&mut self, n: Node<'a, 'i>) -> Res<Stmt> {
         let ty = n.attribute("typeName").unwrap_or("").to_ascii_uppercase();
+        if !FB_TYPES.contains(&ty.as_str()) {
+            return Err(self.unknown_block(n, &ty));
+        }
+        self.enable_ok(n)?;
         let w = what(n);
-        let stmt = match ty.as_str() {
+        Ok(match ty.as_str() {
             "TON" | "TOF" | "TP" => {
-                let input = self.bool_input(n, "IN")?;
+                let input = self.bool_input(n, "IN");
                 let pt_text = self.constant_input(n, "PT")?;
-                let pt_ms = parse_time(&pt_text).ok_or_else(|| {
-                    format!("{w}: PT '{pt_text}' is not a time (T#500ms, T#2s, T#1m30s)")
-                })?;
+                let Some(pt_ms) = parse_time(&pt_text) else {
+                    return Err(self.fail(
+                        n,
+                        DETAIL,
+                        &format!("PT '{pt_text}' is not a time (T#500ms, T#2s, T#1m30s)"),
+                    ));
+                };
                 let kind = match ty.as_str() {
                     "TON" => TimerKind::Ton,
                     "TOF" => TimerKind::Tof,
@@ -227,28 +295,24 @@ impl<'a, 'i> Reader<'a, 'i> {
                 };
                 Stmt::Timer {
                     kind,
-                    input,
+                    input: input?,
                     pt_ms,
                     what: w,
                 }
             }
             "CTU" => {
-                let cu = self.bool_input(n, "CU")?;
-                let reset = self.bool_input(n, "R")?;
+                let (cu, reset) = (self.bool_input(n, "CU"), self.bool_input(n, "R"));
                 let pv_text = self.constant_input(n, "PV")?;
-                let pv = pv_text
-                    .trim()
-                    .parse::<u16>()
-                    .ok()
-                    .filter(|&v| v >= 1)
-                    .ok_or_else(|| {
-                        format!(
-                            "{w}: PV '{pv_text}' is not a preset uTile's counters hold (1..65535)"
-                        )
-                    })?;
+                let Some(pv) = pv_text.trim().parse::<u16>().ok().filter(|&v| v >= 1) else {
+                    return Err(self.fail(
+                        n,
+                        DETAIL,
+                        &format!("PV '{pv_text}' is not a preset uTile's counters hold (1..65535)"),
+                    ));
+                };
                 Stmt::Counter {
-                    cu,
-                    reset,
+                    cu: cu?,
+                    reset: reset?,
                     pv,
                     what: w,
                 }
@@ -257,21 +321,16 @@ impl<'a, 'i> Reader<'a, 'i> {
                 clk: self.bool_input(n, "CLK")?,
                 rising: ty == "R_TRIG",
             },
-            "SR" => Stmt::FlipFlop {
-                set: self.bool_input(n, "S1")?,
-                reset: self.bool_input(n, "R")?,
-                set_dominant: true,
-            },
-            "RS" => Stmt::FlipFlop {
-                set: self.bool_input(n, "S")?,
-                reset: self.bool_input(n, "R1")?,
-                set_dominant: false,
-            },
-            _ => return Err(self.unknown_block(n, &ty)),
-        };
-        self.stmts.push(stmt);
-        let s = self.stmts.len() - 1;
-        self.emitted.insert(id, s);
-        Ok(s)
+            _ => {
+                let sr = ty == "SR";
+                let set = self.bool_input(n, if sr { "S1" } else { "S" });
+                let reset = self.bool_input(n, if sr { "R" } else { "R1" });
+                Stmt::FlipFlop {
+                    set: set?,
+                    reset: reset?,
+                    set_dominant: sr,
+                }
+            }
+        })
     }
 }

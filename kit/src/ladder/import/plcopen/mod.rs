@@ -6,462 +6,401 @@
 //! blocks TON, TOF, TP, CTU, R_TRIG, F_TRIG, SR, RS and the functions AND, OR, XOR, NOT
 //! (EN optional, ENO passed through), FBD's in-, out- and in-out variables, connectors and
 //! continuations. The sinks (coils, output variables, function blocks) run top to bottom,
-//! then left to right, as the picture shows them. The blocks and functions are read in
-//! `blocks.rs`.
+//! then left to right, as the picture shows them.
+//!
+//! One room a job: the variables (`vars.rs`: the interface, globals through `externalVars`,
+//! initial values, `--map` checked against the file), the body's elements (`body.rs`), the
+//! wires followed (`wires.rs`: memoised, loops through a block read as IEC's feedback), the
+//! blocks and functions (`blocks.rs`), the XML helpers (`xml.rs`). Every problem is a
+//! reason, each element's once, sorted by rung and localId.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
+use std::format;
 use std::string::String;
 use std::vec::Vec;
 
 use roxmltree::{Document, Node};
 
-use super::super::Reasons;
-use super::{pop_of, CoilMode, Expr, IecProgram, Signals, Stmt, TimerKind};
+use super::{CoilMode, Expr, Failure, IecProgram, Signals, Stmt, TimerKind, MAX_NODES};
 
 mod blocks;
+mod body;
+mod vars;
+mod wires;
 mod xml;
 pub use blocks::parse_time;
 use xml::{child, child_text, local_id, pos, what};
+
+/// The deepest an XML document may nest: real `plc.xml` files nest about a dozen deep.
+pub const MAX_XML_DEPTH: usize = 256;
+
+/// A problem already said (its reason is in the reader's list): what it reaches says
+/// nothing more.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Said;
+
+type Res<T> = Result<T, Said>;
+
+/// Where a reason sorts: the rung (the first sink in scan order that reaches the element,
+/// 0 for none), the cause first (0: an element or block uTile cannot read; 1: the rest),
+/// the element's localId.
+type Key = (usize, u8, u64);
+
+/// A reason's rank: the real cause (an unknown element, block or function).
+const CAUSE: u8 = 0;
+/// A reason's rank: the rest.
+const DETAIL: u8 = 1;
 
 /// The reader's state: the body's elements by localId, the signals, the statements.
 struct Reader<'a, 'i> {
     elems: HashMap<u64, Node<'a, 'i>>,
     connectors: HashMap<String, Node<'a, 'i>>,
     signals: Signals,
-    /// Non-BOOL variables' initial values (upper-cased name → text).
-    constants: HashMap<String, String>,
-    /// Function-block instance names declared with a standard type.
+    vars: vars::Vars,
+    /// The project's user POUs: upper-cased name → (pouType, body language).
+    pous: HashMap<String, (String, String)>,
     stmts: Vec<Stmt>,
     /// Statement of each FB element already emitted.
     emitted: HashMap<u64, usize>,
     /// Each wire read (element, output) and the statement count when it was first read.
-    wires: HashMap<(u64, Option<String>), usize>,
-    /// The wires read for several statements.
+    wires: HashMap<(u64, String), usize>,
+    /// The wires read for several statements, and which they are.
     shared: Vec<Expr>,
+    shared_wires: HashSet<(u64, String)>,
     /// The blocks with an instance name: (name, localId, upper-cased type), in file order.
     instances: Vec<(String, u64, String)>,
-    /// Elements being followed (a loop of wires comes back to one).
+    /// Each wire's value once followed (or its problem, said once).
+    memo: HashMap<(u64, String), Res<Expr>>,
+    /// The blocks whose outputs a memoised wire reads fed back (their previous scan's).
+    memo_fed: HashMap<(u64, String), Vec<u64>>,
+    /// Elements being followed, and the blocks being evaluated (a wire back to one is fed
+    /// back).
     visiting: Vec<u64>,
+    in_block: HashSet<u64>,
+    /// The blocks read fed back by the wires being followed.
+    fed_back: Vec<u64>,
+    /// The elements followed (or read as a constant).
+    reached: HashSet<u64>,
+    /// Blocks that failed (their reason given, or their inputs').
+    failed_blocks: HashSet<u64>,
     /// Edge memories by contact localId.
     edges: HashMap<u64, usize>,
     edge_what: Vec<String>,
-    problems: Vec<String>,
+    /// The rung being read: the sink's place in scan order, from 1.
+    rung: usize,
+    /// Every reason with its key; the elements and variables that have one.
+    problems: Vec<(Key, String)>,
+    said: HashSet<u64>,
+    said_vars: HashSet<String>,
+    /// Wires nested past the limit were said to be.
+    said_deep: bool,
 }
-
-type Res<T> = Result<T, String>;
 
 const FB_TYPES: [&str; 8] = ["TON", "TOF", "TP", "CTU", "R_TRIG", "F_TRIG", "SR", "RS"];
 const FUNCTIONS: [&str; 4] = ["AND", "OR", "XOR", "NOT"];
 
-/// Read a PLCopen XML document's first program.
-pub fn read(text: &str, signals: Signals) -> Result<IecProgram, Reasons> {
-    read_all(text, signals).map_err(Reasons)
-}
-
-fn read_all(text: &str, signals: Signals) -> Result<IecProgram, Vec<String>> {
+/// Read a PLCopen XML document's first program; `Failure::Map` when `--map` does not fit
+/// the file.
+pub fn read(text: &str, signals: Signals) -> Result<IecProgram, Failure> {
+    let depth = xml::nesting(text);
+    if depth > MAX_XML_DEPTH {
+        return Err(file_reason(format!(
+            "file: XML nested {depth} deep; uTile reads up to {MAX_XML_DEPTH} (a plc.xml nests about a dozen) — is it the right file?"
+        )));
+    }
     let opts = roxmltree::ParsingOptions {
         allow_dtd: false,
         nodes_limit: 2_000_000,
     };
     let doc = Document::parse_with_options(text, opts).map_err(|e| {
-        std::vec![format!(
+        file_reason(format!(
             "file: not well-formed XML ({e}) — save the project again from OpenPLC Editor, or check the file is a PLCopen plc.xml"
-        )]
+        ))
     })?;
+    let (pou, lang) = program(&doc).map_err(file_reason)?;
+    let mut r = Reader::new(signals, &doc);
+    let found = body::collect(&mut r, lang);
+    r.vars = vars::read(&doc, pou, &found);
+    r.check_map(&found)?;
+    r.declare();
+    r.read_sinks(&found.order);
+    r.rung = 0;
+    r.unreached_names(&found);
+    if !r.problems.is_empty() {
+        let mut problems = std::mem::take(&mut r.problems);
+        problems.sort_by_key(|p| p.0);
+        return Err(Failure::File(problems.into_iter().map(|p| p.1).collect()));
+    }
+    r.finish()
+}
+
+fn file_reason(why: String) -> Failure {
+    Failure::File(std::vec![why])
+}
+
+/// The first program POU and its LD or FBD body, or why not.
+fn program<'a, 'i>(doc: &'a Document<'i>) -> Result<(Node<'a, 'i>, Node<'a, 'i>), String> {
     let root = doc.root_element();
     if root.tag_name().name() != "project" {
-        return Err(std::vec![format!(
+        return Err(format!(
             "file: the root element is <{}>, not a PLCopen <project> — is this a plc.xml?",
             root.tag_name().name()
-        )]);
+        ));
     }
-    let pous: Vec<Node> = root
+    let Some(pou) = root
         .descendants()
-        .filter(|n| n.tag_name().name() == "pou")
-        .collect();
-    let Some(pou) = pous
-        .iter()
-        .copied()
-        .find(|p| p.attribute("pouType") == Some("program"))
+        .find(|p| p.tag_name().name() == "pou" && p.attribute("pouType") == Some("program"))
     else {
-        return Err(std::vec![
+        return Err(
             "file: no program POU — a PLCopen project for uTile holds one program in LD or FBD"
-                .into()
-        ]);
+                .into(),
+        );
     };
     let pou_name = pou.attribute("name").unwrap_or("program");
     let Some(body) = child(pou, "body") else {
-        return Err(std::vec![format!("program {pou_name}: no body")]);
+        return Err(format!("program {pou_name}: no body"));
     };
     let Some(lang) = body.children().find(|c| c.is_element()) else {
-        return Err(std::vec![format!("program {pou_name}: an empty body")]);
+        return Err(format!("program {pou_name}: an empty body"));
     };
     match lang.tag_name().name() {
-        "LD" | "FBD" => {}
-        other => {
-            return Err(std::vec![format!(
-                "program {pou_name}: its body is {other} — uTile imports LD and FBD only; redraw it in LD"
-            )])
-        }
+        "LD" | "FBD" => Ok((pou, lang)),
+        other => Err(format!(
+            "program {pou_name}: its body is {} — uTile imports LD and FBD only; redraw it in LD",
+            body_name(other)
+        )),
     }
+}
 
-    let mut r = Reader {
-        elems: HashMap::new(),
-        connectors: HashMap::new(),
-        signals,
-        constants: HashMap::new(),
-        stmts: Vec::new(),
-        emitted: HashMap::new(),
-        instances: Vec::new(),
-        wires: HashMap::new(),
-        shared: Vec::new(),
-        visiting: Vec::new(),
-        edges: HashMap::new(),
-        edge_what: Vec::new(),
-        problems: Vec::new(),
-    };
-    // Variables: the program's interface, then global variables anywhere in the project.
-    let mut vars: Vec<Node> = Vec::new();
-    if let Some(iface) = child(pou, "interface") {
-        vars.extend(
-            iface
-                .descendants()
-                .filter(|n| n.tag_name().name() == "variable"),
-        );
+/// A body's language in words (`ST`, `IL`, `SFC`).
+fn body_name(tag: &str) -> &str {
+    match tag {
+        "ST" | "IL" | "SFC" | "LD" | "FBD" => tag,
+        _ => "not LD or FBD",
     }
-    vars.extend(
-        root.descendants()
-            .filter(|n| n.tag_name().name() == "globalVars")
-            .flat_map(|g| g.children().filter(|n| n.tag_name().name() == "variable")),
-    );
-    for v in vars {
-        let Some(name) = v.attribute("name") else {
-            continue;
-        };
-        let ty = child(v, "type").and_then(|t| t.children().find(|c| c.is_element()));
-        let ty_name = ty.map_or("", |t| t.tag_name().name());
-        if ty_name == "BOOL" {
-            if let Err(why) = r.signals.declare(name, v.attribute("address")) {
-                r.problems.push(why.0);
-            }
-        } else if ty_name != "derived" {
-            if let Some(val) = v
-                .descendants()
-                .find(|n| n.tag_name().name() == "simpleValue")
-                .and_then(|s| s.attribute("value"))
-            {
-                r.constants.insert(name.to_ascii_uppercase(), val.into());
-            }
-        }
-    }
-
-    // The body's elements, also inside CODESYS's rungs.
-    let mut order: Vec<Node> = Vec::new();
-    let mut stack: Vec<Node> = lang.children().filter(|c| c.is_element()).collect();
-    stack.reverse();
-    while let Some(n) = stack.pop() {
-        let tag = n.tag_name().name();
-        match tag {
-            "rung" | "network" => {
-                let mut kids: Vec<Node> = n.children().filter(|c| c.is_element()).collect();
-                kids.reverse();
-                stack.extend(kids);
-                continue;
-            }
-            "comment" | "addData" | "documentation" => continue,
-            "leftPowerRail" | "rightPowerRail" | "contact" | "coil" | "block" | "inVariable"
-            | "outVariable" | "inOutVariable" | "connector" | "continuation" => {}
-            "jump" | "label" | "return" => {
-                r.problems.push(format!(
-                    "{}: jumps and returns have no uTile form — every rung runs every scan; redraw without them",
-                    what(n)
-                ));
-                continue;
-            }
-            other => {
-                r.problems.push(format!(
-                    "{}: <{other}> is not an element uTile knows (rails, contacts, coils, TON/TOF/TP/CTU/R_TRIG/F_TRIG/SR/RS, AND/OR/XOR/NOT, variables) — remove it",
-                    what(n)
-                ));
-                continue;
-            }
-        }
-        let Some(id) = local_id(n) else {
-            r.problems.push(format!(
-                "{}: no localId — save the file again from the editor",
-                what(n)
-            ));
-            continue;
-        };
-        if let (true, Some(inst)) = (tag == "block", n.attribute("instanceName")) {
-            let ty = n.attribute("typeName").unwrap_or("").to_ascii_uppercase();
-            r.instances.push((inst.trim().to_string(), id, ty));
-        }
-        if tag == "connector" {
-            if let Some(name) = n.attribute("name") {
-                r.connectors.insert(name.to_ascii_uppercase(), n);
-            }
-        }
-        if r.elems.insert(id, n).is_some() {
-            r.problems.push(format!(
-                "{}: two elements share localId {id} — save the file again from the editor",
-                what(n)
-            ));
-        }
-        order.push(n);
-    }
-    if !r.problems.is_empty() {
-        return Err(r.problems);
-    }
-
-    // Sinks top to bottom, then left to right.
-    let mut sinks: Vec<Node> = order
-        .iter()
-        .copied()
-        .filter(|n| match n.tag_name().name() {
-            "coil" | "outVariable" | "inOutVariable" => true,
-            "block" => FB_TYPES.contains(&n.attribute("typeName").unwrap_or("")),
-            _ => false,
-        })
-        .collect();
-    sinks.sort_by_key(|n| (pos(*n), local_id(*n)));
-    for s in sinks {
-        if let Err(why) = r.sink(s) {
-            r.problems.push(why);
-            break;
-        }
-    }
-    if !r.problems.is_empty() {
-        return Err(r.problems);
-    }
-    // Blocks read by name (`TOF0.Q`) are statements now.
-    let emitted = std::mem::take(&mut r.emitted);
-    for s in &mut r.stmts {
-        super::stmt_exprs_mut(s, &mut |e| super::resolve_named(e, &emitted));
-    }
-    for e in &mut r.shared {
-        super::resolve_named(e, &emitted);
-    }
-    let set_point = |name: &str| {
-        r.constants
-            .get(name)
-            .and_then(|v| v.trim().parse::<u16>().ok())
-            .filter(|&v| v <= 1023)
-            .unwrap_or(0)
-    };
-    let set_points = [set_point("S6"), set_point("S7")];
-    Ok(IecProgram {
-        edges: r.edges.len(),
-        edge_what: r.edge_what,
-        stmts: r.stmts,
-        used_uv: r.signals.used_uv,
-        shared: r.shared,
-        set_points,
-    })
 }
 
 impl<'a, 'i> Reader<'a, 'i> {
-    fn sink(&mut self, n: Node<'a, 'i>) -> Res<()> {
-        match n.tag_name().name() {
-            "coil" | "outVariable" | "inOutVariable" => {
-                let power = self.input_of(n, child(n, "connectionPointIn"))?;
-                if n.tag_name().name() == "inOutVariable" && child(n, "connectionPointIn").is_none()
-                {
-                    return Ok(());
-                }
-                let name = if n.tag_name().name() == "coil" {
-                    child_text(n, "variable")
-                } else {
-                    child_text(n, "expression")
-                }
-                .unwrap_or_default();
-                let push = self.var(n, &name)?;
-                let Some(pop) = pop_of(push) else {
-                    return Err(format!(
-                        "{}: {name} is an input and cannot be written — write an output or a memory bit",
-                        what(n)
-                    ));
-                };
-                let negated = n.attribute("negated") == Some("true");
-                let mode = match (n.attribute("storage").unwrap_or("none"), negated) {
-                    ("set", _) => CoilMode::Set,
-                    ("reset", _) => CoilMode::Reset,
-                    (_, true) => CoilMode::Negated,
-                    _ => CoilMode::Normal,
-                };
-                if n.attribute("edge").is_some_and(|e| e != "none") {
-                    return Err(format!(
-                        "{}: edge coils have no uTile form — use an edge contact before a plain coil",
-                        what(n)
-                    ));
-                }
-                self.stmts.push(Stmt::Coil {
-                    power,
-                    pop,
-                    push,
-                    mode,
-                });
-                Ok(())
-            }
-            _ => self.block_stmt(n).map(|_| ()),
+    fn new(signals: Signals, doc: &'a Document<'i>) -> Reader<'a, 'i> {
+        let pous = doc
+            .descendants()
+            .filter(|p| p.tag_name().name() == "pou")
+            .filter_map(|p| {
+                let lang = child(p, "body")
+                    .and_then(|b| b.children().find(|c| c.is_element()))
+                    .map_or("", |l| l.tag_name().name());
+                Some((
+                    p.attribute("name")?.trim().to_ascii_uppercase(),
+                    (
+                        p.attribute("pouType").unwrap_or("").into(),
+                        body_name(lang).into(),
+                    ),
+                ))
+            })
+            .collect();
+        Reader {
+            elems: HashMap::new(),
+            connectors: HashMap::new(),
+            signals,
+            vars: vars::Vars::default(),
+            pous,
+            stmts: Vec::new(),
+            emitted: HashMap::new(),
+            wires: HashMap::new(),
+            shared: Vec::new(),
+            shared_wires: HashSet::new(),
+            instances: Vec::new(),
+            memo: HashMap::new(),
+            memo_fed: HashMap::new(),
+            visiting: Vec::new(),
+            in_block: HashSet::new(),
+            fed_back: Vec::new(),
+            failed_blocks: HashSet::new(),
+            reached: HashSet::new(),
+            edges: HashMap::new(),
+            edge_what: Vec::new(),
+            rung: 0,
+            problems: Vec::new(),
+            said: HashSet::new(),
+            said_vars: HashSet::new(),
+            said_deep: false,
         }
     }
 
-    /// The push opcode of a variable named in an element.
-    fn var(&self, n: Node, name: &str) -> Res<u8> {
-        self.signals.get(name).ok_or_else(|| {
-            if self.constants.contains_key(&name.trim().to_ascii_uppercase()) {
-                format!(
-                    "{}: {name} is not a BOOL — uTile's contacts and coils are bits",
-                    what(n)
+    /// Give element `n` its reason (`what (localId N): why`), once: a second reason for
+    /// the same element is not said.
+    fn fail(&mut self, n: Node, rank: u8, why: &str) -> Said {
+        let id = local_id(n).unwrap_or(0);
+        if local_id(n).is_none() || self.said.insert(id) {
+            self.problems
+                .push(((self.rung, rank, id), format!("{}: {why}", what(n))));
+        }
+        Said
+    }
+
+    /// The sinks top to bottom, then left to right, each a rung; every block is one, so
+    /// each unknown block is named even when nothing reads it.
+    fn read_sinks(&mut self, order: &[Node<'a, 'i>]) {
+        let mut sinks: Vec<Node> = order
+            .iter()
+            .copied()
+            .filter(|n| {
+                matches!(
+                    n.tag_name().name(),
+                    "coil" | "outVariable" | "inOutVariable" | "block"
                 )
-            } else {
-                format!(
-                    "{}: variable {name} is not declared as a BOOL — declare it, or name its signal with --map {name}=SIGNAL",
-                    what(n)
-                )
+            })
+            .collect();
+        sinks.sort_by_key(|n| (pos(*n), local_id(*n)));
+        let mut failed = false;
+        for (k, s) in sinks.into_iter().enumerate() {
+            self.rung = k + 1;
+            self.reached.insert(local_id(s).unwrap_or(0));
+            failed |= self.sink(s).is_err();
+        }
+        if failed && self.problems.is_empty() {
+            // Every failure gives its reason; should one not, the file is still refused.
+            self.problems.push((
+                (0, DETAIL, 0),
+                "file: an element could not be read and its reason was lost — please report this file".into(),
+            ));
+        }
+    }
+
+    fn sink(&mut self, n: Node<'a, 'i>) -> Res<()> {
+        let tag = n.tag_name().name();
+        if tag == "block" {
+            let ty = n.attribute("typeName").unwrap_or("").to_ascii_uppercase();
+            if FUNCTIONS.contains(&ty.as_str()) {
+                return Ok(()); // evaluated where it is read
             }
+            return self.block_stmt(n).map(|_| ());
+        }
+        if tag == "inOutVariable" && child(n, "connectionPointIn").is_none() {
+            return Ok(());
+        }
+        let power = self.input_of(n, child(n, "connectionPointIn"));
+        let name = if tag == "coil" {
+            child_text(n, "variable")
+        } else {
+            child_text(n, "expression")
+        }
+        .unwrap_or_default();
+        let push = self.var(n, &name);
+        let (power, push) = (power?, push?);
+        let Some(pop) = super::pop_of(push) else {
+            return Err(self.fail(
+                n,
+                DETAIL,
+                &format!(
+                    "{name} is an input and cannot be written — write an output or a memory bit"
+                ),
+            ));
+        };
+        if n.attribute("edge").is_some_and(|e| e != "none") {
+            return Err(self.fail(
+                n,
+                DETAIL,
+                "edge coils have no uTile form — use an edge contact before a plain coil",
+            ));
+        }
+        let negated = n.attribute("negated") == Some("true");
+        let mode = match (n.attribute("storage").unwrap_or("none"), negated) {
+            ("set", _) => CoilMode::Set,
+            ("reset", _) => CoilMode::Reset,
+            (_, true) => CoilMode::Negated,
+            _ => CoilMode::Normal,
+        };
+        self.stmts.push(Stmt::Coil {
+            power,
+            pop,
+            push,
+            mode,
+        });
+        Ok(())
+    }
+
+    /// The program: blocks read by name (`TOF0.Q`) and fed back made statements'
+    /// outputs, the analog set-points.
+    fn finish(mut self) -> Result<IecProgram, Failure> {
+        self.defer_self_resets()?;
+        let emitted = std::mem::take(&mut self.emitted);
+        for s in &mut self.stmts {
+            super::stmt_exprs_mut(s, &mut |e| super::resolve_named(e, &emitted));
+        }
+        for e in &mut self.shared {
+            super::resolve_named(e, &emitted);
+        }
+        let set_point = |name: &str| {
+            self.vars
+                .constants
+                .get(name)
+                .and_then(|v| v.trim().parse::<u16>().ok())
+                .filter(|&v| v <= 1023)
+                .unwrap_or(0)
+        };
+        let set_points = [set_point("S6"), set_point("S7")];
+        Ok(IecProgram {
+            edges: self.edges.len(),
+            edge_what: self.edge_what,
+            stmts: self.stmts,
+            used_uv: self.signals.used_uv,
+            shared: self.shared,
+            set_points,
         })
     }
 
-    /// The power on a connectionPointIn: the OR of its connections (none: FALSE).
-    fn input_of(&mut self, n: Node<'a, 'i>, point: Option<Node<'a, 'i>>) -> Res<Expr> {
-        let Some(point) = point else {
-            return Ok(Expr::Const(false));
-        };
-        let mut power: Option<Expr> = None;
-        for c in point
-            .children()
-            .filter(|c| c.tag_name().name() == "connection")
-        {
-            let Some(id) = c
-                .attribute("refLocalId")
-                .and_then(|s| s.trim().parse().ok())
-            else {
-                return Err(format!(
-                    "{}: a connection without refLocalId — save the file again from the editor",
-                    what(n)
-                ));
+    /// A CTU whose R is fed back from its own Q (a counter that restarts itself): uTile
+    /// counts at END, so its Q reaches the rungs below a scan later than IEC's; its reset
+    /// then goes after them all (`.CRm` last), so they see each Q pulse, a scan late as
+    /// every read of a CTU's Q below it. The reset reads what it read at the call: refused
+    /// when a statement below writes a variable it reads.
+    fn defer_self_resets(&mut self) -> Result<(), Failure> {
+        let mut deferred = Vec::new();
+        for (&id, &s) in &self.emitted {
+            let Some(Stmt::Counter { reset, what, .. }) = self.stmts.get(s) else {
+                continue;
             };
-            let e = self.output_of(n, id, c.attribute("formalParameter"))?;
-            power = Some(match power {
-                None => e,
-                Some(p) => Expr::or(p, e),
+            if !iec_reads(reset, &Expr::Named(id)) {
+                continue;
+            }
+            let written = self.stmts[s + 1..].iter().find_map(|w| match w {
+                Stmt::Coil { push, .. } if iec_reads(reset, &Expr::Var(*push)) => Some(*push),
+                _ => None,
             });
+            if let Some(push) = written {
+                return Err(Failure::File(std::vec![format!(
+                    "{what}: its R reads its own Q and {}, which a coil below it writes — uTile counts at END, so the reset goes below every rung; read that variable's value through a coil above the counter",
+                    super::signal_name(push)
+                )]));
+            }
+            deferred.push(s);
         }
-        Ok(power.unwrap_or(Expr::Const(false)))
+        deferred.sort_unstable();
+        for s in deferred {
+            if let Some(Stmt::Counter { reset, .. }) = self.stmts.get_mut(s) {
+                let power = std::mem::replace(reset, Expr::Const(false));
+                self.stmts.push(Stmt::CounterReset { counter: s, power });
+            }
+        }
+        Ok(())
     }
+}
 
-    /// The value leaving element `id` (at its output `formal`), for the element `from`.
-    fn output_of(&mut self, from: Node, id: u64, formal: Option<&str>) -> Res<Expr> {
-        let Some(&n) = self.elems.get(&id) else {
-            return Err(format!(
-                "{}: wired to localId {id}, which is not in the body — redraw the wire",
-                what(from)
-            ));
-        };
-        if self.visiting.contains(&id) {
-            return Err(format!(
-                "{}: a loop of wires comes back to it — uTile's rungs flow left to right; break the loop with a coil and a contact",
-                what(n)
-            ));
-        }
-        self.visiting.push(id);
-        let r = self.output_inner(n, id, formal);
-        self.visiting.pop();
-        // A wire read for a second statement is shared (IEC: one value).
-        if let Ok(e) = &r {
-            let at = self.stmts.len();
-            let key = (id, formal.map(str::to_ascii_uppercase));
-            match self.wires.get(&key) {
-                None => {
-                    self.wires.insert(key, at);
-                }
-                Some(&first) if first != at && !self.shared.contains(e) => {
-                    self.shared.push(e.clone());
-                }
-                Some(_) => {}
+/// Whether `e` reads `w` (a variable or a block's Q by name), without recursion.
+fn iec_reads(e: &Expr, w: &Expr) -> bool {
+    let mut stack = std::vec![e];
+    while let Some(x) = stack.pop() {
+        match x {
+            Expr::Not(a) => stack.push(a),
+            Expr::And(a, b) | Expr::Or(a, b) | Expr::Xor(a, b) => {
+                stack.push(a);
+                stack.push(b);
             }
-        }
-        r
-    }
-
-    fn output_inner(&mut self, n: Node<'a, 'i>, id: u64, formal: Option<&str>) -> Res<Expr> {
-        match n.tag_name().name() {
-            "leftPowerRail" => Ok(Expr::Const(true)),
-            "contact" => {
-                let power = self.input_of(n, child(n, "connectionPointIn"))?;
-                let name = child_text(n, "variable").unwrap_or_default();
-                let negated = n.attribute("negated") == Some("true");
-                let edge = n.attribute("edge").unwrap_or("none");
-                if name.contains('.') {
-                    let value = self.instance_output(n, &name)?;
-                    if edge != "none" {
-                        return Err(format!(
-                            "{}: an edge contact on {name} — uTile's edges are on bits; drive a coil from {name} and put the edge contact on that coil's variable",
-                            what(n)
-                        ));
-                    }
-                    let value = if negated { Expr::negate(value) } else { value };
-                    return Ok(Expr::and(power, value));
-                }
-                let push = self.var(n, &name)?;
-                let value = match edge {
-                    "none" => Expr::Var(push),
-                    e @ ("rising" | "falling") => {
-                        let next = self.edges.len();
-                        let eid = *self.edges.entry(id).or_insert(next);
-                        if eid == next {
-                            self.edge_what.push(what(n));
-                        }
-                        Expr::Edge {
-                            var: push,
-                            rising: e == "rising",
-                            id: eid,
-                        }
-                    }
-                    other => {
-                        return Err(format!(
-                            "{}: edge=\"{other}\" is not rising or falling",
-                            what(n)
-                        ))
-                    }
-                };
-                let value = if negated { Expr::negate(value) } else { value };
-                Ok(Expr::and(power, value))
-            }
-            "coil" => self.input_of(n, child(n, "connectionPointIn")),
-            "inVariable" | "inOutVariable" => {
-                let name = child_text(n, "expression").unwrap_or_default();
-                let value = match name.to_ascii_uppercase().as_str() {
-                    "TRUE" | "1" => Expr::Const(true),
-                    "FALSE" | "0" => Expr::Const(false),
-                    _ if name.contains('.') => self.instance_output(n, &name)?,
-                    _ => Expr::Var(self.var(n, &name)?),
-                };
-                Ok(if n.attribute("negated") == Some("true") {
-                    Expr::negate(value)
-                } else {
-                    value
-                })
-            }
-            "continuation" => {
-                let name = n.attribute("name").unwrap_or("").to_ascii_uppercase();
-                let Some(&c) = self.connectors.get(&name) else {
-                    return Err(format!(
-                        "{}: no connector named {name} — draw the connector or the wire",
-                        what(n)
-                    ));
-                };
-                let cid = local_id(c).unwrap_or(0);
-                self.output_of(n, cid, None)
-            }
-            "connector" => self.input_of(n, child(n, "connectionPointIn")),
-            "block" => self.block_output(n, formal.unwrap_or("")),
-            _ => Err(format!(
-                "{}: nothing flows out of it — redraw the wire",
-                what(n)
-            )),
+            Expr::Edge { var, .. } if *w == Expr::Var(*var) => return true,
+            x if x == w => return true,
+            _ => {}
         }
     }
+    false
 }
