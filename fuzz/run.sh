@@ -22,7 +22,7 @@ for t in "${targets[@]}"; do
     mkdir -p "fuzz/work/$t"
     printf '\033[1m==> fuzz %s for %s s\033[0m\n' "$t" "$secs" >&2
     cargo fuzz run -O "$t" "fuzz/work/$t" "fuzz/corpus/$t" -- \
-        -max_total_time="$secs" -max_len=4096 -print_final_stats=1 2>&1 |
+        -max_total_time="$secs" -max_len=4096 -timeout=20 -print_final_stats=1 2>&1 |
         grep -E '^(#[0-9]+ +DONE|stat::number_of_executed_units|stat::new_units_added|==[0-9]+==|SUMMARY|.*panicked|.*invariant broken|artifact_prefix|Test unit written)' || true
     if ls "fuzz/artifacts/$t"/crash-* >/dev/null 2>&1; then
         echo "fuzz target $t found a crash: $(ls fuzz/artifacts/$t/crash-*)" >&2

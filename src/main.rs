@@ -30,7 +30,6 @@ mod firmware {
     use utile_core::editor::{Editor, Mode};
     use utile_core::engine::Engine;
     use utile_core::modbus::hold::Next;
-    use utile_core::stats::ScanStats;
 
     /// The editor lives in static RAM, so the linker counts it against the RAM budget
     /// (memory.x) instead of it hiding in `main`'s stack frame. An editor at rest is all
@@ -110,7 +109,6 @@ mod firmware {
     #[inline(never)]
     fn run(eng: &mut Engine, editor: &mut Editor, board: &mut hal::Nano, by_watchdog: bool) {
         let mut st = RunState::new(board.stats_ticks());
-        let mut wraps: u16 = 0;
         // SAFETY: the only reference to SERVER, taken once per RUN (`run` is not re-entered);
         // no interrupt handler uses it; all-zero bytes are a valid `Server` (integers and
         // bools only).
@@ -148,8 +146,10 @@ mod firmware {
                     }
                 }
                 Exit::Scans => {
-                    if server.visit(eng, board, &st, wraps) == modbus::After::Written {
-                        hal::kept::reseal(&eng.prog);
+                    if server.visit(eng, board, &st) {
+                        // Its terminal bytes not yet sent were dropped for the reply: the
+                        // screen is drawn again whole once the master is quiet.
+                        editor.redraw();
                     }
                     // As the visit left the line: a reply it started goes out alone.
                     if server.quiet(board) {
@@ -160,18 +160,15 @@ mod firmware {
                         editor.after_scan(eng, board);
                     }
                 }
-                Exit::Wrap => wraps = wraps.wrapping_add(1),
+                Exit::Wrap => server.wrapped(board),
                 Exit::Refused => break,
             }
         }
         server.end();
-        editor.stats = ScanStats {
-            min: st.min,
-            max: st.max,
-            count: (u32::from(wraps) << 16) | u32::from(st.scans),
-            run_ms: 0,
-        };
         editor.on_break(eng, board);
+        // STAT's figures: the run time is the mean's (since RUN, or since the scan count
+        // last wrapped).
+        editor.stats = server.stats(&st, board.now_ms());
     }
 
     // SAFETY (all six handlers): an AVR interrupt handler runs with interrupts disabled

@@ -1,10 +1,10 @@
-//! RUN mode's Modbus RTU slave (SPEC §13, §17, §18), between scans: judge a frame once its
-//! silence has passed, carry the request out on the engine (the core's `PlcMap`) and start its
-//! reply at once, then feed the reply to the transmitter a few bytes per visit; and whether
-//! the next scan may run (§18's hold, the core's `Hold`, kept in the status). The line's timing
-//! and the slave itself are the hardware layer's (`hal/line.rs`); this file has no `unsafe`.
+//! RUN mode's Modbus RTU slave (SPEC §13, §17, §18), between scans: carry out a frame closed
+//! at its silence on the engine (the core's `PlcMap`) and start its reply at once, then feed
+//! the reply to the transmitter a few bytes per visit; and whether the next scan may run
+//! (§18's hold, the core's `Hold`, kept in the status). The line's timing and the slave
+//! itself are the hardware layer's (`hal/line.rs`); this file has no `unsafe`.
 //!
-//! The scan comes back for this after the very scan in which the work arose (a frame ended,
+//! The scan comes back for this after the very scan in which the work arose (a frame closed,
 //! the transmitter took a byte of the reply), so a reply starts within a scan of its
 //! request's silence, whatever the program's length; no visit holds the scan up long.
 
@@ -32,29 +32,24 @@ const MIN_BYTES: u8 = 3;
 /// never leaves a pause of 1.5 characters inside a reply.
 const AHEAD: u8 = 12;
 
-/// What the RUN loop must do after a visit.
-#[derive(Clone, Copy, PartialEq, Eq)]
-pub enum After {
-    /// Nothing (a lone `/` went to the receive ring, where KEY takes it).
-    Nothing,
-    /// The master wrote presets or set-points: reseal the program kept over a warm reset.
-    Written,
-}
-
-/// The slave's RUN-mode state.
+/// The slave's RUN-mode state. `repr(C)`, the count's high word first: the simavr tests
+/// find it at `SERVER`'s address to bring a run to its 2³²nd scan.
+#[repr(C)]
 pub struct Server {
-    address: u8,
+    /// The scan count's high word: how many times its low 16 bits (`RunState::scans`) have
+    /// wrapped. It wraps too, at 2³² scans (registers 4–5 and 70–71 count modulo 2³²).
+    wraps: u16,
     /// Input register 0's bits.
     flags: u16,
     status: Status,
+    /// The ms clock when the mean's run time starts: at RUN, and again each time the scan
+    /// count wraps to 0, so the mean is always that run time over the scans it counted.
     start_ms: u32,
     overruns_at_start: u16,
     /// A reply is being made.
     pending: bool,
     /// Its first byte has gone to the transmitter (the driver enable is up).
     started: bool,
-    /// A request came: the warm-reset seal is renewed at the next visit.
-    reseal: bool,
 }
 
 impl Server {
@@ -72,7 +67,7 @@ impl Server {
         }
         // Field by field, in place: the rest of the status is written at every request
         // before it is read.
-        self.address = store::slave_address(board);
+        self.wraps = 0;
         self.flags = flags;
         self.status.start(&eng.prog.uf);
         // Free, bit 5 clear. No steps are left: a RUN ends only at a `/`, which ends any
@@ -81,14 +76,14 @@ impl Server {
         self.status.hold.bits = 0;
         self.start_ms = board.now_ms();
         self.overruns_at_start = board.rx_overruns();
-        // No reply (`started` is set with each reply; a seal left over is renewed, harmless).
+        // No reply (`started` is set with each reply).
         self.pending = false;
-        line::serve(true);
+        line::serve(store::slave_address(board));
     }
 
     /// RUN ends: the line goes back to the terminal.
     pub fn end(&mut self) {
-        line::serve(false);
+        line::serve(0);
     }
 
     /// Whether the terminal must wait: a master talked to this slave within the last 3 s,
@@ -97,66 +92,77 @@ impl Server {
         line::busy(board.now_ms())
     }
 
-    /// One visit between scans: a finished frame judged and carried out, its reply started
-    /// and fed as the transmit ring has room, or (the reply queued) the warm-reset seal
-    /// renewed. Whatever is left wants the scan back after the next scan.
-    pub fn visit(
-        &mut self,
-        eng: &mut Engine,
-        board: &mut Nano,
-        st: &RunState,
-        wraps: u16,
-    ) -> After {
+    /// The scan count's low 16 bits wrapped: 65,536 more scans. At 2³² the count wraps to
+    /// 0, and the mean's run time starts again with it.
+    pub fn wrapped(&mut self, board: &mut Nano) {
+        self.wraps = self.wraps.wrapping_add(1);
+        if self.wraps == 0 {
+            self.start_ms = board.now_ms();
+        }
+    }
+
+    /// STAT's figures as they are now (run time and scans since RUN, or since the scan
+    /// count last wrapped).
+    pub fn stats(&self, st: &RunState, now_ms: u32) -> ScanStats {
+        ScanStats {
+            min: st.min,
+            max: st.max,
+            count: (u32::from(self.wraps) << 16) | u32::from(st.scans),
+            run_ms: now_ms.wrapping_sub(self.start_ms),
+        }
+    }
+
+    /// One visit between scans: a frame closed at its silence carried out and its reply
+    /// started, or the reply fed as the transmit ring has room. Whatever is left wants the
+    /// scan back after the next scan. Returns true when a request for this slave was carried
+    /// out: the terminal's screen is to be redrawn whole once the master is quiet (SPEC §13).
+    pub fn visit(&mut self, eng: &mut Engine, board: &mut Nano, st: &RunState) -> bool {
         let start = board.stats_ticks();
+        let mut replied = false;
         if line::take_frame_end() {
             let now = board.now_ms();
-            self.refresh(eng, board, st, wraps, now);
+            self.refresh(eng, board, st, now);
             let mut map = PlcMap {
                 eng: &mut *eng,
                 b: &mut *board,
                 status: &mut self.status,
             };
-            match line::judge(self.address, &mut map, now) {
+            match line::judge(&mut map, now) {
                 Event::Slash => {
                     serial::inject(b'/');
-                    // The terminal's break key ends a hold (SPEC §18): KEY stops the
-                    // program at its next scan; a program without KEY runs on.
-                    self.status.hold.write(HR_SCAN_CONTROL, 0);
+                    // The terminal's break key ends a hold of a program with KEY, which then
+                    // stops at its next KEY; of any other it changes nothing (SPEC §18).
+                    if eng.prog.stops_at_key() {
+                        self.status.hold.write(HR_SCAN_CONTROL, 0);
+                    }
                 }
                 Event::Reply => {
                     self.pending = true;
                     self.started = false;
-                    // Any request may have written: the seal is renewed (0.14 ms) anyway.
-                    self.reseal = true;
-                    // A valid frame for this slave: a hold's lease starts again (SPEC §18).
+                    replied = true;
+                    // A valid request for this slave: a hold's lease starts again (SPEC §18;
+                    // a broadcast does not renew it).
                     self.status.hold.heard(now);
                 }
-                Event::Broadcast => {
-                    self.reseal = true;
-                    self.status.hold.heard(now);
-                }
-                Event::None | Event::Dropped => {}
+                Event::Broadcast | Event::None | Event::Dropped => {}
             }
-        } else if !self.pending && self.reseal {
-            // After the reply is queued: the master waits for the reply, not for the seal.
-            self.reseal = false;
-            return After::Written;
         }
         if self.pending {
             self.send(eng, board, start);
         }
-        // A reply waiting for the line, or the seal: at the next END. A reply being fed
-        // comes back by itself each time the transmitter takes a byte.
-        if (self.pending && !self.started) || (!self.pending && self.reseal) {
+        // A reply waiting for the line: at the next END. A reply being fed comes back by
+        // itself each time the transmitter takes a byte.
+        if self.pending && !self.started {
             line::again();
         }
-        After::Nothing
+        replied
     }
 
     /// Make reply bytes while the transmit ring has room, at least [`MIN_BYTES`] and then
     /// until the visit that began at Timer1 count `start` has lasted [`VISIT_TICKS`].
     fn send(&mut self, eng: &mut Engine, board: &mut Nano, start: u16) {
-        // A RUN display still going out must leave the line before the driver enable rises.
+        // The terminal's bytes not yet sent are dropped; the ones already in the USART must
+        // leave the line before the driver enable rises.
         if !self.started {
             if !line::reply_start() {
                 return;
@@ -192,17 +198,12 @@ impl Server {
 
     /// The figures the input registers report, as they are now, and the snapshot's
     /// registers of this scan (SPEC §17).
-    fn refresh(&mut self, eng: &Engine, board: &mut Nano, st: &RunState, wraps: u16, now: u32) {
+    fn refresh(&mut self, eng: &Engine, board: &mut Nano, st: &RunState, now: u32) {
         let overruns = board.rx_overruns();
         if overruns != self.overruns_at_start {
             self.flags |= STATUS_OVERRUN;
         }
-        let stats = ScanStats {
-            min: st.min,
-            max: st.max,
-            count: (u32::from(wraps) << 16) | u32::from(st.scans),
-            run_ms: now.wrapping_sub(self.start_ms),
-        };
+        let stats = self.stats(st, now);
         self.status
             .refresh(self.flags, &stats, overruns, line::dropped());
         self.status.take_scan(eng, board);

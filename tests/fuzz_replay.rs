@@ -218,6 +218,12 @@ const FOUND: &[(&str, &str)] = &[
     ("lines", "read_resets_cursor"),
     // ../shared/fuzz/image-reserved-byte.bin: a valid image whose reserved byte is 0xC8.
     ("image", "reserved_byte"),
+    // fuzz/run.sh 120 ladder_built: an LDmicro file of 16,000 stray END and SERIES lines
+    // between rungs took 26 s (each reason compared with every other); now one reason.
+    ("ladder_built", "stray_lines"),
+    // fuzz/run.sh 120 ladder_built: PLCopen XML with `<documentation>` nested 8,000 deep
+    // overflowed roxmltree's recursive parser; refused now by the nesting count before it.
+    ("ladder_built", "xml_documentation_deep"),
 ];
 
 #[test]
@@ -485,6 +491,36 @@ fn seeds() -> Vec<Seed> {
           CONTACTS Rb 1\n            TON Tt 1000000 0\n        END\n    END\n    CTU Cc 4 0\n    \
           COIL Ya 0 0 0 0\nEND\nRUNG\n    CONTACTS Xb 0\n    RES Cc\n",
     );
+    // ladder_built: choices (kit/src/fuzzing/ladder_gen.rs) that build an LDmicro file of
+    // every kind of line, one nested 250,000 deep (2.7 MB), and PLCopen projects with a
+    // chain, a rejoin and a loop, and nested elements.
+    write(
+        "ladder_built",
+        "ld_elements",
+        &[
+            0, 1, 1, 0, 5, 0, 5, 4, 6, 16, 1, 1, 2, 5, 9, 5, 12, 3, 1, 5, 17, 5, 21, 0, 5, 1, 5,
+            23, 0,
+        ],
+    );
+    write(
+        "ladder_built",
+        "ld_deep",
+        &[0, 1, 0, 0, 1, 0, 0xF0, 250, 5, 0, 5, 4, 3, 0xF0, 251, 0],
+    );
+    write(
+        "ladder_built",
+        "ld_many_rungs",
+        &[0, 0, 0, 0, 5, 0, 5, 4, 4, 0xF0, 60, 1],
+    );
+    write(
+        "ladder_built",
+        "xml_wires",
+        &[
+            1, 2, 0, 0, 0, 0, 2, 0, 2, 0, 6, 0, 2, 0, 2, 3, 1, 0, 0, 2, 3, 2, 1, 1, 3, 2, 3, 1, 2,
+            3, 3, 2, 2, 0, 4, 3, 8, 8, 3, 4, 5,
+        ],
+    );
+    write("ladder_built", "xml_nested", &[1, 1, 5, 2, 1, 0, 0, 2, 1]);
     out
 }
 
@@ -644,4 +680,32 @@ fn modbus_seeds() -> Vec<(&'static str, Vec<u8>)> {
             ]),
         ),
     ]
+}
+
+/// The structure-aware seeds build what they are for: a file nested 250,000 deep (refused
+/// in words), one of many rungs over a megabyte, PLCopen wires with blocks.
+#[test]
+fn the_ladder_built_seeds_reach_deep_big_and_wired_files() {
+    let seed = |name: &str| std::fs::read(corpus_dir("ladder_built").join(name)).expect("seed");
+    let (name, deep) = fuzzing::ladder_text(&seed("ld_deep"));
+    assert_eq!(name, "fuzz.ld");
+    assert!(deep.len() > 2_700_000 && deep.matches("SERIES\n").count() == 250_000);
+    let refused = utile_kit::ladder::import::import(name, deep.as_bytes(), "").unwrap_err();
+    assert!(
+        refused
+            .reasons
+            .iter()
+            .any(|r| r.contains("nested 250001 deep")),
+        "{refused}"
+    );
+    let (_, many) = fuzzing::ladder_text(&seed("ld_many_rungs"));
+    assert!(many.len() > 1 << 20, "{}", many.len());
+    let (name, wires) = fuzzing::ladder_text(&seed("xml_wires"));
+    assert_eq!(name, "fuzz.xml");
+    assert!(
+        wires.contains("<block ") && wires.contains("<contact "),
+        "{wires}"
+    );
+    let (_, ld) = fuzzing::ladder_text(&seed("ld_elements"));
+    assert!(ld.contains("RUNG 1\n") && ld.contains("PARALLEL\n"), "{ld}");
 }

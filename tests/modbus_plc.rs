@@ -232,6 +232,62 @@ fn broadcasts_are_done_silently_and_other_frames_are_dropped_and_counted() {
     assert_eq!(pdu, vec![0x86, 2], "register 47 is not a holding register");
 }
 
+/// Issue 40: frames are closed at their silence (the board's timer interrupt), and carried
+/// out later, between two scans. A frame for another slave is counted and forgotten when it
+/// closes, so a request right behind it is a frame of its own; a frame this slave must
+/// carry out keeps the line until it has been, and the bytes meanwhile are never glued on.
+#[test]
+fn a_frame_closed_at_its_silence_is_never_glued_to_the_next() {
+    let mut r = Rig::new(&["U1.", ".Y1", "END"]);
+    let push = |r: &mut Rig, frame: &[u8]| {
+        for &x in frame {
+            r.slave.push(x, false);
+        }
+    };
+    // Another slave's reply, closed; our request before the main loop looked.
+    push(&mut r, &modbus::frame(9, &[0x03, 2, 0x12, 0x34]));
+    assert!(
+        !r.slave.close(ADDRESS),
+        "another slave's frame: nothing to carry out"
+    );
+    assert_eq!(r.slave.dropped(), 1, "counted when it closed");
+    push(&mut r, &modbus::frame(ADDRESS, &[0x08, 0, 0, 0xAB, 0xCD]));
+    assert!(r.slave.close(ADDRESS));
+    let now = r.b.ticker.now_ms();
+    let mut map = PlcMap {
+        eng: &mut r.eng,
+        b: &mut r.b,
+        status: &mut r.status,
+    };
+    assert_eq!(r.slave.judge(&mut map, now), Event::Reply);
+    let mut reply = Vec::new();
+    while let Some(x) = r.next_byte() {
+        reply.push(x);
+    }
+    assert_eq!(
+        modbus::reply_pdu(ADDRESS, &reply).ok(),
+        Some(&[0x08, 0, 0, 0xAB, 0xCD][..]),
+        "the request answered whole"
+    );
+    // A broadcast waits to be carried out: a byte meanwhile joins no frame.
+    push(&mut r, &modbus::frame(0, &[0x05, 0, 9, 0xFF, 0]));
+    assert!(r.slave.close(ADDRESS));
+    assert!(
+        r.slave.line_busy(now),
+        "the terminal waits for the closed frame"
+    );
+    push(&mut r, &[ADDRESS]);
+    let mut map = PlcMap {
+        eng: &mut r.eng,
+        b: &mut r.b,
+        status: &mut r.status,
+    };
+    assert_eq!(r.slave.judge(&mut map, now), Event::Broadcast);
+    assert_eq!(r.slave.judge(&mut map, now), Event::None, "judged once");
+    assert!(!r.slave.receiving(), "the byte meanwhile was no frame's");
+    assert_eq!(r.slave.dropped(), 1);
+}
+
 #[test]
 fn a_master_is_active_for_three_seconds_after_its_last_frame() {
     let mut r = Rig::new(&["END"]);

@@ -2,7 +2,8 @@
 //! as a wire (`support/master.rs`): a hold stops the scan count and keeps every pin; a timer
 //! that runs out while held shows TQ = 0 at the next step; n steps raise the scan count by
 //! exactly n; the lease ends a hold 10 s (simulated) after the last frame and sets status
-//! bit 5; `/` still stops a program with KEY while held (and ends the hold of one without);
+//! bit 5, and broadcasts do not renew it; `/` still stops a program with KEY while held, and
+//! changes nothing for one without (a lone 0x2F of noise never un-freezes the plant);
 //! exception 03 for bad values; a reset and EX0 start free.
 //!
 //! Most tests run tests/data/scan_counter.utl, whose Y0..Y7 count the scans: its pins and
@@ -14,25 +15,17 @@ mod support;
 
 use support::chip::CYCLES_PER_MS;
 use support::master::{char_cycles, pdu, read_input, Line};
-use utile_core::engine::Program;
+use support::scenario::listing as listing_of;
 use utile_core::modbus::hold::{STATUS_HELD, STATUS_LAPSED};
 use utile_core::modbus::plc::{STATUS_RUNNING, STATUS_STORED};
 use utile_core::modbus::snapshot::SNAPSHOT;
+use utile_core::opcodes::{END, KEY};
 use utile_kit::listing;
 use utile_kit::modbus;
 
-/// A listing of `tests/data/`.
-fn data_listing(name: &str) -> Program {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name);
-    let text = std::fs::read_to_string(&path).expect("the listing");
-    listing::parse(name, &text).unwrap_or_else(|e| panic!("{e}"))
-}
-
 /// The scan counter, running (autostarted).
 fn counter() -> Line {
-    Line::new(&data_listing("scan_counter.utl"))
+    Line::new(&listing_of("scan_counter"))
 }
 
 /// What one snapshot read shows: status, Y0..Y7, TQ0..TQF, scans since RUN.
@@ -214,7 +207,7 @@ fn the_lease_ends_a_hold_ten_seconds_after_the_last_frame_and_sets_bit_5() {
 }
 
 #[test]
-fn a_lone_slash_still_stops_a_program_with_key_while_held_and_ends_any_hold() {
+fn a_lone_slash_stops_a_held_program_with_key_and_leaves_the_hold_of_one_without() {
     let mut line = Line::new(&listing::commands(&["U0.", ".Y0", "KEY", "END"]));
     hold(&mut line);
     line.run(50 * CYCLES_PER_MS);
@@ -225,14 +218,57 @@ fn a_lone_slash_still_stops_a_program_with_key_while_held_and_ends_any_hold() {
         String::from_utf8_lossy(&line.nano.chip.take_output()).contains("Strike any key"),
         "the break key stopped the held program"
     );
-    // A program without KEY: `/` from the terminal ends the hold, the program runs on.
+    // Programs without KEY (none at all; one only after END, which no scan reaches): a
+    // lone `/` (or a noise byte 0x2F between two silences) changes nothing, the plant
+    // stays frozen and the master still reads it held.
+    let after_end = {
+        let mut p = listing_of("scan_counter");
+        let end = p.uf.iter().position(|&op| op == END).expect("END");
+        p.uf[end + 1] = KEY;
+        p
+    };
+    for (name, prog) in [
+        ("no KEY", listing_of("scan_counter")),
+        ("KEY after END", after_end),
+    ] {
+        let mut line = Line::new(&prog);
+        let held = hold(&mut line);
+        let pins = line.nano.outputs();
+        for _ in 0..3 {
+            line.send(4 * char_cycles(), b"/");
+            line.run(100 * CYCLES_PER_MS);
+        }
+        assert_eq!(line.nano.outputs(), pins, "{name}: every pin stays");
+        let now = picture(&mut line);
+        assert_eq!(now, held, "{name}: still held, not one scan more");
+        assert_eq!(
+            scan_control(&mut line),
+            [1, 0],
+            "{name}: register 32 reads 1"
+        );
+    }
+}
+
+#[test]
+fn broadcasts_do_not_renew_the_lease() {
     let mut line = counter();
     let held = hold(&mut line);
-    line.send(4 * char_cycles(), b"/");
-    line.run(100 * CYCLES_PER_MS);
-    let now = picture(&mut line);
-    assert!(now.scans > held.scans + 100, "{now:?}");
-    assert_eq!(now.status & (STATUS_HELD | STATUS_LAPSED), 0);
+    let judged = line.nano.chip.cycle();
+    let pins = line.nano.outputs();
+    // A broadcast every 2 s (V7 off: the program copies V anew at each scan), and a request
+    // to another slave: neither is a frame for this slave's own address.
+    for to in [0, 0, 9, 0] {
+        line.run(2_000 * CYCLES_PER_MS);
+        line.send(4 * char_cycles(), &modbus::frame(to, &[0x05, 0, 23, 0, 0]));
+    }
+    // 10 s after the hold (the request that held it): free, bit 5 set.
+    while line.nano.chip.cycle() < judged + 10_050 * CYCLES_PER_MS {
+        line.nano.chip.run_for(10 * CYCLES_PER_MS);
+    }
+    assert_ne!(line.nano.outputs(), pins, "the hold ended by itself");
+    let free = picture(&mut line);
+    assert!(free.scans > held.scans, "{free:?}");
+    assert_eq!(free.status & (STATUS_HELD | STATUS_LAPSED), STATUS_LAPSED);
 }
 
 #[test]

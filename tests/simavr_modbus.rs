@@ -9,6 +9,7 @@ mod support;
 
 use support::chip::CYCLES_PER_MS;
 use support::master::{bytes, char_cycles, pdu, read_input, stored, Line, ADDRESS};
+use support::scenario::listing as listing_of;
 use utile_core::engine::Program;
 use utile_core::modbus::plc::{STATUS_RUNNING, STATUS_STORED};
 use utile_core::modbus::snapshot::{self, Snapshot, PROGRAM, SNAPSHOT, SNAPSHOT_LEN};
@@ -249,7 +250,7 @@ fn a_lone_slash_typed_after_line_noise_breaks_key_in_the_virtual_nano_too() {
 }
 
 #[test]
-fn the_terminal_is_quiet_while_a_master_is_active_and_resumes_after_three_seconds() {
+fn the_terminal_is_quiet_while_a_master_is_active_and_redrawn_whole_three_seconds_after() {
     // PPA every scan: RUN mode shows the port byte every 100 ms.
     let mut line = Line::new(&listing::commands(&["PPA", "KEY", "END"]));
     line.run(300 * CYCLES_PER_MS);
@@ -272,10 +273,20 @@ fn the_terminal_is_quiet_while_a_master_is_active_and_resumes_after_three_second
             "the terminal is quiet"
         );
     }
-    line.run(3_100 * CYCLES_PER_MS);
+    // After 3 s the RUN screen is drawn again whole (SPEC §13: a reply may have dropped
+    // terminal bytes), title and status line included, and the displays go on.
+    // (The last request was 0.4 s ago.)
+    line.run(2_500 * CYCLES_PER_MS);
+    assert!(line.nano.chip.take_output().is_empty(), "quiet for 3 s");
+    line.run(1_500 * CYCLES_PER_MS);
+    let text = String::from_utf8_lossy(&line.nano.chip.take_output()).into_owned();
+    for part in ["u T I L E", "Running User File Program"] {
+        assert!(text.contains(part), "redrawn whole after 3 s: {text:?}");
+    }
+    line.run(300 * CYCLES_PER_MS);
     assert!(
         !line.nano.chip.take_output().is_empty(),
-        "the displays resumed after 3 s"
+        "the displays resumed"
     );
 }
 
@@ -427,19 +438,10 @@ fn the_snapshot_and_the_program_of_a_listing_are_read_whole_and_its_fingerprint_
     }
 }
 
-/// A test program from `tests/data/`.
-fn data_listing(name: &str) -> Program {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name);
-    let text = std::fs::read_to_string(&path).expect("the listing");
-    listing::parse(name, &text).unwrap_or_else(|e| panic!("{e}"))
-}
-
 #[test]
 fn a_reply_streamed_over_many_scans_shows_the_bits_of_one_scan() {
     // Y0..Y7 count the scans; U and V copy them; every Q and TQ follows Y0.
-    let mut line = Line::new(&data_listing("scan_counter.utl"));
+    let mut line = Line::new(&listing_of("scan_counter"));
     for (k, qty) in [8u16, SNAPSHOT_LEN, 8, SNAPSHOT_LEN, 8]
         .into_iter()
         .enumerate()
@@ -467,7 +469,7 @@ fn the_longest_programs_still_answer_within_the_spec_and_without_gaps() {
     // 256 lines scanned (no END), and 255 of the slowest lines there are (each restarts
     // TF: a 32-bit deadline), about 0.5 ms a scan.
     let no_end = listing::commands(&["Y0.", "!", ".Y0"]);
-    let slowest = data_listing("slowest_scan.utl");
+    let slowest = listing_of("slowest_scan");
     let mut write = vec![0x10, 0, 0, 0, 16, 32];
     for _ in 0..16 {
         write.extend_from_slice(&[0, 10]);
@@ -638,7 +640,7 @@ fn a_reply_keeps_d10_up_to_its_last_stop_bit_whatever_the_interleaving() {
 /// the reply and emptied the request an echo reply is still built from.
 #[test]
 fn a_stray_byte_during_a_reply_changes_nothing_in_it() {
-    let mut line = Line::new(&data_listing("scan_counter.utl"));
+    let mut line = Line::new(&listing_of("scan_counter"));
     let c = char_cycles();
     // Diagnostics echoes its request: 52 bytes of PDU, over many visits.
     let mut echo = vec![0x08, 0, 0];
@@ -674,4 +676,44 @@ fn a_stray_byte_during_a_reply_changes_nothing_in_it() {
     // The stray bytes were no frames: nothing dropped.
     let (_, reply) = line.transact(&[0x04, 0, 7, 0, 1]);
     assert_eq!(pdu(&reply), vec![0x04, 2, 0, 0], "no frame dropped");
+}
+
+/// Issue 40: a byte that came after a frame's closing silence but before the main loop had
+/// judged the frame was glued onto it, so with a scan of 0.5 ms another slave's reply and a
+/// request to this one 3.5 characters after it were both lost. Now a frame is closed in the
+/// silence's interrupt: the foreign reply is counted there, and the request is answered,
+/// whatever the phase of the scan when the silence ends.
+#[test]
+fn a_request_three_and_a_half_characters_after_another_slaves_reply_is_answered() {
+    let mut line = Line::new(&listing_of("slowest_scan"));
+    let c = char_cycles();
+    let read = [0x04, 0, 7, 0, 1];
+    // Another slave's reply to FC03 x 2 (address 9), then ours 3.5 characters after its
+    // last stop bit, at 32 phases of the 0.5 ms scan.
+    let foreign = modbus::frame(9, &[0x03, 4, 0x12, 0x34, 0x56, 0x78]);
+    let (_, first) = line.transact(&read);
+    let mut dropped = modbus::registers(&pdu(&first))[0];
+    let mut wrong = Vec::new();
+    for k in 0..32u64 {
+        line.run(20 * CYCLES_PER_MS + k * CYCLES_PER_MS / 64);
+        line.nano.chip.take_output_timed();
+        line.send(4 * c, &foreign);
+        let end = line.send(7 * c / 2, &modbus::frame(ADDRESS, &read));
+        line.run(end.saturating_sub(line.nano.chip.cycle()));
+        let reply = line.collect();
+        match modbus::reply_pdu(ADDRESS, &bytes(&reply)) {
+            Ok(p) if p.len() == 4 => {
+                let now = u16::from_be_bytes([p[2], p[3]]);
+                if now != dropped + 1 {
+                    wrong.push(format!(
+                        "phase {k}: {} frames counted, not 1",
+                        now - dropped
+                    ));
+                }
+                dropped = now;
+            }
+            _ => wrong.push(format!("phase {k}: no answer ({:02X?})", bytes(&reply))),
+        }
+    }
+    assert!(wrong.is_empty(), "{}", wrong.join("; "));
 }

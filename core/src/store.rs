@@ -26,32 +26,69 @@ pub const SEQ_LEN: u16 = 2;
 /// Bytes a slot occupies: sequence number + image.
 pub const SLOT_LEN: u16 = SEQ_LEN + IMAGE_LEN as u16;
 
-/// EEPROM address of the Modbus slave address (SPEC §13, `ADDR`), apart from the program
-/// slots; the next cell holds its complement, so an erased or damaged cell reads as unset.
-pub const ADDR_CELL: u16 = 0x3FE;
+/// EEPROM addresses of the two copies of the Modbus slave address (SPEC §13, `ADDR`), apart
+/// from the program slots, in the order they are read: each copy is the address and, in
+/// the next cell, its complement, so an erased or damaged copy reads as unset. The first is
+/// the one cell pair versions 2–4 wrote, so their EEPROM keeps its address.
+pub const ADDR_CELLS: [u16; 2] = [0x3FE, 0x3FC];
+/// The copy read first (the only one before version 5).
+pub const ADDR_CELL: u16 = ADDR_CELLS[0];
 /// The slave address until `ADDR` sets another.
 pub const DEFAULT_ADDRESS: u8 = 1;
 
-/// The Modbus slave address kept in EEPROM (1..247), or [`DEFAULT_ADDRESS`].
+/// The Modbus slave address kept in EEPROM (1..247): the first whole copy, or
+/// [`DEFAULT_ADDRESS`] when neither is.
 pub fn slave_address<B: Board>(b: &mut B) -> u8 {
-    let a = b.eeprom_read(ADDR_CELL);
-    let check = b.eeprom_read(ADDR_CELL + 1);
-    if (1..=crate::modbus::MAX_ADDRESS).contains(&a) && check == !a {
+    match address_copy(b, ADDR_CELLS[0]) {
+        0 => match address_copy(b, ADDR_CELLS[1]) {
+            0 => DEFAULT_ADDRESS,
+            a => a,
+        },
+        a => a,
+    }
+}
+
+/// The copy of the slave address at `cell` (1..247), or 0 when it is not whole.
+// Out of line: each of the two copies read inline cost more than the call.
+#[inline(never)]
+fn address_copy<B: Board>(b: &mut B, cell: u16) -> u8 {
+    let a = b.eeprom_read(cell);
+    if (1..=crate::modbus::MAX_ADDRESS).contains(&a) && b.eeprom_read(cell + 1) == !a {
         a
     } else {
-        DEFAULT_ADDRESS
+        0
     }
 }
 
 /// Keep `address` (1..247) as the Modbus slave address; false (nothing written) for any
-/// other value.
+/// other value. The copy read second is written first, then the one read first, so a power
+/// cut at any moment leaves one copy whole: the old address while the second is written
+/// (the first still holds it), the new one while the first is.
 pub fn set_slave_address<B: Board>(b: &mut B, address: u8) -> bool {
     if !(1..=crate::modbus::MAX_ADDRESS).contains(&address) {
         return false;
     }
-    b.eeprom_update(ADDR_CELL, address);
-    b.eeprom_update(ADDR_CELL + 1, !address);
-    slave_address(b) == address
+    let mut cell = ADDR_CELLS[1];
+    loop {
+        b.eeprom_update(cell, address);
+        b.eeprom_update(cell + 1, !address);
+        if cell == ADDR_CELLS[0] {
+            return slave_address(b) == address;
+        }
+        cell = ADDR_CELLS[0];
+    }
+}
+
+/// The EEPROM cells `ADDR` writes for `address`, as (cell, value) pairs: how a host tool
+/// presets a uTile's address in an EEPROM image.
+pub fn address_cells(address: u8) -> [(u16, u8); 4] {
+    let [a, b] = ADDR_CELLS;
+    [
+        (a, address),
+        (a + 1, !address),
+        (b, address),
+        (b + 1, !address),
+    ]
 }
 
 /// STORE failed.

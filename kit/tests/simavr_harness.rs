@@ -288,16 +288,22 @@ fn uart_bytes_are_received_and_timed_at_9600_and_38400_baud() {
     echo_timing(38_400, 25);
 }
 
-#[test]
-fn three_chips_share_one_rs485_line() {
-    let chips: Vec<Chip> = (0..3u8)
+/// `n` chips running the fixture at bus addresses 0..n, on one line whose driver enables
+/// are watched.
+fn bus_of_apps(n: u8) -> Bus {
+    let chips: Vec<Chip> = (0..n)
         .map(|addr| {
             let mut c = Chip::load(&app()).expect("load");
             c.set_eeprom(0, &[addr]);
             c
         })
         .collect();
-    let mut bus = Bus::new(chips, 19_200).with_driver_enable();
+    Bus::new(chips, 19_200).with_driver_enable()
+}
+
+#[test]
+fn three_chips_share_one_rs485_line() {
+    let mut bus = bus_of_apps(3);
     assert_eq!(bus.len(), 3);
     bus.run_for(20 * CYCLES_PER_MS);
     assert!(bus.take_master().is_empty(), "silent until addressed");
@@ -343,6 +349,37 @@ fn three_chips_share_one_rs485_line() {
     let ms = (end - c.start) as f64 / CYCLES_PER_MS as f64;
     // 7 bytes (3.6 ms) plus the 1.5 ms wait, each chip about as long.
     assert!((4.0..6.0).contains(&ms), "overlap {ms} ms");
+}
+
+#[test]
+fn the_bus_takes_a_byte_only_if_its_driver_enable_was_up_over_its_whole_wire_time() {
+    let mut bus = bus_of_apps(2);
+    bus.run_for(20 * CYCLES_PER_MS);
+    // Chip 1 raises D10, writes "H\r\n" and drops D10 at once: 'H' has left whole, '\r'
+    // is on the wire (half on), '\n' waits in UDR0 and goes out with D10 low (off the line).
+    bus.send(b"\"");
+    bus.run_for(10 * CYCLES_PER_MS);
+    let got = bus.take_master();
+    assert_eq!(
+        got.iter().map(|b| (b.byte, b.from)).collect::<Vec<_>>(),
+        vec![(b'H', 1)],
+        "only the byte sent whole under D10"
+    );
+    let half = bus.half_on();
+    assert_eq!(half.len(), 1, "{half:?}");
+    assert_eq!((half[0].byte, half[0].from), (b'\r', 1));
+    // 10 bits of 16 × (UBRR0 51 + 1) cycles.
+    assert_eq!(half[0].stop - half[0].start, 10 * 16 * 52, "{half:?}");
+    assert_eq!(
+        half[0].start, got[0].cycle,
+        "'\\r' right after 'H': double-buffered"
+    );
+    // Chip 0 heard 'H' (and the master's bytes), not the half byte: its count shows it.
+    bus.send(b"x");
+    bus.run_for(10 * CYCLES_PER_MS);
+    let text: Vec<u8> = bus.take_master().iter().map(|b| b.byte).collect();
+    assert_eq!(text, b"R0=03\r\n", "'\"', 'H', 'x'");
+    assert!(bus.collisions().is_empty());
 }
 
 #[test]

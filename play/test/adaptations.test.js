@@ -50,9 +50,12 @@ test('ucsraKeepsStatus: a Modbus request gets its reply', () => {
   const reply = modbusReply('ucsraKeepsStatus', true);
   assert.deepEqual(reply.slice(0, 3), [1, 3, 2]);
   assert.equal(reply.length, 7);
-  // The firmware writes UCSR0A when it claims the line for a reply; avr8js's write wipes
-  // UDRE0, so the reply's first byte never leaves.
-  assert.deepEqual(modbusReply('ucsraKeepsStatus', false), []);
+  // The firmware writes UCSR0A with every byte it sends (a one to clear TXC0,
+  // src/hal/serial.rs); avr8js's write wipes UDRE0, so after the boot screen's first byte
+  // nothing more leaves, and no request can be answered.
+  const off = new Nano(image(), { adapt: { ucsraKeepsStatus: false } });
+  off.runMs(1500);
+  assert.equal(text(off), '\u001b');
 });
 
 test('txBuffer: the boot screen goes out back to back, one frame a byte', () => {
@@ -170,6 +173,80 @@ test('instructionAfterSei: one instruction runs after sei before a pending inter
   assert.deepEqual([nop - sei, vector], [1, 8]);
   // avr8js serves it right after the sei.
   assert.equal(words(seiTrace({ instructionAfterSei: false }))[1], 8);
+});
+
+/** Each instruction of a run of `flash`: the cycle it starts, the cycle it ends, and then ADCSRA, TCCR0B, TIFR0. */
+function boundaries(flash, adapt, steps) {
+  const nano = new Nano(flash, { adapt });
+  const seen = [];
+  for (let i = 0; i < steps; i++) {
+    const cycle = nano.cycles;
+    nano.run(1);
+    seen.push({ cycle, after: nano.cycles, adcsra: nano.peek(0x7a), tccr0b: nano.peek(0x45), tifr0: nano.peek(0x35) });
+  }
+  return seen;
+}
+
+test('everyEvent: an ADC conversion ends at its cycle beside Timer1 counting every 8', () => {
+  // The conversion's end falls due on a cycle Timer1 counts (four nops put it there):
+  // avr8js fired one event an instruction, the count first.
+  const flash = program(`
+    ldi r16, 2
+    sts 0x81, r16     ; TCCR1B = CS11: Timer1 counts every 8 cycles
+    ldi r16, 0x46
+    sts 0x7c, r16     ; ADMUX = AVcc, ADC6
+    ldi r16, 0xc7
+    nop
+    nop
+    nop
+    nop
+  start:
+    sts 0x7a, r16     ; ADCSRA = ADEN | ADSC | clk/128: the first conversion, 25 ADC clocks
+  wait:
+    lds r17, 0x7a
+    sbrc r17, 6
+    rjmp wait
+  spin:
+    rjmp spin
+  `);
+  const end = (on) => {
+    const steps = boundaries(flash, { everyEvent: on }, 3000);
+    const start = steps.find((s) => s.adcsra & 0x40).cycle;
+    const due = start + 25 * 128;
+    const first = steps.find((s) => s.after >= due).after;
+    return { first, cleared: steps.find((s) => s.cycle > start && !(s.adcsra & 0x40)).after };
+  };
+  const right = end(true);
+  assert.equal(right.cleared, right.first, 'ADSC clears at the first boundary at or after its cycle');
+  const wrong = end(false);
+  assert.ok(wrong.cleared > wrong.first, 'an instruction late');
+});
+
+test('compareTiming: Timer0 in CTC mode raises OCF0A 250 counts after it starts, not 249', () => {
+  const flash = program(`
+    ldi r16, 249
+    out 0x27, r16     ; OCR0A
+    ldi r16, 2
+    out 0x24, r16     ; TCCR0A = WGM01 (CTC)
+    ldi r16, 3
+    out 0x25, r16     ; TCCR0B = clk/64: counting from here
+  wait:
+    sbis 0x15, 1      ; TIFR0's OCF0A
+    rjmp wait
+  spin:
+    rjmp spin
+  `);
+  const flag = (on) => {
+    const steps = boundaries(flash, { compareTiming: on }, 12000);
+    const start = steps.find((s) => s.tccr0b === 3).cycle;
+    return steps.find((s) => s.tifr0 & 0x02).after - start;
+  };
+  // The counter matches OCR0A at count 249; the flag rises as it leaves it (to BOTTOM):
+  // 250 × 64 cycles, give or take the instruction boundary.
+  const right = flag(true);
+  assert.ok(right >= 250 * 64 && right < 250 * 64 + 4, `${right} cycles`);
+  const wrong = flag(false);
+  assert.ok(wrong < 249 * 64 + 4, `avr8js: ${wrong} cycles, a timer clock early`);
 });
 
 /** SREG's H after `code` runs from reset on a Nano with halfCarry `on`. */

@@ -83,6 +83,7 @@ for (const name of names) {
         `${ms(simavr.end)}; times apart at most: UART ${ms(apart.uart)}, pins ${ms(apart.pins)}`,
     );
     assert.ok(simavr.uart.length > 0, 'the firmware said something');
+    assert.equal(avr8js.lost, 0, "no byte lost in avr8js's one-byte receive buffer");
     assert.equal(uartDifference(simavr, avr8js), null);
     const scan = (scenario.scan_us * CYCLES_PER_MS) / 1000;
     assert.equal(pinDifference(simavr, avr8js, scan), null);

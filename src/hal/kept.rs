@@ -1,10 +1,15 @@
 //! The engine lives in RAM that the C runtime does not clear (`.noinit`), so a warm reset
 //! (reset button, watchdog) keeps the UF and the timer presets (SPEC §3).
 //!
-//! The program is trusted after a reset only if a magic word and a checksum of the UF and of
-//! the presets and set-points, resealed by the main loop after every received byte, still
-//! match. A power-on or brown-out reset always starts cold: all lines blank, presets,
-//! set-points and counts 0. A warm reset keeps the counts (SPEC §14) with the program.
+//! The program is trusted after a reset only if a magic word and a checksum of the UF,
+//! resealed by the main loop after every line that can change it, still match. The timer
+//! and counter presets and the set-points are kept with it, as the counts are (SPEC §14),
+//! unsealed: a Modbus master writes them between two scans at any moment, and a seal of
+//! theirs renewed after the write left a moment in which a warm reset found it stale and
+//! threw the whole program away (issue 40). Kept as RAM holds them, every value written is
+//! kept, whenever the reset comes; a write the reset cut short was not answered, and the
+//! master sends it again. A power-on or brown-out reset always starts cold: all lines
+//! blank, presets, set-points and counts 0.
 
 use core::mem::MaybeUninit;
 use core::ptr::{addr_of, addr_of_mut};
@@ -21,7 +26,6 @@ const MAGIC: u32 = 0x5554_694C;
 pub(super) struct Kept {
     magic: u32,
     sum_uf: u32,
-    sum_presets: u32,
     engine: Engine,
 }
 
@@ -45,8 +49,7 @@ pub fn take_engine<B: Board>(cold: bool, board: &mut B) -> &'static mut Engine {
         let uf = addr_of_mut!((*kept).engine.prog.uf);
         let valid = !cold
             && addr_of!((*kept).magic).read() == MAGIC
-            && addr_of!((*kept).sum_uf).read() == seal(SEAL_START, &*uf)
-            && addr_of!((*kept).sum_presets).read() == seal_settings(&(*kept).engine.prog);
+            && addr_of!((*kept).sum_uf).read() == seal(&*uf);
         if !valid {
             // Cold start: every line blank, presets, set-points and counts 0.
             uf.cast::<u8>().write_bytes(BLANK, LINES);
@@ -77,15 +80,15 @@ pub(super) fn engine_ptr() -> *const Engine {
         .cast::<Engine>()
 }
 
-/// Fletcher-style checksum (two 16-bit running sums). A bitwise CRC-16 of the program
-/// took about 1.1 ms, longer than one byte at 19200 baud (0.52 ms), so resealing after
-/// every byte of a READ overflowed the receive buffer; this takes about 0.14 ms and still
-/// catches any single damaged byte and reordered bytes.
-// Out of line: inlined four times (boot check, reseal) it cost 150 bytes more.
+/// Fletcher-style checksum of the UF (two 16-bit running sums). A bitwise CRC-16 of the
+/// program took about 1.1 ms, longer than one byte at 19200 baud (0.52 ms), so resealing
+/// after every byte of a READ overflowed the receive buffer; this takes about 0.13 ms and
+/// still catches any single damaged byte and reordered bytes.
+// Out of line: inlined at the boot check and in `reseal` it cost bytes more.
 #[inline(never)]
-fn seal(start: u32, bytes: &[u8]) -> u32 {
-    let (mut a, mut b) = (start as u16, (start >> 16) as u16);
-    for &x in bytes {
+fn seal(uf: &[u8; LINES]) -> u32 {
+    let (mut a, mut b) = (SEAL_START as u16, (SEAL_START >> 16) as u16);
+    for &x in uf {
         a = a.wrapping_add(u16::from(x));
         b = b.wrapping_add(a);
     }
@@ -95,33 +98,16 @@ fn seal(start: u32, bytes: &[u8]) -> u32 {
 /// The seal's starting sums.
 const SEAL_START: u32 = 0x5555;
 
-/// Bytes of the timer presets, counter presets and set-points, which lie back to back.
-const SETTINGS_LEN: usize = UNITS + 2 * COUNTERS + 2 * SET_POINTS;
-const _: () = assert!(
-    core::mem::offset_of!(Program, set_points) + 2 * SET_POINTS
-        == core::mem::offset_of!(Program, presets) + SETTINGS_LEN
-);
-
-/// The seal of the timer presets, counter presets and set-points.
-fn seal_settings(prog: &Program) -> u32 {
-    // SAFETY: `Program` is `repr(C)` with alignment 1 on the AVR; the assertion above shows
-    // the three arrays are SETTINGS_LEN contiguous bytes of integers, valid as `u8`s.
-    let bytes =
-        unsafe { core::slice::from_raw_parts(addr_of!(prog.presets).cast::<u8>(), SETTINGS_LEN) };
-    seal(SEAL_START, bytes)
-}
-
 /// Record the present program as the one to keep over a warm reset.
 // Out of line: inlined at its call sites in the main loop it cost 132 bytes more.
 #[inline(never)]
 pub fn reseal(prog: &Program) {
-    let (sum_uf, sum_presets) = (seal(SEAL_START, &prog.uf), seal_settings(prog));
+    let sum_uf = seal(&prog.uf);
     let kept = addr_of_mut!(KEPT).cast::<Kept>();
     // SAFETY: writes only the seal fields, disjoint from the engine the caller borrows;
     // no interrupt handler touches KEPT.
     unsafe {
         addr_of_mut!((*kept).sum_uf).write(sum_uf);
-        addr_of_mut!((*kept).sum_presets).write(sum_presets);
         addr_of_mut!((*kept).magic).write(MAGIC);
     }
 }

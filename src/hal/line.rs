@@ -3,11 +3,14 @@
 //! receive-complete interrupt to find gaps inside a frame: a silence of more than 1.5
 //! characters from one stop bit to the next start bit (t1.5), that is more than the later
 //! character and t1.5 between two stamps ([`PAUSE_TICKS`], from the core's rule in
-//! `modbus/frame.rs`); Timer1's compare B marks the 3.5-character silence that ends a frame and wants
-//! the main loop at the next END (`want.rs`); a reply raises the driver enable D10, wants the
-//! main loop again after each byte while it is being made, and the transmit-complete
-//! interrupt lowers D10 after the last stop bit. The main loop (`src/modbus.rs`) reaches the
-//! slave only through the safe functions here.
+//! `modbus/frame.rs`); Timer1's compare B marks the 3.5-character silence that ends a frame
+//! and closes it there and then (`Slave::close`: a frame for another slave, or a broken one,
+//! is counted and forgotten, so the next byte starts a new frame whatever the main loop is
+//! doing), wanting the main loop at the next END (`want.rs`) for a frame it must carry out;
+//! a reply raises the driver enable D10 once the transmitter is idle (the terminal's bytes
+//! not yet sent dropped), wants the main loop again after each byte while it is being
+//! made, and the transmit-complete interrupt lowers D10 after the last stop bit. The main
+//! loop (`src/modbus.rs`) reaches the slave only through the safe functions here.
 
 use avr_device::interrupt::{self, CriticalSection};
 use utile_core::modbus::plc::PlcMap;
@@ -25,10 +28,9 @@ struct Line {
     last: u16,
     /// The whole reply is in the transmit ring: transmit complete ends it.
     queued: bool,
-    /// The line serves Modbus (RUN mode); in EDIT mode bytes go to the ring.
-    serving: bool,
-    /// A frame's closing silence has passed and the main loop has not judged it.
-    frame_end: bool,
+    /// This slave's address (RUN mode: the line serves Modbus), for the frames closed at
+    /// their silence; 0 in EDIT mode, where bytes go to the ring.
+    address: u8,
 }
 
 /// The slave and its timing, shared with the receive, timer and transmit interrupts.
@@ -36,8 +38,7 @@ static LINE: IsrCell<Line> = IsrCell::new(Line {
     slave: Slave::new(),
     last: 0,
     queued: false,
-    serving: false,
-    frame_end: false,
+    address: 0,
 });
 
 /// From the receive interrupt: in RUN mode the byte goes to the slave and the silence after
@@ -45,7 +46,7 @@ static LINE: IsrCell<Line> = IsrCell::new(Line {
 #[inline(always)]
 pub(crate) fn on_byte(cs: CriticalSection, byte: u8) -> bool {
     // SAFETY: the closure does not re-enter LINE.
-    if !unsafe { LINE.with(cs, |l| l.serving) } {
+    if unsafe { LINE.with(cs, |l| l.address) } == 0 {
         return false;
     }
     let dp = regs();
@@ -73,14 +74,16 @@ pub(crate) fn on_byte(cs: CriticalSection, byte: u8) -> bool {
     true
 }
 
-/// Timer1 compare B: 3.5 characters of silence after the last byte, the frame is complete.
+/// Timer1 compare B: 3.5 characters of silence after the last byte, the frame is complete
+/// and closed; the main loop is wanted for one it must carry out.
 #[inline(always)]
 pub fn on_silence(cs: CriticalSection) {
     // TIMSK1: compare B off until the next byte.
     wr!(regs().TC1.timsk1(), 0);
     // SAFETY: the closure does not re-enter LINE.
-    unsafe { LINE.with(cs, |l| l.frame_end = true) };
-    want::now(cs);
+    if unsafe { LINE.with(cs, |l| l.slave.close(l.address)) } {
+        want::now(cs);
+    }
 }
 
 /// From the data-register-empty interrupt: the transmitter took a byte of a reply; the main
@@ -116,36 +119,31 @@ fn reply_over(cs: CriticalSection) {
     serial::transmit_complete(cs, false);
 }
 
-/// Switch the line between the terminal's ring (EDIT mode) and the Modbus slave (RUN mode).
-/// Either way the slave starts from a clean line.
-pub(crate) fn serve(on: bool) {
+/// Switch the line between the terminal's ring (EDIT mode, `address` 0) and the Modbus
+/// slave at `address` (RUN mode, 1..247). Either way the slave starts from a clean line.
+pub(crate) fn serve(address: u8) {
     interrupt::free(|cs| {
         // TIMSK1: no pending silence.
         wr!(regs().TC1.timsk1(), 0);
         // SAFETY: the closure does not re-enter LINE.
         unsafe {
             LINE.with(cs, |l| {
-                l.serving = on;
-                l.frame_end = false;
+                l.address = address;
                 l.slave = Slave::new();
             })
         };
     });
 }
 
-/// The main loop is back between two scans: whether a frame's closing silence has passed
-/// (reported once). A wish of the line from now on wants the main loop at the next END.
-/// A silence timed while a reply is being made closes no frame (the slave ignored the bytes
-/// before it): the reply's snapshot and the request it echoes stay as they are.
+/// The main loop is back between two scans: whether a frame closed at its silence waits to
+/// be carried out ([`judge`] carries it out). A wish of the line from now on wants the main
+/// loop at the next END. While a reply is being made no frame closes (the slave ignores
+/// the bytes): the reply's snapshot and the request it echoes stay as they are.
 pub(crate) fn take_frame_end() -> bool {
     interrupt::free(|cs| {
         want::taken(cs);
         // SAFETY: the closure does not re-enter LINE.
-        unsafe {
-            LINE.with(cs, |l| {
-                core::mem::take(&mut l.frame_end) && !l.slave.replying()
-            })
-        }
+        unsafe { LINE.with(cs, |l| l.slave.closed()) }
     })
 }
 
@@ -154,13 +152,13 @@ pub(crate) fn again() {
     interrupt::free(want::now);
 }
 
-/// Judge the frame that has ended and, for a request to `address` or a broadcast, carry it
-/// out on `map` (the core's `Slave::end`).
-pub(crate) fn judge(address: u8, map: &mut PlcMap<'_, Nano>, now_ms: u32) -> Event {
+/// Carry the closed frame out on `map`: a request for this slave (its reply then waits), a
+/// broadcast, or the break key (the core's `Slave::judge`).
+pub(crate) fn judge(map: &mut PlcMap<'_, Nano>, now_ms: u32) -> Event {
     interrupt::free(|cs| {
         // SAFETY: `PlcMap<Nano>` reaches the engine, the ticker, the ADC and EEPROM, never
         // LINE, so the closure does not re-enter it.
-        unsafe { LINE.with(cs, |l| l.slave.end(address, map, now_ms)) }
+        unsafe { LINE.with(cs, |l| l.slave.judge(map, now_ms)) }
     })
 }
 
@@ -185,11 +183,12 @@ pub(crate) fn dropped() -> u16 {
     interrupt::free(|cs| unsafe { LINE.with(cs, |l| l.slave.dropped()) })
 }
 
-/// Start a reply: only when the transmitter is idle (a RUN display still going out would
-/// otherwise go onto the bus), raise the driver enable. Returns whether it started.
+/// Start a reply: the terminal's bytes not yet sent are dropped, and once the transmitter
+/// is idle (the bytes already in the USART have left) the driver enable rises. Returns
+/// whether it started.
 pub(crate) fn reply_start() -> bool {
     interrupt::free(|cs| {
-        let idle = serial::claim_idle(cs);
+        let idle = serial::claim(cs);
         if idle {
             pins::driver_enable(cs, true);
             // SAFETY: the closure does not re-enter LINE.

@@ -58,6 +58,12 @@ impl<const N: usize> Ring<N> {
         true
     }
 
+    /// Drop every byte waiting.
+    #[inline(always)]
+    pub(crate) fn clear(&mut self) {
+        self.tail = self.head;
+    }
+
     /// Take the oldest byte.
     #[inline(always)]
     pub(crate) fn pop(&mut self) -> Option<u8> {

@@ -4,6 +4,12 @@
 //! overran), the loss is counted for STAT. Sending waits only when the transmit ring is full.
 //! In RUN mode received bytes go to the Modbus slave instead of the ring (`line.rs`, which
 //! also owns the driver enable and the transmit-complete interrupt of a reply).
+//!
+//! TXC0 is cleared with every byte written to UDR0 (as Arduino's HardwareSerial does), so a
+//! set TXC0 always means what the datasheet says: UDR0 and the shift register have both been
+//! empty since the last byte. Writing UDR0 does not clear it, and the transmit-complete
+//! interrupt that does is enabled only while a reply goes out: before, a TXC0 left over
+//! from an earlier byte let a reply claim the line while terminal bytes were still going.
 
 use avr_device::interrupt::{self, CriticalSection};
 
@@ -87,6 +93,9 @@ pub fn on_udre(cs: CriticalSection) {
     match unsafe { TX.with(cs, |tx| tx.pop()) } {
         Some(byte) => {
             wr!(dp.USART0.udr0(), byte);
+            // UCSR0A: TXC0 cleared (a one clears it), normal speed. After the write: the
+            // transmitter now holds this byte, so TXC0 cannot rise before it has left.
+            wr!(dp.USART0.ucsr0a(), bit::TXC0);
             // A byte of a Modbus reply (transmit complete is on for it): make more.
             if txcie(cs) != 0 {
                 line::on_sent(cs);
@@ -129,15 +138,22 @@ pub(crate) fn idle_since_queued(cs: CriticalSection) -> bool {
     unsafe { TX_IDLE.with(cs, |i| *i != 0) }
 }
 
-/// If nothing waits to be sent and the transmitter is idle, make transmit complete report
-/// the end of what comes next (TXC0 cleared, TXCIE0 on) and return true.
-pub(crate) fn claim_idle(cs: CriticalSection) -> bool {
+/// The line for a reply: the terminal's bytes not yet given to the USART are dropped (SPEC
+/// §13; the RUN screen is redrawn whole once the master is quiet). Once the transmitter is
+/// idle, that is once the bytes already in UDR0 and the shift register have left, transmit
+/// complete is made to report the end of what comes next (TXC0 cleared, TXCIE0 on) and
+/// this returns true; until then false, and the caller asks again.
+pub(crate) fn claim(cs: CriticalSection) -> bool {
     let dp = regs();
     // SAFETY: the closure does not re-enter TX.
-    let empty = unsafe { TX.with(cs, |tx| tx.len() == 0) };
-    // UCSR0A: TXC0 says UDR0 and the shift register are both empty.
+    unsafe { TX.with(cs, |tx| tx.clear()) };
+    // UCSR0B without UDRIE0: nothing more for the transmitter (TXCIE0 is off between
+    // replies).
+    wr!(dp.USART0.ucsr0b(), UCSR0B_ON);
+    // UCSR0A: TXC0 says UDR0 and the shift register have been empty since the last byte
+    // (cleared with each one, `on_udre`).
     let done = dp.USART0.ucsr0a().read().bits() & bit::TXC0 != 0;
-    let idle = empty && (done || idle_since_queued(cs));
+    let idle = done || idle_since_queued(cs);
     if idle {
         // UCSR0A: TXC0 cleared (a one clears it), normal speed.
         wr!(dp.USART0.ucsr0a(), bit::TXC0);

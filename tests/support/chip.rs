@@ -280,6 +280,34 @@ impl Board {
     }
 }
 
+/// The data-space address of the firmware's static whose symbol name contains `name` (the
+/// image's symbol table, read with binutils' `avr-nm`, which `./x setup` installs).
+pub fn static_address(name: &str) -> u16 {
+    let elf = setup::firmware_elf();
+    let out = std::process::Command::new("avr-nm")
+        .arg(&elf)
+        .output()
+        .unwrap_or_else(|e| panic!("avr-nm (binutils-avr, ./x setup): {e}"));
+    let text = String::from_utf8_lossy(&out.stdout);
+    let found: Vec<u16> = text
+        .lines()
+        .filter_map(|l| {
+            let mut f = l.split_whitespace();
+            let (addr, _kind, sym) = (f.next()?, f.next()?, f.next()?);
+            // Data addresses are offset by 0x800000 in an AVR ELF.
+            let addr = u32::from_str_radix(addr, 16).ok()?;
+            (sym.contains(name) && addr >= 0x80_0000).then_some((addr & 0xFFFF) as u16)
+        })
+        .collect();
+    assert_eq!(
+        found.len(),
+        1,
+        "one static named {name} in {}",
+        elf.display()
+    );
+    found[0]
+}
+
 /// `needle` occurs in `hay`.
 pub fn contains(hay: &[u8], needle: &[u8]) -> bool {
     needle.is_empty() || hay.windows(needle.len()).any(|w| w == needle)

@@ -9,6 +9,7 @@ const UTILE: &str = env!("CARGO_BIN_EXE_utile");
 const VNANO: &str = env!("CARGO_BIN_EXE_vnano");
 const XTASK: &str = env!("CARGO_BIN_EXE_xtask");
 const BENCH: &str = env!("CARGO_BIN_EXE_bench");
+const SIMTRACE: &str = env!("CARGO_BIN_EXE_simtrace");
 
 fn run(bin: &str, args: &[&str]) -> Output {
     Command::new(bin)
@@ -53,6 +54,7 @@ const COMMANDS: &[(&str, &[&str], &str)] = &[
     (XTASK, &["fw"], "--check-budget-enforced"),
     (XTASK, &["play"], "--out <DIR>"),
     (BENCH, &[], "--quick"),
+    (SIMTRACE, &[], "<SCENARIO.json>"),
 ];
 
 #[test]
@@ -209,6 +211,12 @@ fn usage_errors_name_the_argument() {
             "for '--for <SECONDS>': must be more than 0 seconds",
         ),
         (VNANO, &["--bootloader", "new"], "old or optiboot, not new"),
+        (SIMTRACE, &[], "<SCENARIO.json>"),
+        (
+            SIMTRACE,
+            &["a.json", "b.json"],
+            "unexpected argument 'b.json'",
+        ),
         (
             VNANO,
             &["--persist", "--save-eeprom", "x"],

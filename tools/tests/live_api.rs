@@ -4,9 +4,8 @@
 //! others, values out of range refused with the reason and nothing sent (on the page's
 //! API, and by the uTile through the gateway), `--read-only`, every failure answered as JSON
 //! (axum's rejections too); and on a pty of the test's own, a line that answers with noise or
-//! damaged frames: only a damaged frame counts as a CRC error. A uTile held from the page
-//! runs freely again within the 10 s lease (simulated) once `utile live` is killed, and
-//! 10 s after the last page following the events closed.
+//! damaged frames: only a damaged frame counts as a CRC error. Holds and their leases are
+//! `live_holds.rs`'s.
 
 mod support;
 
@@ -383,33 +382,16 @@ fn scan_finds_the_utile_on_the_line() {
     live.wait_value(1, "A6", 409);
 }
 
-/// Snapshots of uTile 1 taken so far, and its scan count in the latest.
-fn scans_now(live: &Live) -> (u64, u64) {
-    let u = live.unit(1);
-    (
-        u["snapshots"].as_u64().unwrap(),
-        u["values"]["scans"].as_u64().unwrap(),
-    )
-}
-
-/// The scan count once `pictures` newer snapshots have come, each showing the same count.
-fn settled_scans(live: &Live, pictures: u64) -> u64 {
-    let (seen, scans) = scans_now(live);
-    live.wait("newer snapshots", T, |s| {
-        s["units"][0]["snapshots"].as_u64().unwrap() >= seen + pictures
-    });
-    let (_, now) = scans_now(live);
-    assert_eq!(now, scans, "the scan count moved while held");
-    now
-}
-
 #[test]
 fn hold_run_and_step_through_the_api() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let (_nano, live) = tank_live("live-hold", &[]);
-    // A page open: utile live keeps a hold from the page while one is (unwatched.rs).
-    let _page = open_page(&live);
-    let scan = |body: serde_json::Value| live.post("/api/units/1/scan", &body);
+    // A page that follows the events and names itself: its hold lives while it follows them.
+    let _page = live.open_page(Some("hold-test"));
+    let scan = |mut body: serde_json::Value| {
+        body["page"] = json!("hold-test");
+        live.post("/api/units/1/scan", &body)
+    };
     // The line asked the firmware once whether it holds (SPEC §18): it does.
     live.wait("§18 known", T, |s| {
         s["units"][0]["scan_control"]["supported"] == true
@@ -426,7 +408,7 @@ fn hold_run_and_step_through_the_api() {
     );
     assert_eq!(s["units"][0]["online"], true);
     // Held: the scan count stops (a few snapshots later it has not moved).
-    let held = settled_scans(&live, 3);
+    let held = live.settled_scans(1, 3);
     // The gateway passes registers 32-33 like any other: 32 reads 1, 33 no steps left.
     let mut s = TcpStream::connect(live.tcp).unwrap();
     s.set_read_timeout(Some(T)).unwrap();
@@ -435,11 +417,11 @@ fn hold_run_and_step_through_the_api() {
     let (code, body) = scan(json!({"action": "step", "n": 1}));
     assert_eq!((code, body["n"].as_u64()), (200, Some(1)), "{body}");
     live.wait_value(1, "scans", held + 1);
-    assert_eq!(settled_scans(&live, 3), held + 1);
+    assert_eq!(live.settled_scans(1, 3), held + 1);
     let (code, body) = scan(json!({"action": "step", "n": 10}));
     assert_eq!(code, 200, "{body}");
     live.wait_value(1, "scans", held + 11);
-    assert_eq!(settled_scans(&live, 3), held + 11);
+    assert_eq!(live.settled_scans(1, 3), held + 11);
     assert_eq!(live.unit(1)["state"], "held");
     // Bad requests are refused with the reason, nothing sent.
     let writes = live.state()["line"]["writes"].as_u64().unwrap();
@@ -478,7 +460,7 @@ fn read_only_refuses_hold_and_step() {
         assert_eq!(code, 403, "{answer}");
         assert!(answer["error"].as_str().unwrap().starts_with("read-only"));
     }
-    let (seen, _) = scans_now(&live);
+    let (seen, _) = live.scans(1);
     live.wait("newer snapshots", T, |s| {
         s["units"][0]["snapshots"].as_u64().unwrap() >= seen + 3
     });
@@ -784,7 +766,10 @@ fn the_rig_through_the_api_presses_a0_and_moves_a6() {
     assert_eq!(live.post("/api/units/1/rig", &json!({})).1["a6"], 1.0);
     let (code, body) = live.post("/api/units/1/rig", &json!([1, 2]));
     assert_eq!(code, 400, "{body}");
-    assert!(body["error"].as_str().unwrap().contains("one JSON object"));
+    assert!(
+        body["error"].as_str().unwrap().contains("one JSON object"),
+        "{body}"
+    );
     let (code, body) = live.post("/api/units/7/rig", &json!({"press": 0}));
     assert_eq!(code, 404, "{body}");
     assert_eq!(body["error"], "no uTile 7 on this line");
@@ -856,149 +841,4 @@ fn the_ladder_of_the_running_program() {
     let (code, why) = error("/api/units/300/ladder");
     assert_eq!(code, 400, "{why}");
     assert!(why.contains("\"300\""), "{why}");
-}
-
-/// The rig's state from the virtual Nano's control socket: no Modbus frame (which would
-/// renew the hold's lease).
-fn rig_state(socket: &std::path::Path) -> serde_json::Value {
-    use std::io::{BufRead, BufReader};
-    let mut stream = std::os::unix::net::UnixStream::connect(socket).expect("the rig's socket");
-    stream.write_all(b"{}\n").expect("ask the rig");
-    let mut line = String::new();
-    BufReader::new(stream)
-        .read_line(&mut line)
-        .expect("the rig's answer");
-    serde_json::from_str(&line).unwrap_or_else(|e| panic!("{e}: {line}"))
-}
-
-/// A page following the events (`GET /api/events`), open while the stream lives.
-fn open_page(live: &Live) -> TcpStream {
-    use std::io::Read;
-    let mut s = TcpStream::connect(live.http).expect("connect to the page's server");
-    write!(
-        s,
-        "GET /api/events HTTP/1.1\r\nHost: test\r\nAccept: text/event-stream\r\n\r\n"
-    )
-    .expect("ask for the events");
-    let mut head = [0u8; 512];
-    let n = s.read(&mut head).expect("the events' head");
-    assert!(
-        head[..n].starts_with(b"HTTP/1.1 200"),
-        "{}",
-        String::from_utf8_lossy(&head[..n])
-    );
-    s
-}
-
-/// tests/data/scan_counter.utl on one virtual Nano with its rig's socket, `utile live` on
-/// it (uTile 1 online), a page open and uTile 1 held from the API: the Nano, `utile live`,
-/// the page, the socket and the outputs as held.
-fn scan_counter_held(
-    name: &str,
-) -> (
-    support::vnano::PtyNano,
-    Live,
-    TcpStream,
-    std::path::PathBuf,
-    serde_json::Value,
-) {
-    // Y0..Y7 count the scans, so the outputs stand still exactly while the scan is held.
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/scan_counter.utl");
-    let text = std::fs::read_to_string(&path).expect("scan_counter.utl");
-    let prog = utile_kit::listing::parse("scan_counter", &text).expect("the listing");
-    let (spec, socket) = NanoSpec::single(name, &prog, false).with_rig();
-    let nano = spec.start();
-    let live = Live::start(&spec.link, &[]);
-    live.wait("uTile 1 online", T, |s| s["units"][0]["state"] == "online");
-    let page = open_page(&live);
-    let (code, body) = live.post("/api/units/1/scan", &json!({"action": "hold"}));
-    assert_eq!(code, 200, "{body}");
-    live.wait("uTile 1 held", T, |s| s["units"][0]["state"] == "held");
-    let held = rig_state(&socket)["outputs"].clone();
-    (nano, live, page, socket, held)
-}
-
-#[test]
-fn a_hold_from_the_page_ends_10_s_after_the_last_page_closed() {
-    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
-    let (_nano, live, page, socket, held) = scan_counter_held("live-unwatched");
-    // Past the lease with the page open: still held (utile live's polls keep the firmware's
-    // lease, the open page keeps utile live's).
-    std::thread::sleep(Duration::from_secs(12));
-    assert_eq!(live.unit(1)["state"], "held");
-    assert_eq!(
-        rig_state(&socket)["outputs"],
-        held,
-        "held while a page is open"
-    );
-    drop(page);
-    let closed = Instant::now();
-    assert_eq!(
-        rig_state(&socket)["outputs"],
-        held,
-        "held as the page closes"
-    );
-    live.wait("uTile 1 runs again after its page closed", T * 2, |s| {
-        s["units"][0]["state"] == "online"
-    });
-    assert!(
-        closed.elapsed() >= Duration::from_secs(9),
-        "the hold ended {:?} after the page closed, before its 10 s",
-        closed.elapsed()
-    );
-    assert_ne!(rig_state(&socket)["outputs"], held, "the scan runs");
-}
-
-#[test]
-fn utile_live_killed_while_held_the_lease_frees_the_utile_within_10_s() {
-    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
-    let (_nano, mut live, _page, socket, held) = scan_counter_held("live-lease");
-    // Held for 2 s while utile live polls (and so keeps the lease).
-    let t = rig_state(&socket)["seconds"].as_f64().unwrap();
-    while rig_state(&socket)["seconds"].as_f64().unwrap() < t + 2.0 {
-        std::thread::sleep(Duration::from_millis(100));
-    }
-    assert_eq!(
-        rig_state(&socket)["outputs"],
-        held,
-        "held while utile live polls"
-    );
-
-    // utile live killed (SIGKILL: no goodbye on the line).
-    let before = rig_state(&socket)["seconds"].as_f64().unwrap();
-    live.child.kill().expect("kill utile live");
-    live.child.wait().expect("utile live ended");
-    let after = rig_state(&socket)["seconds"].as_f64().unwrap();
-    // Its last frame came before `after`: the lease ends the hold at most 10 s later.
-    let start = Instant::now();
-    let mut last_held = after;
-    let freed_at = loop {
-        let s = rig_state(&socket);
-        let now = s["seconds"].as_f64().unwrap();
-        if s["outputs"] != held {
-            break now;
-        }
-        last_held = now;
-        assert!(
-            start.elapsed() < Duration::from_secs(120),
-            "still held {:.1} s (simulated) after utile live was killed",
-            now - after
-        );
-        std::thread::sleep(Duration::from_millis(50));
-    };
-    eprintln!(
-        "killed at {before:.2}..{after:.2} s, last seen held at {last_held:.2} s, \
-         running at {freed_at:.2} s (simulated)"
-    );
-    assert!(
-        last_held >= before + 9.0,
-        "the hold ended {:.2} s after the kill, before its 10 s lease",
-        last_held - before
-    );
-    assert!(
-        freed_at <= after + 10.5,
-        "the hold outlived its lease: still held at {last_held:.2} s, {:.2} s after the kill",
-        last_held - after
-    );
 }

@@ -7,7 +7,9 @@
 //! pymodbus's TCP client through the gateway while the page polls; on a bus with its rigs
 //! (`cargo nano --bus 3 --control`), each card's rig panel works the Nano at the card's
 //! address and no other, and a card held from the page runs again 10 s after the page is
-//! closed. `./x setup` installs
+//! closed; a page of another site (another port of localhost, and a name rebound to
+//! 127.0.0.1) can neither type, write nor open the terminal, and the rig panel's release
+//! never overtakes its press. `./x setup` installs
 //! chromium, Playwright, pymodbus and mbpoll: without them these tests fail, they never skip.
 
 mod support;
@@ -17,7 +19,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::Mutex;
 
-use support::live::{tank, tank_path, tank_with_remote, Live, NanoSpec};
+use support::live::{tank, tank_path, tank_with, tank_with_remote, Live, NanoSpec};
 
 /// The browser scenarios share two cores: one at a time.
 static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
@@ -208,4 +210,16 @@ fn three_utiles_on_a_bus_each_card_works_its_own_rig() {
         &["--units", "1,2,3", "--rig", rig.to_str().unwrap()],
         &["--units", "1,2,3"],
     );
+}
+
+/// Issue 37: pages of other sites try keys (a no-cors fetch), writes and the terminal's
+/// WebSocket against the tank (with `U0. .Y2` and KEY, so a `/` would stop it): the program
+/// runs on, no coil moves; the rig panel's release waits for its press; then the page's own
+/// terminal, writes, rig and Send work as before.
+#[test]
+fn a_page_of_another_origin_cannot_touch_the_plant() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let prog = tank_with(&["U0.", ".Y2", "KEY"]);
+    let (spec, rig) = NanoSpec::single("live-door", &prog, true).with_rig();
+    drive("door", &spec, &["--rig", rig.to_str().unwrap()], &[]);
 }

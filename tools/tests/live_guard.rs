@@ -15,49 +15,17 @@ use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use serde_json::Value;
-
-use support::live::{mbap, tank_with_remote, Live, NanoSpec, UTILE};
+use support::live::{exchange, mbap, tank_with_remote, Answer, Live, NanoSpec, UTILE};
 use support::vnano::scratch;
 
 const T: Duration = Duration::from_secs(30);
 
-/// An answer: status, headers (lower-case names), body as JSON (`Null` if not).
-struct Answer {
-    status: u16,
-    head: String,
-    body: Value,
-}
-
-/// One HTTP/1.1 request with extra header lines.
+/// One HTTP/1.1 request (Host, and a JSON body) with extra header lines.
 fn http(addr: SocketAddr, method: &str, path: &str, headers: &[&str], body: &str) -> Answer {
-    let mut s = TcpStream::connect(addr).expect("connect");
-    s.set_read_timeout(Some(Duration::from_secs(15))).unwrap();
-    let mut head = format!(
-        "{method} {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\
-         Content-Type: application/json\r\nContent-Length: {}\r\n",
-        body.len()
-    );
-    for h in headers {
-        head.push_str(h);
-        head.push_str("\r\n");
-    }
-    head.push_str("\r\n");
-    s.write_all(head.as_bytes()).unwrap();
-    s.write_all(body.as_bytes()).unwrap();
-    let mut got = Vec::new();
-    let _ = s.read_to_end(&mut got);
-    let text = String::from_utf8_lossy(&got).into_owned();
-    let (head, body) = text.split_once("\r\n\r\n").unwrap_or((&text, ""));
-    Answer {
-        status: head
-            .split_whitespace()
-            .nth(1)
-            .and_then(|c| c.parse().ok())
-            .unwrap_or(0),
-        head: head.to_ascii_lowercase(),
-        body: serde_json::from_str(body).unwrap_or(Value::Null),
-    }
+    let host = format!("Host: {addr}");
+    let mut all = vec![host.as_str(), "Content-Type: application/json"];
+    all.extend_from_slice(headers);
+    exchange(addr, method, path, &all, body.as_bytes())
 }
 
 /// `utile live` on a port that does not exist (no uTile needed: the rules are the server's)
@@ -220,8 +188,16 @@ fn public_read_opens_reads_only_and_a_token_file_gives_the_token() {
     drop(live);
 
     // A token file with too short a token is refused at start.
-    std::fs::write(&file, "short\n").unwrap();
-    let out = Command::new(UTILE)
+    let (started, said) = start_with_token(&dir, "short");
+    assert!(!started && said.contains("at least 16"), "{said}");
+}
+
+/// `utile live` beyond loopback with `token` in its `--token-file`: whether it started (it
+/// is stopped at once), and its console.
+fn start_with_token(dir: &Path, token: &str) -> (bool, String) {
+    let file = dir.join("token");
+    std::fs::write(&file, format!("{token}\n")).unwrap();
+    let mut child = Command::new(UTILE)
         .args([
             "live",
             "--port",
@@ -233,10 +209,53 @@ fn public_read_opens_reads_only_and_a_token_file_gives_the_token() {
         .arg("--token-file")
         .arg(&file)
         .stdin(Stdio::null())
-        .output()
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
         .unwrap();
-    assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("at least 16"));
+    let mut err = child.stderr.take().unwrap();
+    // It ends at once when it refuses; started, it prints its page's URL with the token.
+    let mut said = String::new();
+    let mut buf = [0u8; 4096];
+    let t0 = Instant::now();
+    while !said.contains("?token=") && t0.elapsed() < T {
+        match err.read(&mut buf) {
+            Ok(0) | Err(_) => break,
+            Ok(n) => said.push_str(&String::from_utf8_lossy(&buf[..n])),
+        }
+    }
+    let started = said.contains("?token=");
+    let _ = child.kill();
+    let status = child.wait().unwrap();
+    assert!(
+        started || !status.success(),
+        "refused, yet it ended well: {said}"
+    );
+    (started, said)
+}
+
+#[test]
+fn a_token_with_characters_the_url_paste_or_cookie_would_change_is_refused_at_start() {
+    let dir = scratch("guard-token-characters");
+    let (started, said) = start_with_token(&dir, "A-Token_of.its~own-42");
+    assert!(started, "{said}");
+    assert!(said.contains("?token=A-Token_of.its~own-42"), "{said}");
+    for bad in [
+        "token+with+plus+signs",
+        "token&with=a&query-x",
+        "token%41percent-xxxx",
+        "token#with-a-hash-xx",
+        "token\"quoted\"-xxxxx",
+        "token,with,commas-xx",
+        "token\\backslash-xxxx",
+    ] {
+        let (started, said) = start_with_token(&dir, bad);
+        assert!(!started, "{bad} was taken: {said}");
+        assert!(
+            said.contains("a letter (A-Z, a-z), a digit, '-', '.', '_' or '~'"),
+            "{bad}: {said}"
+        );
+    }
 }
 
 #[test]

@@ -4,7 +4,7 @@
 //! line's and each uTile's, killed or stopped cleanly), the broker stopped and back, Home
 //! Assistant discovery checked against the keys HA documents, `set` commands (with
 //! `--mqtt-commands`, refused without it and with `--read-only`, bad payloads), TLS and the
-//! login.
+//! login; nothing of a uTile's state before it was first read.
 
 mod support;
 
@@ -658,6 +658,37 @@ fn set_topics_write_with_mqtt_commands_only_and_refuse_bad_payloads() {
 /// with the MQTT arguments `mqtt`.
 fn portless_live(mqtt: &[&str]) -> Live {
     Live::start(Path::new("/nonexistent/utile-mqtt-tty"), mqtt)
+}
+
+#[test]
+fn no_state_is_published_before_the_utile_was_read() {
+    if !have_mosquitto() {
+        return;
+    }
+    let _one = one_at_a_time();
+    let broker = Broker::start("unread");
+    let sub = Subscriber::connect(broker.port, &["utile/#"]);
+    let mut args = broker.live_args("unread1");
+    args.push("--mqtt-commands".into());
+    // No uTile behind the line: it is never read.
+    let _live = portless_live(&strs(&args));
+    sub.wait("utile/unread1/status", T, |p| p == "online");
+    sub.wait("utile/unread1/1/availability", T, |p| p == "offline");
+    // A refusal goes on the line's session after its first reports, which any state of the
+    // uTile would have come before.
+    sub.publish("utile/unread1/1/U0/set", b"abc", false);
+    refused(&sub, 0, "unread1", "not a whole number");
+    let published: Vec<String> = sub
+        .all()
+        .into_iter()
+        .map(|m| m.topic)
+        .filter(|t| t.starts_with("utile/unread1/1/"))
+        .filter(|t| !t.ends_with("/availability") && !t.ends_with("/error") && !t.ends_with("/set"))
+        .collect();
+    assert!(
+        published.is_empty(),
+        "published before the first read: {published:?}"
+    );
 }
 
 #[test]

@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """The real browser against `utile live` on the virtual Nano, for tools/tests/live_browser.rs.
 
-    live_page.py single|bus|ladder --url URL --tcp HOST:PORT [--units 1,2,3] [--program FILE]
-                 [--screenshot PNG]
+    live_page.py single|bus|ladder|bus-rig|door --url URL --tcp HOST:PORT [--units 1,2,3]
+                 [--program FILE] [--screenshot PNG]
 
 Drives Debian's chromium through Playwright (headless) as a user would: reads the cards by
 their data-unit / data-signal / data-value attributes, clicks coils, types presets, uses the
@@ -10,13 +10,20 @@ terminal tab. The Rust test owns the virtual Nano; this script asks it for rig k
 and a restart by printing `@rig KEYS`, `@kill`, `@start` and waiting for `ok` on stdin. The
 gateway is used at the same time with mbpoll -m tcp and pymodbus's TCP client.
 
+`door` is another web site's page against the plant: one served from another port of
+localhost, and one whose name is made to point at 127.0.0.1 (DNS rebinding, by Chromium's
+host resolver rules), each trying keys, writes and the terminal's WebSocket; nothing may
+change, and the page's own terminal, writes, rig and Send go on working.
+
 Exits 1 with the reason on the first check that fails; prints `ALL OK` at the end.
 """
 
 import argparse
+import http.server
 import json
 import subprocess
 import sys
+import threading
 import time
 import urllib.error
 import urllib.request
@@ -633,32 +640,9 @@ def picture(p, unit, path):
         p.wait(unit, signal, value)
 
 
-def single(p, a):
-    step("the page: one card, the program running")
-    p.wait(1, "online", 1)
-    p.page.wait_for_selector('#mode[data-value="run"]', timeout=T)
-    step("the program view: the tank listing, checked against --program")
-    p.tab("program")
-    p.page.wait_for_selector('.program[data-unit="1"] td.op >> text="H6."', timeout=T)
-    p.wait_text('.program[data-unit="1"] .check', f"runs {a.program}")
-    p.page.wait_for_selector('.program[data-unit="1"] td.v[data-line="0"]:not([data-value=""])', timeout=T)
-    p.tab("plant")
-    tank(p, 1)
-    if a.screenshot:
-        picture(p, 1, a.screenshot)
-    step("a rig switch shows on the page")
-    ask("rig 0")
-    p.wait(1, "A0", 0)
-    ask("rig 0")
-    p.wait(1, "A0", 1)
-    rig_panel(p, 1)
-    gateway(p, a.tcp, 1)
-    api_failures(p, 1)
-    hold_and_step(p, 1)
-    edit_and_check(p, 1, a.program)
-    editor_without_library(p, 1)
-    phone(p, 1)
-
+def terminal_writes_send(p):
+    """The page's own Terminal tab (EDIT mode: a program typed in and run), its writes and
+    its rig driving the typed program, and Send."""
     step("D8 removed and reset: uTile starts in EDIT mode and the page says so")
     ask("rig 8r")
     p.wait_text("#banner", "EDIT mode")
@@ -697,13 +681,214 @@ def single(p, a):
     p.wait(1, "Y3", 0)
     send_program(p, 1)
 
+
+# What another web site's page can try against utile live at `base` ('' for its own
+# origin): keys by a no-cors fetch (text and bytes, the CORS simple requests that need no
+# preflight), writes and a hold by fetch, keys as JSON, and the terminal's WebSocket with `/`.
+# Each outcome in words: the status it saw, "opaque" (a no-cors request went, its answer
+# hidden), "blocked" (the browser stopped it: a refused preflight), "refused" (WebSocket).
+ATTACK = """async (base) => {
+  const r = {};
+  const json = { "content-type": "application/json" };
+  const tries = {
+    "keys / by no-cors text": [base + "/api/terminal", { method: "POST", mode: "no-cors", body: "/" }],
+    "keys / by no-cors bytes": [base + "/api/terminal", { method: "POST", mode: "no-cors", body: new Uint8Array([47]) }],
+    "U0 = 1 by no-cors": [base + "/api/units/1/write", { method: "POST", mode: "no-cors",
+      headers: { "content-type": "text/plain" }, body: JSON.stringify({ signal: "U0", value: 1 }) }],
+    "U0 = 1": [base + "/api/units/1/write", { method: "POST", headers: json,
+      body: JSON.stringify({ signal: "U0", value: 1 }) }],
+    "hold": [base + "/api/units/1/scan", { method: "POST", headers: json, body: JSON.stringify({ action: "hold" }) }],
+    "keys / as JSON": [base + "/api/terminal", { method: "POST", headers: json, body: JSON.stringify({ keys: "/" }) }],
+  };
+  for (const [name, [url, init]] of Object.entries(tries)) {
+    try {
+      const res = await fetch(url, init);
+      r[name] = res.type === "opaque" ? "opaque" : res.status;
+    } catch (e) {
+      r[name] = "blocked";
+    }
+  }
+  const ws = (base || location.origin).replace(/^http/, "ws") + "/api/terminal";
+  r["terminal WebSocket"] = await new Promise((done) => {
+    const s = new WebSocket(ws);
+    s.onopen = () => { s.send("/"); setTimeout(() => done("opened, / typed"), 300); };
+    s.onerror = () => done("refused");
+  });
+  return r;
+}"""
+
+
+def other_site():
+    """A web site of its own on another port of this computer (its page says nothing)."""
+    class Page(http.server.BaseHTTPRequestHandler):
+        def do_GET(self):
+            body = b"<!doctype html><title>another site</title><p>Just another page."
+            self.send_response(200)
+            self.send_header("Content-Type", "text/html")
+            self.send_header("Content-Length", str(len(body)))
+            self.end_headers()
+            self.wfile.write(body)
+
+        def log_message(self, *_):
+            pass
+
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Page)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    return server
+
+
+def plant_now(p, tcp, unit):
+    """What must not change: the line's writes, the scan state, every coil (Y, U, V) through
+    the gateway (pymodbus), the mode."""
+    state = api(p.url, "/api/state")
+    u = [x for x in state["units"] if x["addr"] == unit][0]
+    host, port = tcp.split(":")
+    c = ModbusTcpClient(host, port=int(port), timeout=15)
+    if not c.connect():
+        fail("pymodbus cannot connect to the gateway")
+    coils = c.read_coils(0, count=24, slave=unit)
+    c.close()
+    if coils.isError():
+        fail(f"pymodbus: coils of uTile {unit}: {coils}")
+    return {"writes": state["line"]["writes"], "mode": state["mode"], "state": u["state"],
+            "coils": [int(b) for b in coils.bits[:24]]}
+
+
+def foreign_pages(p, a, unit):
+    """Another site's page tries keys, writes and the terminal: the program keeps running and
+    nothing changes."""
+    before = plant_now(p, a.tcp, unit)
+    if before["mode"] != "run" or before["state"] != "online":
+        fail(f"the plant is not running before the other pages try: {before}")
+    scans = p.value(unit, "scans")
+    site = other_site()
+    where = f"http://localhost:{site.server_address[1]}/"
+    step(f"a page of another site ({where}) tries keys, writes and the terminal")
+    other = p.page.context.browser.new_page()
+    other.goto(where)
+    tried = other.evaluate(ATTACK, p.url)
+    print(f"another site's page: {json.dumps(tried)}", flush=True)
+    other.close()
+    site.shutdown()
+    if tried["terminal WebSocket"] != "refused":
+        fail(f"the terminal's WebSocket took another site's page: {tried}")
+    for name in ["U0 = 1", "hold", "keys / as JSON"]:
+        if tried[name] != "blocked":
+            fail(f"{name} from another site was not stopped: {tried}")
+    port = p.url.rsplit(":", 1)[1]
+    step(f"a page of evil.test:{port}, the name made to point at 127.0.0.1 (DNS rebinding)")
+    browser = p.page.context.browser.browser_type.launch(
+        executable_path="/usr/bin/chromium",
+        args=ARGS + ["--host-resolver-rules=MAP evil.test 127.0.0.1"])
+    rebound = browser.new_page()
+    # Once the name points here, the browser takes utile live for that site: its document
+    # and every request after it are the site's own (same origin, no CORS in the way).
+    opened = rebound.goto(f"http://evil.test:{port}/")
+    if opened.status != 421:
+        fail(f"the page at the rebound name was served: {opened.status}")
+    tried = rebound.evaluate(ATTACK, "")
+    print(f"the rebound page: {json.dumps(tried)}", flush=True)
+    browser.close()
+    for name, got in tried.items():
+        if got not in (421, "refused"):
+            fail(f"{name} from the rebound name got {got!r}, not 421: {tried}")
+    step("nothing changed: the program runs, no coil moved, nothing was written")
+    p.newer_than(unit, scans, T, "the scan count stopped")
+    p.fresh(unit)
+    after = plant_now(p, a.tcp, unit)
+    if after != before:
+        fail(f"the other pages changed the plant: before {before}, after {after}")
+    if p.value(unit, "U0") != "0":
+        fail("U0 was written by another page")
+
+
+def rig_in_order(p, unit):
+    """The rig panel's press held back in the network: the release waits for it, so the switch
+    is released in the end (two fetches at once could reach the rig in the other order)."""
+    step(f"the rig's A2 on card {unit}: the press held back, the release does not overtake it")
+    pattern = f"**/api/units/{unit}/rig"
+    held = []
+
+    def hold_the_press(route):
+        if '"press"' in (route.request.post_data or "") and not held:
+            held.append(route)
+        else:
+            route.continue_()
+
+    p.page.route(pattern, hold_the_press)
+    p.page.locator(f'[data-rig="A2"][data-unit="{unit}"]').hover()
+    p.page.mouse.down()
+    t0 = time.time()
+    while not held:
+        if time.time() - t0 > T / 1000:
+            fail("the press never left the page")
+        p.page.wait_for_timeout(20)
+    p.page.mouse.up()
+    # A release sent at once goes through now, before the press it follows.
+    p.page.wait_for_timeout(500)
+    held[0].continue_()
+    wait_rig(p, unit, "A2", 0)
+    p.page.unroute(pattern, hold_the_press)
+    p.fresh(unit)
+    rig = api(p.url, "/api/state")["rig"]["nanos"][0]
+    if rig["switches"][2] or p.value(unit, "A2") != "1":
+        fail(f"A2 left pressed: the rig says {rig['switches']}, the card's A2 {p.value(unit, 'A2')}")
+
+
+def door(p, a):
+    step("the page: one card, the tank (with KEY) running")
+    p.wait(1, "online", 1)
+    p.page.wait_for_selector('#mode[data-value="run"]', timeout=T)
+    p.wait(1, "A6", 409)
+    foreign_pages(p, a, 1)
+    rig_in_order(p, 1)
+    terminal_writes_send(p)
+
+
+def single(p, a):
+    step("the page: one card, the program running")
+    p.wait(1, "online", 1)
+    p.page.wait_for_selector('#mode[data-value="run"]', timeout=T)
+    step("the program view: the tank listing, checked against --program")
+    p.tab("program")
+    p.page.wait_for_selector('.program[data-unit="1"] td.op >> text="H6."', timeout=T)
+    p.wait_text('.program[data-unit="1"] .check', f"runs {a.program}")
+    p.page.wait_for_selector('.program[data-unit="1"] td.v[data-line="0"]:not([data-value=""])', timeout=T)
+    p.tab("plant")
+    tank(p, 1)
+    if a.screenshot:
+        picture(p, 1, a.screenshot)
+    step("a rig switch shows on the page")
+    ask("rig 0")
+    p.wait(1, "A0", 0)
+    ask("rig 0")
+    p.wait(1, "A0", 1)
+    rig_panel(p, 1)
+    gateway(p, a.tcp, 1)
+    api_failures(p, 1)
+    hold_and_step(p, 1)
+    edit_and_check(p, 1, a.program)
+    editor_without_library(p, 1)
+    phone(p, 1)
+
+    terminal_writes_send(p)
+
     step("the virtual Nano killed: the card says offline; back when it returns")
     ask("kill")
     p.wait(1, "online", 0)
     p.wait_text('.card[data-unit="1"] .state', "offline")
+    step("a key typed while the port is closed: refused in words under the terminal, not kept")
+    p.tab("terminal")
+    p.page.click("#xterm")
+    p.page.keyboard.type("/")
+    p.wait_text("#terminal-refused", "keys not typed: the serial port is closed")
+    p.tab("plant")
     ask("start")
     p.wait(1, "online", 1, timeout=60_000)
     p.wait(1, "A6", 409)
+    p.fresh(1, pictures=20)
+    if p.page.get_attribute('.card[data-unit="1"] .state', "data-state") != "online":
+        fail("the key typed while the port was closed reached the uTile: its program stopped")
 
 
 def bus(p, a):
@@ -997,7 +1182,7 @@ def bus_rig(p, a):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("scenario", choices=["single", "bus", "ladder", "bus-rig"])
+    ap.add_argument("scenario", choices=["single", "bus", "ladder", "bus-rig", "door"])
     ap.add_argument("--url", required=True)
     ap.add_argument("--tcp", required=True)
     ap.add_argument("--units", default="1,2,3")
@@ -1012,7 +1197,8 @@ def main():
         page.on("pageerror", lambda e: errors.append(str(e)))
         page.goto(a.url)
         p = Page(page, a.url.rstrip("/"))
-        {"single": single, "bus": bus, "ladder": ladder, "bus-rig": bus_rig}[a.scenario](p, a)
+        {"single": single, "bus": bus, "ladder": ladder, "bus-rig": bus_rig,
+         "door": door}[a.scenario](p, a)
         if errors:
             fail(f"the page's scripts failed: {errors}")
         browser.close()

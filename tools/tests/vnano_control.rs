@@ -3,14 +3,17 @@
 //! output follows; releases it, and both come back; a bad request is refused with its
 //! reason and changes nothing; A6 is set in volts. On a bus of three, a press on Nano 2
 //! (`{"nano": 2, ...}`) changes only Nano 2's A0, as pymodbus reads it at slave address 2,
-//! and a Nano that is not there is refused in words.
+//! and a Nano that is not there is refused in words. PATH is never a file it deletes: a
+//! file that is no socket, or a socket another virtual Nano serves, is refused at start and
+//! left as it was; a request line past 1,024 bytes is discarded to its newline, none of it
+//! carried out, and answered with an error.
 
 mod support;
 
 use std::io::{BufRead, BufReader, Write};
 use std::os::unix::net::UnixStream;
 use std::path::Path;
-use std::process::Command;
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use serde_json::Value;
@@ -62,14 +65,13 @@ fn connect(socket: &Path) -> (UnixStream, BufReader<UnixStream>) {
     (stream, reader)
 }
 
-#[test]
-fn a_client_presses_a0_and_the_pin_and_the_program_follow() {
-    // Y0 is A0 as the program reads it: a pressed switch pulls its pin low.
-    let prog = listing::commands(&["A0.", ".Y0", "A0.", "!", ".Y1", "END"]);
-    let ee = eeprom_file("control.eeprom", &prog);
-    let socket = scratch("control").join("rig.sock");
+/// A virtual Nano autostarting the program of `words`, its rig on a control socket in a
+/// scratch folder named `name`: the Nano and the socket's path.
+fn running_with_control(name: &str, words: &[&str]) -> (PtyNano, std::path::PathBuf) {
+    let ee = eeprom_file(&format!("{name}.eeprom"), &listing::commands(words));
+    let socket = scratch(name).join("rig.sock");
     let elf = firmware_elf();
-    let _n = PtyNano::start(&[
+    let nano = PtyNano::start(&[
         "--elf",
         elf.to_str().unwrap(),
         "--eeprom",
@@ -78,6 +80,13 @@ fn a_client_presses_a0_and_the_pin_and_the_program_follow() {
         "--control",
         socket.to_str().unwrap(),
     ]);
+    (nano, socket)
+}
+
+#[test]
+fn a_client_presses_a0_and_the_pin_and_the_program_follow() {
+    // Y0 is A0 as the program reads it: a pressed switch pulls its pin low.
+    let (_n, socket) = running_with_control("control", &["A0.", ".Y0", "A0.", "!", ".Y1", "END"]);
     let (mut stream, mut reader) = connect(&socket);
     let free = until(&mut stream, &mut reader, "running", |s| {
         s["outputs"][0] != s["outputs"][1]
@@ -218,4 +227,120 @@ fn on_a_bus_a_press_on_nano_2_changes_only_nano_2() {
         );
         std::thread::sleep(Duration::from_millis(200));
     }
+}
+
+/// `vnano --control path` with the program of the first test: its exit status and what it
+/// said, or `None` when it was still running after 20 s (then killed).
+fn start_on(path: &Path) -> Option<(std::process::ExitStatus, String)> {
+    let prog = listing::commands(&["A0.", ".Y0", "END"]);
+    let ee = eeprom_file("control-path.eeprom", &prog);
+    let elf = firmware_elf();
+    let mut child = Command::new(VNANO)
+        .args(["--pty", "--elf", elf.to_str().unwrap(), "--eeprom"])
+        .arg(&ee)
+        .arg("--control")
+        .arg(path)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start vnano");
+    let start = Instant::now();
+    while start.elapsed() < Duration::from_secs(20) {
+        if let Some(status) = child.try_wait().expect("vnano's status") {
+            let mut said = String::new();
+            std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut said).unwrap();
+            return Some((status, said));
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    None
+}
+
+#[test]
+fn a_path_that_is_no_free_socket_is_refused_and_left_as_it_was() {
+    let dir = scratch("control-path");
+    let file = dir.join("notes.txt");
+    std::fs::write(&file, "the plant's wiring notes\n").unwrap();
+    let (status, said) = start_on(&file).expect("vnano ran on a file it would have deleted");
+    assert!(!status.success(), "{said}");
+    assert!(
+        said.contains("not a socket") && said.contains("nothing was deleted"),
+        "{said}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(&file).expect("the file is still there"),
+        "the plant's wiring notes\n"
+    );
+
+    // A socket another virtual Nano serves stays that one's.
+    let socket = dir.join("rig.sock");
+    let _first = PtyNano::start(&[
+        "--elf",
+        firmware_elf().to_str().unwrap(),
+        "--control",
+        socket.to_str().unwrap(),
+    ]);
+    let (mut stream, mut reader) = connect(&socket);
+    let (status, said) = start_on(&socket).expect("a second vnano took a socket in use");
+    assert!(!status.success(), "{said}");
+    assert!(said.contains("another program listens"), "{said}");
+    let state = ask(&mut stream, &mut reader, "{}");
+    assert!(
+        state.get("switches").is_some(),
+        "the first Nano still answers: {state}"
+    );
+}
+
+#[test]
+fn an_over_long_line_is_discarded_to_its_newline_and_answered_with_an_error() {
+    let (_n, socket) = running_with_control("control-long", &["A0.", ".Y0", "END"]);
+    let (mut stream, mut reader) = connect(&socket);
+    assert_eq!(ask(&mut stream, &mut reader, "{}")["switches"][0], false);
+    // 1,100 bytes of a line without its end; a second client's answer proves the virtual
+    // Nano has read them (it serves its clients in turn, the first one first).
+    stream.write_all(&[b'x'; 1100]).expect("send");
+    let (mut other, mut other_reader) = connect(&socket);
+    ask(&mut other, &mut other_reader, "{}");
+    // The line's last bytes are a request of their own: none of it is carried out.
+    let answer = ask(&mut stream, &mut reader, r#"{"press": 0}"#);
+    let why = answer["error"].as_str().unwrap_or_default();
+    assert!(why.contains("at most 1024 bytes"), "{answer}");
+    let state = ask(&mut other, &mut other_reader, "{}");
+    assert_eq!(
+        state["switches"][0], false,
+        "the tail was carried out: {state}"
+    );
+    // The next line is a request again.
+    let pressed = ask(&mut stream, &mut reader, r#"{"press": 0}"#);
+    assert_eq!(pressed["switches"][0], true, "{pressed}");
+    // A whole line past the limit at once, and unknown or wrong fields, name what is wrong.
+    let long = format!(r#"{{"press": 1, "pad": "{}"}}"#, "y".repeat(1100));
+    let answer = ask(&mut stream, &mut reader, &long);
+    assert!(
+        answer["error"]
+            .as_str()
+            .unwrap_or_default()
+            .contains("at most 1024"),
+        "{answer}"
+    );
+    let answer = ask(&mut stream, &mut reader, r#"{"prss": 1}"#);
+    assert!(
+        answer["error"]
+            .as_str()
+            .unwrap_or_default()
+            .contains("unknown field"),
+        "{answer}"
+    );
+    let answer = ask(&mut stream, &mut reader, r#"{"d8": 3}"#);
+    assert!(
+        answer["error"]
+            .as_str()
+            .unwrap_or_default()
+            .starts_with("d8: "),
+        "{answer}"
+    );
+    assert_eq!(answer["switches"][1], false, "{answer}");
 }

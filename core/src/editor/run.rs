@@ -34,6 +34,13 @@ impl Editor {
         Mode::Run
     }
 
+    /// The screen is to be drawn again whole, step by step from the next
+    /// [`Editor::after_scan`] (RUN mode: terminal bytes were dropped for a Modbus reply, and
+    /// the main loop lets the editor draw again once the master is quiet, SPEC §13).
+    pub fn redraw(&mut self) {
+        self.left = STEPS;
+    }
+
     /// Whether [`Editor::after_scan`] has anything to do: a deferred redraw or a PPx/PBS
     /// request. The main loop asks first, so an idle scan pays only these tests.
     #[inline(always)]
@@ -49,6 +56,10 @@ impl Editor {
         if self.left != 0 {
             // One step per visit: the scan waits for at most one step's work.
             if b.tx_room() >= STEP_MAX {
+                if self.left == STEPS {
+                    // A screen cut short for a Modbus reply may have left reverse video on.
+                    normal(b);
+                }
                 self.step(STEPS - self.left, eng, b);
                 self.left -= 1;
             }

@@ -1,7 +1,7 @@
 //! The user's program (UF0, the timer and counter presets, the analog set-points) and the
 //! timers' units.
 
-use crate::opcodes::BLANK;
+use crate::opcodes::{BLANK, END, KEY};
 
 /// Lines in the User File UF0.
 pub const LINES: usize = 256;
@@ -58,6 +58,20 @@ impl Program {
             counter_presets: [0; COUNTERS],
             set_points: [0; SET_POINTS],
         }
+    }
+
+    /// Whether a scan reaches a KEY line (one before the first END), so that `/` can stop
+    /// the program (SPEC §18: a `/` ends a hold only of such a program).
+    pub fn stops_at_key(&self) -> bool {
+        for &op in &self.uf {
+            if op == KEY {
+                return true;
+            }
+            if op == END {
+                return false;
+            }
+        }
+        false
     }
 }
 

@@ -92,8 +92,8 @@ impl Hold {
         }
     }
 
-    /// A valid frame for this slave came at `now_ms` (a request answered, or a broadcast):
-    /// the lease starts again.
+    /// A valid request for this slave's own address came at `now_ms`: the lease starts
+    /// again (a broadcast does not renew it, SPEC §18).
     pub fn heard(&mut self, now_ms: u32) {
         self.heard_ms = now_ms as u16;
     }

@@ -2,9 +2,14 @@
 //! reply out one byte at a time, the drops counted, and whether a master is active (the
 //! terminal stays quiet while one is).
 //!
-//! The board reports the line's silences ([`Slave::push`] with `after_gap`, [`Slave::end`]
-//! after 3.5 character times, both measured as [`super::frame`] says); the slave never waits
-//! and never holds a reply buffer.
+//! The board reports the line's silences ([`Slave::push`] with `after_gap`, [`Slave::close`]
+//! after 3.5 character times, both measured as [`super::frame`] says) as they happen, from
+//! its interrupts; the main program carries a closed frame out later ([`Slave::judge`]).
+//! A frame is closed at its silence whatever the main program is doing, so a byte that
+//! comes after it starts a new frame: a frame for another slave (or a broken one) is counted
+//! and forgotten at once, and one this slave must carry out (a request for it, a broadcast,
+//! the lone `/`) keeps the line until it has been, as its reply does (RS-485 is half duplex).
+//! The slave never waits and never holds a reply buffer.
 
 use super::frame::{Receiver, Verdict};
 use super::map::Map;
@@ -19,7 +24,7 @@ pub const ACTIVE_MS: u32 = 3000;
 /// What the end of a frame meant.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Event {
-    /// Nothing (an empty frame, or bytes that arrived while a reply was going out).
+    /// Nothing (no frame closed, or it was counted when it closed: [`Slave::close`]).
     None,
     /// The single byte `/`: the terminal's break key.
     Slash,
@@ -38,6 +43,9 @@ pub struct Slave {
     /// The reply being sent, while `replying`.
     reply: Reply,
     replying: bool,
+    /// A frame closed by [`Slave::close`] waits for [`Slave::judge`]: a request for this
+    /// slave or a broadcast (its bytes in `rx`'s last frame), or the lone `/` (none).
+    closed: bool,
     /// Frames dropped (CRC, length, gap, another address), saturating.
     dropped: u16,
     /// The ms clock at the last valid frame for this slave.
@@ -59,6 +67,7 @@ impl Slave {
             rx: Receiver::new(),
             reply: Reply::none(),
             replying: false,
+            closed: false,
             dropped: 0,
             last_ms: 0,
             heard: false,
@@ -67,11 +76,17 @@ impl Slave {
 
     /// A received byte; `after_gap`: the line was silent for more than 1.5 character times
     /// since the previous byte's stop bit (see [`super::frame::pause_limit`]).
-    /// While a reply goes out the line is ours (RS-485 is half duplex): bytes are ignored.
+    /// From a closed frame this slave carries out until its reply has gone, the line is
+    /// ours (RS-485 is half duplex): bytes are ignored.
     pub fn push(&mut self, byte: u8, after_gap: bool) {
-        if !self.replying {
+        if !self.replying && !self.closed {
             self.rx.push(byte, after_gap);
         }
+    }
+
+    /// Whether a frame closed by [`Slave::close`] waits for [`Slave::judge`].
+    pub fn closed(&self) -> bool {
+        self.closed
     }
 
     /// Whether bytes of an unfinished frame wait for their silence.
@@ -79,43 +94,68 @@ impl Slave {
         !self.rx.is_empty()
     }
 
-    /// 3.5 character times of silence: judge the frame, and for a valid request to
-    /// `address` (1..247) or a broadcast, carry it out on `map`.
+    /// 3.5 character times of silence (the board's timer interrupt): the frame is closed.
+    /// A broken frame or one for another address than `address` (1..247) is counted
+    /// ([`Slave::dropped`]) and forgotten; a request for `address`, a broadcast or the lone
+    /// `/` waits for [`Slave::judge`] (returns true), and bytes are ignored until then.
     ///
-    /// While a reply is being made nothing ends: the bytes were ignored, and the request the
-    /// reply is built from stays.
-    pub fn end<M: Map + ?Sized>(&mut self, address: u8, map: &mut M, now_ms: u32) -> Event {
-        if self.replying {
+    /// While a closed frame waits or a reply is being made nothing closes: the bytes were
+    /// ignored, and the request the reply is built from stays.
+    pub fn close(&mut self, address: u8) -> bool {
+        if self.replying || self.closed {
+            return self.closed;
+        }
+        self.closed = match self.rx.end() {
+            Verdict::Empty => return false,
+            Verdict::Slash => true,
+            Verdict::Dropped(_) => false,
+            Verdict::Frame { .. } => {
+                let to = self.rx.frame().first().copied().unwrap_or(0);
+                to == address || to == BROADCAST
+            }
+        };
+        if !self.closed {
+            self.dropped = self.dropped.saturating_add(1);
+        }
+        self.closed
+    }
+
+    /// Carry out the frame [`Slave::close`] kept: a request for this slave on `map` (its
+    /// reply then waits in [`Slave::next_byte`]), a broadcast on `map` (no reply), or the
+    /// break key. [`Event::None`] when no frame waits.
+    pub fn judge<M: Map + ?Sized>(&mut self, map: &mut M, now_ms: u32) -> Event {
+        if !core::mem::take(&mut self.closed) {
             return Event::None;
         }
-        let len = match self.rx.end() {
-            Verdict::Empty => return Event::None,
-            Verdict::Slash => return Event::Slash,
-            Verdict::Dropped(_) => return self.drop(),
-            Verdict::Frame { len } => usize::from(len),
-        };
         let frame = self.rx.frame();
-        let to = frame.first().copied().unwrap_or(0);
-        let pdu = frame.get(1..len - 2).unwrap_or(&[]);
+        let Some(&to) = frame.first() else {
+            return Event::Slash;
+        };
+        let pdu = frame.get(1..frame.len() - 2).unwrap_or(&[]);
+        let answer: Answer = handle(pdu, map);
         if to == BROADCAST {
             // Carried out, never answered: only a write changes anything.
-            handle(pdu, map);
             return Event::Broadcast;
-        }
-        if to != address {
-            return self.drop();
         }
         self.last_ms = now_ms;
         self.heard = true;
-        let answer: Answer = handle(pdu, map);
-        self.reply = Reply::new(address, answer, map);
+        self.reply = Reply::new(to, answer, map);
         self.replying = true;
         Event::Reply
     }
 
-    fn drop(&mut self) -> Event {
-        self.dropped = self.dropped.saturating_add(1);
-        Event::Dropped
+    /// [`Slave::close`] and [`Slave::judge`] at once, for a board that does both between
+    /// two scans; a frame counted as dropped is [`Event::Dropped`].
+    pub fn end<M: Map + ?Sized>(&mut self, address: u8, map: &mut M, now_ms: u32) -> Event {
+        let dropped = self.dropped;
+        if !self.close(address) {
+            return if self.dropped != dropped {
+                Event::Dropped
+            } else {
+                Event::None
+            };
+        }
+        self.judge(map, now_ms)
     }
 
     /// Whether a reply is being sent.
@@ -155,6 +195,6 @@ impl Slave {
     /// Whether the terminal must wait: a frame is coming in or waits to be judged, its reply
     /// is being sent, or a master is active (SPEC §13: nothing but replies meanwhile).
     pub fn line_busy(&self, now_ms: u32) -> bool {
-        self.receiving() || self.replying || self.master_active(now_ms)
+        self.receiving() || self.closed || self.replying || self.master_active(now_ms)
     }
 }

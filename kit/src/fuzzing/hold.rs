@@ -5,7 +5,8 @@
 //!
 //! Invariant: held, the scan count moves only by the steps asked for; registers 32–33 and
 //! status bits 4–5 read as the model says; an exception changes no hold; a hold ends by
-//! itself 10 s after the last valid frame for the slave, and only then.
+//! itself 10 s after the last valid request for the slave's own address (a broadcast does
+//! not count), and only then; a lone `/` ends it only for a program with KEY.
 
 use std::vec::Vec;
 
@@ -32,10 +33,18 @@ pub(super) struct Model {
     left: u32,
     /// A hold ended by itself since RUN.
     lapsed: bool,
-    /// The ms clock at the last valid frame for the slave.
+    /// The ms clock at the last valid request for the slave's own address.
     heard: u32,
     /// Scans run since RUN.
     scans: u32,
+    /// The program has a KEY that a scan reaches (before its first END): `/` stops it.
+    key: bool,
+}
+
+/// Whether a scan of `uf` reaches a KEY line: the spec's words, apart from the core's.
+fn reaches_key(uf: &[u8]) -> bool {
+    use utile_core::opcodes::{END, KEY};
+    uf.iter().take_while(|&&op| op != END).any(|&op| op == KEY)
 }
 
 /// The writes to registers 32–33 that a request (its PDU) carries, in address order, when
@@ -71,7 +80,8 @@ fn hold_writes(pdu: &[u8]) -> Option<Vec<(u16, u16)>> {
 /// core's hold held to the [`Model`] after every frame and every decision, and what a request
 /// may change checked as there.
 pub(super) fn held(data: &[u8]) -> Verdict {
-    use super::modbus::{check_windows, end_frame, line_events, FrameEnd, Judged, Line, ADDRESS};
+    use super::modbus::{line_events, Line, ADDRESS};
+    use super::modbus_plc::{check_windows, end_frame, FrameEnd, Judged};
     use crate::modbus::crc_ok;
     use utile_core::modbus::plc::PlcMap;
     use utile_core::modbus::slave::Slave;
@@ -82,7 +92,10 @@ pub(super) fn held(data: &[u8]) -> Verdict {
     let mut slave = Slave::new();
     let mut status = Status::new(STATUS_RUNNING, &ScanStats::new(), 0, 0);
     status.start(&eng.prog.uf);
-    let mut hold = Model::default();
+    let mut hold = Model {
+        key: reaches_key(&eng.prog.uf),
+        ..Model::default()
+    };
     // The bytes since the last frame end: the request, if it was one.
     let mut frame = Vec::new();
     for event in line_events(data) {
@@ -113,7 +126,8 @@ pub(super) fn held(data: &[u8]) -> Verdict {
                 return Err("a reply of more than 256 bytes".into());
             }
         }
-        hold.judged(&request, event, &reply, now, &mut status)?;
+        let stops = eng.prog.stops_at_key();
+        hold.judged(&request, event, &reply, (now, stops), &mut status)?;
         match event {
             Event::Reply => {
                 if reply.len() < 5 || !crc_ok(&reply) || reply[0] != ADDRESS {
@@ -199,30 +213,33 @@ impl Model {
     }
 
     /// A frame was judged at `now`: `frame` its bytes (address, PDU, CRC), `event` and
-    /// `reply` the slave's answer. Its writes to registers 32–33 (the spec's reading of the
-    /// request) move the model; a read of them shows the model.
+    /// `reply` the slave's answer; `stops`: the core says the program stops at a KEY. Its
+    /// writes to registers 32–33 (the spec's reading of the request) move the model; a read
+    /// of them shows the model.
     pub(super) fn judged(
         &mut self,
         frame: &[u8],
         event: Event,
         reply: &[u8],
-        now: u32,
+        (now, stops): (u32, bool),
         status: &mut Status,
     ) -> Verdict {
-        // What the firmware's visit does after a frame (src/modbus.rs): `/` ends a hold, a
-        // valid frame for the slave renews the lease.
+        // What the firmware's visit does after a frame (src/modbus.rs): `/` ends a hold of a
+        // program with KEY, a valid request for the slave's own address renews the lease.
         match event {
-            Event::Slash => status.hold.write(HR_SCAN_CONTROL, 0),
-            Event::Reply | Event::Broadcast => status.hold.heard(now),
-            Event::None | Event::Dropped => {}
+            Event::Slash if stops => status.hold.write(HR_SCAN_CONTROL, 0),
+            Event::Reply => status.hold.heard(now),
+            Event::Slash | Event::Broadcast | Event::None | Event::Dropped => {}
         }
         let pdu = frame.get(1..frame.len().saturating_sub(2)).unwrap_or(&[]);
-        if event == Event::Slash {
-            // The terminal's break key ends a hold (the firmware's visit, src/modbus.rs).
+        if event == Event::Slash && self.key {
+            // The terminal's break key ends a hold of a program with KEY (SPEC §18).
             (self.held, self.left) = (false, 0);
         }
-        if matches!(event, Event::Reply | Event::Broadcast) {
+        if event == Event::Reply {
             self.heard = now;
+        }
+        if matches!(event, Event::Reply | Event::Broadcast) {
             let refused = reply.get(1).is_some_and(|f| f & 0x80 != 0);
             match hold_writes(pdu) {
                 Some(writes) if !refused => {

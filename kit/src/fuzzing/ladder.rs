@@ -11,7 +11,7 @@ use crate::listing;
 
 /// What every import must keep: a refusal has reasons; a program compiles (or is too long,
 /// said so), reads back from its listing, and draws.
-fn check(result: Result<ladder::Ladder, import::Refused>) -> Verdict {
+pub(super) fn check(result: Result<ladder::Ladder, import::Refused>) -> Verdict {
     let model = match result {
         Err(r) if r.reasons.is_empty() => return Err("a refusal without a reason".into()),
         Err(_) => return Ok(()),

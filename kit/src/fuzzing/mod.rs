@@ -12,7 +12,8 @@
 //!
 //! Rooms: `term.rs` (the terminal model), `main_loop.rs`, and the harnesses by subject:
 //! `editor.rs`, `storage.rs`, `modbus.rs` (with `modbus_oracle.rs`, what a request must do,
-//! and `hold.rs`, SPEC §18's part of it), `ladder.rs` (the ladder importers).
+//! and `hold.rs`, SPEC §18's part of it), `ladder.rs` (the ladder importers) with `ladder_gen.rs` (files built from the bytes'
+//! choices: the structure-aware harness).
 
 use std::format;
 use std::string::{String, ToString};
@@ -65,17 +66,22 @@ pub const RX_RING: usize = 64;
 mod editor;
 mod hold;
 mod ladder;
+mod ladder_gen;
 mod main_loop;
 mod modbus;
 mod modbus_oracle;
+mod modbus_plc;
 mod storage;
 mod term;
 
 pub use editor::{editor, editor_loop, keys, lines, sample_program};
 pub use ladder::{ldmicro, plcopen};
+pub use ladder_gen::{built as ladder_text, ladder_built};
 pub use main_loop::MainLoop;
-pub use modbus::{modbus, modbus_plc, named_writes, BUILT_MAX};
+pub use modbus::{modbus, BUILT_MAX};
 pub use modbus_oracle::check_effect;
+pub use modbus_oracle::named_writes;
+pub use modbus_plc::modbus_plc;
 pub use storage::{eeprom, hex_roundtrip, ihex, image_decode, reference_newest, same_image};
 pub use term::Term;
 
@@ -83,7 +89,7 @@ pub use term::Term;
 pub type Harness = fn(&[u8]) -> Verdict;
 
 /// Every harness by the name its fuzz target and corpus directory use.
-pub const TARGETS: [(&str, Harness); 11] = [
+pub const TARGETS: [(&str, Harness); 12] = [
     ("editor", editor),
     ("lines", lines),
     ("keys", keys),
@@ -95,4 +101,5 @@ pub const TARGETS: [(&str, Harness); 11] = [
     ("modbus_plc", modbus_plc),
     ("plcopen", plcopen),
     ("ldmicro", ldmicro),
+    ("ladder_built", ladder_built),
 ];

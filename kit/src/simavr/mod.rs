@@ -42,7 +42,7 @@ pub mod pins;
 pub mod run;
 pub mod uart;
 
-pub use bus::{Bus, BusByte, Collision};
+pub use bus::{Bus, BusByte, Collision, HalfOn};
 pub use chip::{BootSection, Chip, CpuState, Reset};
 pub use flash::{ArduinoBoot, FlashImage, HexLineError};
 pub use pins::RigPin;

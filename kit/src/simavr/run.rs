@@ -214,7 +214,7 @@ impl Chip {
                 std::ptr::null_mut(),
             );
         }
-        self.rx_after_reset();
+        self.uart_after_reset();
         self.pins_after_reset();
     }
 }

@@ -1,6 +1,6 @@
 //! The chip's serial port (USART0): bytes into the firmware, paced as chosen, and bytes out
-//! of it, each with the cycle its stop bit ends. The transmitter is the datasheet's, not
-//! simavr's (see [`on_udr_write`]).
+//! of it, each with the cycle its stop bit ends, from a transmitter double-buffered as the
+//! datasheet's in place of simavr's (see [`on_udr_write`]).
 
 use super::chip::{Chip, Link};
 use super::{ioctl_def, LoadError, CYCLES_PER_BYTE, F_CPU, RX_FIXED_CYCLES_PER_BYTE};
@@ -58,15 +58,11 @@ pub(crate) struct UartLink {
     out: VecDeque<(u8, u64)>,
     /// Cycle at which the firmware wrote its last byte to UDR0.
     out_last_cycle: u64,
-    /// Cycle at which the transmitter's line is free again (its shift register empty).
+    /// Cycle at which the last byte's stop bit ends: the transmitter's line is free again
+    /// (its shift register empty), and transmit complete then, unless another byte followed.
     tx_free: u64,
-    /// CPU cycles of the last byte's frame on the line.
-    tx_frame: u64,
     /// A byte waits in UDR0 for the shift register (UDRE0 is 0 until it moves).
     udr_full: bool,
-    /// simavr's cycle (since reset) the last byte's stop bit ends: transmit complete then,
-    /// unless another byte followed.
-    tx_end: u64,
     /// simavr's USART0 module (its UDRE and TXC vectors, its output IRQ).
     module: *mut ffi::avr_uart_t,
     /// simavr's receive FIFO is empty: the firmware has read every byte we gave it.
@@ -81,9 +77,7 @@ impl UartLink {
             out: VecDeque::with_capacity(4096),
             out_last_cycle: 0,
             tx_free: 0,
-            tx_frame: 0,
             udr_full: false,
-            tx_end: 0,
             module: std::ptr::null_mut(),
             rx_empty: true,
             rx_full: false,
@@ -131,7 +125,9 @@ impl Rx {
     }
 }
 
-/// simavr's UART output IRQ: the firmware wrote a byte to UDR0.
+/// simavr's UART output IRQ: the firmware's byte goes on the wire (raised by
+/// [`on_udr_write`]). It starts when the line is free (at once, or when the byte before it
+/// has left) and takes 10 bit times at the UBRR0 and U2X0 the firmware set.
 unsafe extern "C" fn on_uart_output(_irq: *mut ffi::avr_irq_t, value: u32, param: *mut c_void) {
     // SAFETY: `param` is the `Box<Link>` owned by the `Chip` that registered this callback;
     // simavr only calls it from `avr_run` while the `Chip` is alive and borrowed.
@@ -146,7 +142,6 @@ unsafe extern "C" fn on_uart_output(_irq: *mut ffi::avr_irq_t, value: u32, param
     let bit = (ubrr + 1) * if ucsra & U2X0 != 0 { 8 } else { 16 };
     let stop = now.max(link.uart.tx_free) + 10 * bit;
     link.uart.tx_free = stop;
-    link.uart.tx_frame = 10 * bit;
     link.uart.out.push_back((value as u8, stop));
     link.uart.out_last_cycle = now;
 }
@@ -174,12 +169,12 @@ unsafe extern "C" fn on_udr_write(avr: *mut ffi::avr_t, _addr: u16, v: u8, param
         // UDR0 holds the byte: UDRE0 falls, its interrupt is no longer pending.
         ffi::avr_clear_interrupt(avr, &mut (*p).udrc);
         *d.add(UCSR0A) &= !UDRE0;
-        // On the line (`on_uart_output` logs it and times its frame).
+        // On the line when the byte before it has left (`on_uart_output` logs it and times
+        // its frame); simavr's timers count from the last reset.
+        let start = link.uart.tx_free.saturating_sub(link.base);
         ffi::avr_raise_irq((*p).io.irq.add(ffi::UART_IRQ_OUTPUT as usize), u32::from(v));
         let now = (*avr).cycle;
-        let stop = link.uart.tx_free.saturating_sub(link.base);
-        let start = stop.saturating_sub(link.uart.tx_frame);
-        link.uart.tx_end = stop;
+        let stop = link.uart.tx_free - link.base;
         if start <= now {
             link.uart.udr_full = false;
             ffi::avr_raise_interrupt(avr, &mut (*p).udrc);
@@ -215,7 +210,7 @@ unsafe extern "C" fn tx_done(
     // SAFETY: as in `udr_moved`.
     unsafe {
         let link = &mut *(param as *mut Link);
-        if link.uart.tx_end == when && !link.uart.udr_full {
+        if link.uart.tx_free == link.base + when && !link.uart.udr_full {
             ffi::avr_raise_interrupt(avr, &mut (*link.uart.module).txc);
         }
     }
@@ -432,15 +427,16 @@ impl Chip {
         self.rx.last = self.cycle();
     }
 
-    /// The receive side after a reset: simavr emptied its FIFO; paced input waits for the
-    /// receiver again.
-    pub(crate) fn rx_after_reset(&mut self) {
+    /// The serial port after a reset: simavr emptied its receive FIFO (paced input waits for
+    /// the receiver again) and its transmitter.
+    pub(crate) fn uart_after_reset(&mut self) {
         self.rx.next = self.cycle();
         self.link.uart.rx_empty = true;
         self.link.uart.rx_full = false;
-        // simavr's reset dropped every timer: nothing waits in UDR0 any more.
+        // The transmitter is empty after a reset (simavr's dropped every timer, so nothing
+        // waits in UDR0 any more): the next byte starts when it is written.
         self.link.uart.udr_full = false;
-        self.link.uart.tx_end = 0;
+        self.link.uart.tx_free = self.link.uart.tx_free.min(self.cycle());
     }
 
     /// Chooses how input is paced (default [`RxPacing::AfterRead`]).
@@ -519,6 +515,13 @@ impl Chip {
     /// Bytes sent by the firmware and not yet taken.
     pub fn output_len(&self) -> usize {
         self.link.uart.out.len()
+    }
+
+    /// CPU cycles one 8N1 frame of the firmware's own takes, start bit to stop bit, at the
+    /// UBRR0 and U2X0 it set: the wire time [`Chip::take_output_timed`]'s bytes are given.
+    pub fn frame_cycles_set(&self) -> u64 {
+        let ubrr = u64::from(self.peek(UBRR0L)) | u64::from(self.peek(UBRR0H) & 0x0F) << 8;
+        10 * (ubrr + 1) * if self.peek(UCSR0A) & U2X0 != 0 { 8 } else { 16 }
     }
 
     /// The baud rate the firmware set (UBRR0 and U2X0).

@@ -83,6 +83,7 @@ export function runScenario(scenario, hex, simavr, options = {}) {
     uart,
     pins,
     end: nano.cycles,
+    lost: nano.line.lost,
     speedMhz: nano.speedMhz(),
   };
 }

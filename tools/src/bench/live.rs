@@ -19,7 +19,9 @@ use utile_core::modbus::{READ_HOLDING_REGISTERS, WRITE_SINGLE_COIL};
 use utile_kit::listing;
 use utile_kit::sim::stored_eeprom;
 
-use crate::live::{self, args, hub::Input, queue::Job, queue::Origin, rtu, Running};
+use crate::live::hub::Input;
+use crate::live::job::{Job, Ticket};
+use crate::live::{self, args, rtu, Running};
 
 use super::{BenchError, Spread};
 
@@ -59,10 +61,25 @@ fn program() -> utile_core::engine::Program {
 
 /// The virtual Nano (`units` of them on a bus when more than one), autostarting the program.
 pub(crate) fn start_nano(dir: &Path, link: &Path, units: usize) -> Result<Child, BenchError> {
-    spawn_nano(dir, link, units).map_err(BenchError::Live)
+    start_nano_with(dir, link, units, &program())
 }
 
-fn spawn_nano(dir: &Path, link: &Path, units: usize) -> Result<Child, String> {
+/// The virtual Nano as [`start_nano`] starts it, autostarting `prog`.
+pub(crate) fn start_nano_with(
+    dir: &Path,
+    link: &Path,
+    units: usize,
+    prog: &utile_core::engine::Program,
+) -> Result<Child, BenchError> {
+    spawn_nano(dir, link, units, prog).map_err(BenchError::Live)
+}
+
+fn spawn_nano(
+    dir: &Path,
+    link: &Path,
+    units: usize,
+    prog: &utile_core::engine::Program,
+) -> Result<Child, String> {
     let vnano = std::env::current_exe()
         .map_err(|e| e.to_string())?
         .with_file_name("vnano");
@@ -72,7 +89,7 @@ fn spawn_nano(dir: &Path, link: &Path, units: usize) -> Result<Child, String> {
             vnano.display()
         ));
     }
-    let eeprom = stored_eeprom(&program(), 1).map_err(|e| format!("STORE: {e:?}"))?;
+    let eeprom = stored_eeprom(prog, 1).map_err(|e| format!("STORE: {e:?}"))?;
     let ee = dir.join("live-bench.eeprom");
     std::fs::write(&ee, eeprom).map_err(|e| e.to_string())?;
     let elf = utile_kit::setup::firmware_elf();
@@ -199,16 +216,16 @@ fn run(nano: &mut Child, link: &Path, units: usize, secs: u32) -> Result<LiveFig
     for i in 0..20u32 {
         let on = i % 2 == 0;
         std::thread::sleep(Duration::from_millis(37 + u64::from(i * 7 % 50)));
-        let (job, _rx) = Job::new(
+        // The asker's end is kept while the click is timed: a job nobody waits for is not
+        // carried out.
+        let (ticket, _asked) = Ticket::new(Job::page(
             1,
             vec![WRITE_SINGLE_COIL, 0, 8, if on { 0xFF } else { 0 }, 0],
-            Origin::Page,
-        );
+        ));
         let t0 = Instant::now();
         running
             .hub
-            .inputs
-            .send(Input::Job(job))
+            .submit(Input::Job(ticket))
             .map_err(|e| e.to_string())?;
         let want = u32::from(on);
         if until(Duration::from_secs(5), || {
@@ -241,7 +258,7 @@ fn run(nano: &mut Child, link: &Path, units: usize, secs: u32) -> Result<LiveFig
 
     // The page's rig button → shown: A0 pressed and released through the API.
     let mut rig_page = Vec::new();
-    let rig_up = || running.hub.view().rig.as_ref().is_some_and(|r| r.connected);
+    let rig_up = || running.app.rig.as_ref().is_some_and(|r| r.view().connected);
     if units == 1 && until(Duration::from_secs(10), rig_up).is_some() {
         for i in 0..20u32 {
             std::thread::sleep(Duration::from_millis(113 + u64::from(i * 13 % 60)));
@@ -286,7 +303,7 @@ fn run(nano: &mut Child, link: &Path, units: usize, secs: u32) -> Result<LiveFig
             rtts.push(t0.elapsed().as_secs_f64() * 1e3);
         }
     }
-    let o = running.hub.tcp.overhead_ms();
+    let o = running.app.gateway.now().tcp_overhead_ms;
     let gateway_ms = (o.mean, o.max);
     drop(running);
     Ok(LiveFigures {
@@ -308,8 +325,7 @@ fn run(nano: &mut Child, link: &Path, units: usize, secs: u32) -> Result<LiveFig
 fn step_to_shown(running: &Running, pace: f64) -> Result<Vec<f64>, String> {
     let scans = || value(running, 1, "scans");
     let snapshots = || running.hub.view().unit(1).map_or(0, |u| u.snapshots);
-    // A page following the events: utile live keeps a hold from the page while one is open.
-    let _page = running.hub.state_json.subscribe();
+    // Held through the API: each step renews the hold's lease.
     post(running.http, "/api/units/1/scan", r#"{"action": "hold"}"#)?;
     // Two pictures read after the hold: the count shown has stopped.
     let seen = snapshots();
@@ -339,7 +355,7 @@ fn post(http: std::net::SocketAddr, path: &str, body: &str) -> Result<(), String
     s.set_nodelay(true).map_err(|e| e.to_string())?;
     write!(
         s,
-        "POST {path} HTTP/1.1\r\nHost: bench\r\nContent-Type: application/json\r\n\
+        "POST {path} HTTP/1.1\r\nHost: {http}\r\nContent-Type: application/json\r\n\
          Content-Length: {}\r\nConnection: close\r\n\r\n{body}",
         body.len()
     )

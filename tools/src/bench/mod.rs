@@ -8,7 +8,8 @@
 //! measurement has no figure), [`programs`] (what they
 //! run), [`stats`] (the spread of a sample), [`isr`] (interrupt handlers' cycles), then the
 //! measurements — [`scan`], [`timing`], [`editor`], [`modbus`], [`live`] (`utile live` on
-//! the virtual Nano), [`live_pages`] (with twenty pages open), [`mqtt`] (three lines into one
+//! the virtual Nano), [`live_pages`] (with twenty pages open), [`live_door`] (requests
+//! another web page could send, refused), [`mqtt`] (three lines into one
 //! broker), [`mqtt_rig`] (a rig switch to its MQTT message) — and [`report`], the rows
 //! of the `bench` binary's table with the original's figures beside them. Section sizes and
 //! symbols come from [`crate::elf`].
@@ -18,6 +19,7 @@ pub mod editor;
 pub mod error;
 pub mod isr;
 pub mod live;
+pub mod live_door;
 pub mod live_pages;
 pub mod modbus;
 pub mod mqtt;

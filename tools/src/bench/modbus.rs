@@ -10,7 +10,7 @@ use std::path::Path;
 
 use utile_core::engine::Program;
 use utile_core::modbus::{READ_HOLDING_REGISTERS, READ_INPUT_REGISTERS, WRITE_MULTIPLE_REGISTERS};
-use utile_kit::simavr::{frame_cycles, Chip, RxPacing};
+use utile_kit::simavr::{frame_cycles, Bus, Chip, RxPacing};
 
 use super::chip::{BenchRun, CYCLES_PER_MS};
 use super::error::BenchError;
@@ -335,34 +335,39 @@ pub fn measure_latency_served(elf: &Path, presses: usize) -> Result<Spread, Benc
     Spread::of(&on).ok_or_else(|| "no presses".into())
 }
 
-/// The reply start of a first request that arrives while the RUN screen is still being
-/// drawn after an autostart (`U0. .Y1 A0. .Y0 KEY END`, the request 200 ms after power-up):
-/// the drawing stops as the request comes in, but what it queued goes out first.
-pub fn measure_first_during_screen(elf: &Path) -> Result<f64, BenchError> {
+/// Moments after power-up (ms) at which [`measure_during_screen`] asks, while the
+/// autostart's RUN screen is being drawn (about a second of it).
+pub const SCREEN_MOMENTS_MS: [u64; 6] = [9, 25, 70, 160, 300, 600];
+
+/// First requests while the RUN screen is still being drawn after an autostart
+/// (`U0. .Y1 A0. .Y0 KEY END`), one chip for each of [`SCREEN_MOMENTS_MS`], on the kit's
+/// bus that judges D10 over each byte's wire time: the reply starts (ms after the request's
+/// last stop bit), and the bytes other than the reply's that were on the line or half on
+/// it (D10 up while a terminal byte was still going out).
+pub fn measure_during_screen(elf: &Path) -> Result<(Spread, usize), BenchError> {
     let prog = program(&["U0.", ".Y1", "A0.", ".Y0", "KEY", "END"]);
-    let mut chip = autostarting(elf, &prog)?;
-    chip.set_rx_pacing(RxPacing::Line { baud: 19_200 });
-    chip.run_rig(200 * CYCLES_PER_MS);
     let c = frame_cycles(19_200);
     let frame = utile_kit::modbus::frame(ADDRESS, &FC03_16);
-    chip.take_output_timed();
-    chip.send_after(0, &frame);
-    let sent = chip.cycle() + frame.len() as u64 * c;
-    let mut got = Vec::new();
-    // The reply is the last thing sent: wait for the line to be quiet for 10 ms.
-    let mut quiet = 0;
-    while quiet < 10 {
-        chip.run_rig(CYCLES_PER_MS);
-        let more = chip.take_output_timed();
-        quiet = if more.is_empty() { quiet + 1 } else { 0 };
-        got.extend(more);
-    }
     let len = reply_len(&FC03_16);
-    if got.len() < len {
-        return Err("no reply".into());
+    let (mut starts, mut stray) = (Vec::new(), 0);
+    for ms in SCREEN_MOMENTS_MS {
+        let chip = autostarting(elf, &prog)?;
+        let mut bus = Bus::new(vec![chip], 19_200).with_driver_enable();
+        bus.run_for(ms * CYCLES_PER_MS);
+        let sent = bus.cycle() + frame.len() as u64 * c;
+        bus.send(&frame);
+        bus.run_for(100 * CYCLES_PER_MS);
+        let got = bus.take_master();
+        stray += got.len().saturating_sub(len) + bus.half_on().len();
+        let Some(reply) = got
+            .get(got.len().saturating_sub(len)..)
+            .filter(|r| r.len() == len)
+        else {
+            return Err(BenchError::NoReply(frame.clone()));
+        };
+        let bytes: Vec<u8> = reply.iter().map(|b| b.byte).collect();
+        utile_kit::modbus::reply_pdu(ADDRESS, &bytes)?;
+        starts.push((reply[0].cycle - c).saturating_sub(sent) as f64 / CYCLES_PER_MS as f64);
     }
-    let reply = &got[got.len() - len..];
-    let bytes: Vec<u8> = reply.iter().map(|&(b, _)| b).collect();
-    utile_kit::modbus::reply_pdu(ADDRESS, &bytes)?;
-    Ok((reply[0].1 - c).saturating_sub(sent) as f64 / CYCLES_PER_MS as f64)
+    Ok((Spread::of(&starts).ok_or("no request")?, stray))
 }

@@ -10,7 +10,7 @@ use serialport::SerialPort;
 pub const BAUD: u32 = 19_200;
 
 /// How long one read waits for a byte.
-const POLL: Duration = Duration::from_millis(20);
+pub const POLL: Duration = Duration::from_millis(20);
 
 /// A failure of the port itself; its cause (the system's words) is its source.
 #[derive(Debug, thiserror::Error)]

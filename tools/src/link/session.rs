@@ -11,6 +11,7 @@ use utile_core::Program;
 use utile_kit::listing;
 
 use super::port::{find, Port, PortError};
+use super::timeouts::Timeouts;
 
 /// The editor's title, on every full screen.
 pub const TITLE: &[u8] = text::TITLE.as_bytes();
@@ -46,9 +47,6 @@ const STORE_FAILED: &[u8] = text::STORE_FAILED.as_bytes();
 
 /// Ctrl-L: the editor draws its whole screen again.
 const REDRAW: u8 = 0x0C;
-/// The longest wait for a whole screen (about 1,100 bytes, 0.6 s at 19200 baud; a time-out
-/// only, with room for a simulation slowed to a fifth of the clock on a loaded machine).
-const DRAWN: Duration = Duration::from_secs(10);
 
 /// How a session starts.
 #[derive(Clone, Copy, Debug)]
@@ -151,6 +149,7 @@ pub type Progress<'a> = &'a mut dyn FnMut(&str);
 pub struct Session {
     port: Port,
     path: String,
+    waits: Timeouts,
 }
 
 /// The text the firmware sent from `from` on, control bytes shown as spaces.
@@ -174,6 +173,25 @@ fn shown(seen: &[u8], from: usize) -> String {
     joined.get(skip..).unwrap_or(&joined).to_string()
 }
 
+/// READ's answer, up to the [`FOR_MENU`] that ends it: the file taken, or refused with the
+/// reason between [`READ_ERROR`] and [`FOR_MENU`]. Bytes garbled on the line (a reason lost,
+/// the two texts overlapping) make a strange answer in words, never a slice out of range.
+fn read_answer(answer: &[u8]) -> Result<(), LinkError> {
+    if find(answer, READ_DONE).is_some() {
+        return Ok(());
+    }
+    let why = find(answer, READ_ERROR).and_then(|at| {
+        let end = answer.len().checked_sub(FOR_MENU.len())?;
+        answer.get(at + READ_ERROR.len()..end)
+    });
+    match why {
+        Some(why) if !why.is_empty() => Err(LinkError::Refused(
+            String::from_utf8_lossy(why).into_owned(),
+        )),
+        _ => Err(LinkError::StrangeAnswer(shown(answer, 0))),
+    }
+}
+
 impl Session {
     /// Opens `path`, waits out the boot loader and finds the editor's page. Refuses a
     /// running program unless `opts.stop`, and says so when nothing answers.
@@ -185,12 +203,13 @@ impl Session {
         let mut s = Session {
             port,
             path: path.to_string(),
+            waits: Timeouts::default(),
         };
         let first = s.port.wait_for(0, &[TITLE], opts.boot_wait)?.is_some();
         if first {
             // The rest of the first screen (about 0.7 s at 19200 baud).
-            s.port
-                .settle(Duration::from_millis(300), Duration::from_secs(3))?;
+            let (quiet, max) = s.waits.first_screen;
+            s.port.settle(quiet, max)?;
             if find(&s.port.seen, RUNNING).is_some() {
                 if !opts.stop {
                     return Err(LinkError::Running(path.into()));
@@ -214,6 +233,7 @@ impl Session {
         let mut s = Session {
             port,
             path: path.to_string(),
+            waits: Timeouts::default(),
         };
         if running {
             // `/` and a key leave the editor at its page: nothing to redraw.
@@ -244,7 +264,7 @@ impl Session {
         self.port.send(&[REDRAW])?;
         if self
             .port
-            .wait_for(from, &[TITLE], Duration::from_millis(1500))?
+            .wait_for(from, &[TITLE], self.waits.title)?
             .is_none()
         {
             if opts.stop {
@@ -260,9 +280,9 @@ impl Session {
             }
             return Err(LinkError::NoAnswer(self.path.clone()));
         }
-        let page = self.port.wait_for(from, &[PAGE], DRAWN)?;
+        let page = self.port.wait_for(from, &[PAGE], self.waits.drawn)?;
         let parked = match page {
-            Some((_, end)) => self.wait_parked(end, DRAWN)?,
+            Some((_, end)) => self.wait_parked(end)?,
             None => None,
         };
         if parked.is_none() {
@@ -276,15 +296,16 @@ impl Session {
     }
 
     /// Waits for the cursor parked at the prompt after offset `from` (the end of what the
-    /// editor draws for a key on its page); the offset past it, or `None` after `timeout`.
-    fn wait_parked(&mut self, from: usize, timeout: Duration) -> Result<Option<usize>, LinkError> {
-        let Some((_, at)) = self.port.wait_for(from, &[PARK], timeout)? else {
+    /// editor draws for a key on its page); the offset past it, or `None` when the screen
+    /// does not end so in time.
+    fn wait_parked(&mut self, from: usize) -> Result<Option<usize>, LinkError> {
+        let Some((_, at)) = self.port.wait_for(from, &[PARK], self.waits.drawn)? else {
             return Ok(None);
         };
         // The column's digits and `H`: a few bytes.
         Ok(self
             .port
-            .wait_for(at, &[b"H"], Duration::from_secs(1))?
+            .wait_for(at, &[b"H"], self.waits.parked)?
             .map(|(_, end)| end))
     }
 
@@ -295,14 +316,11 @@ impl Session {
         progress("stopping the running program (--stop)");
         let from = self.port.seen.len();
         self.port.send(b"/")?;
-        let Some((_, struck)) = self
-            .port
-            .wait_for(from, &[STRIKE], Duration::from_secs(2))?
-        else {
+        let Some((_, struck)) = self.port.wait_for(from, &[STRIKE], self.waits.strike)? else {
             return Err(LinkError::DidNotStop(self.path.clone()));
         };
         self.port.send(b" ")?;
-        if self.wait_parked(struck, DRAWN)?.is_none() {
+        if self.wait_parked(struck)?.is_none() {
             return Err(LinkError::NoAnswerTo {
                 cmd: "a key after `/`",
                 shows: shown(&self.port.seen, from),
@@ -319,7 +337,7 @@ impl Session {
         self.port.send(format!("{cmd}\r").as_bytes())?;
         match self
             .port
-            .wait_for(from, &[expect, UNRECOGNIZED], Duration::from_secs(5))?
+            .wait_for(from, &[expect, UNRECOGNIZED], self.waits.answer)?
         {
             Some((0, end)) => Ok(end),
             Some(_) => Err(LinkError::NotTaken(cmd)),
@@ -331,10 +349,10 @@ impl Session {
     }
 
     /// The end of READ's or WRITE's screen after offset `from`: its status line, then the
-    /// cursor put at `ready`. Not seen within [`DRAWN`], the screen is taken as drawn: the
-    /// prompt already said the command was taken.
+    /// cursor put at `ready`. Not seen in time, the screen is taken as drawn: the prompt
+    /// already said the command was taken.
     fn transfer_screen(&mut self, from: usize, ready: &[u8]) -> Result<(), LinkError> {
-        let wait = DRAWN;
+        let wait = self.waits.drawn;
         if let Some((_, end)) = self.port.wait_for(from, &[TRANSFER], wait)? {
             self.port.wait_for(end, &[ready], wait)?;
         }
@@ -345,10 +363,10 @@ impl Session {
     fn back_to_page(&mut self, progress: Progress) -> Result<(), LinkError> {
         let from = self.port.seen.len();
         self.port.send(b"\r")?;
-        let Some((_, end)) = self.port.wait_for(from, &[PAGE], DRAWN)? else {
+        let Some((_, end)) = self.port.wait_for(from, &[PAGE], self.waits.drawn)? else {
             return Err(LinkError::NotBackToPage);
         };
-        if self.wait_parked(end, DRAWN)?.is_none() {
+        if self.wait_parked(end)?.is_none() {
             return Err(LinkError::NotBackToPage);
         }
         progress(&format!(
@@ -395,21 +413,13 @@ impl Session {
             file.len()
         ));
         // READ checks the file, drains 200 ms of quiet, then shows its result.
-        let Some((_, end)) = self.port.wait_for(from, &[FOR_MENU], DRAWN)? else {
+        let Some((_, end)) = self.port.wait_for(from, &[FOR_MENU], self.waits.drawn)? else {
             return Err(LinkError::NotConfirmed(shown(&self.port.seen, from)));
         };
-        let answer = &self.port.seen[from..end];
-        let result = if find(answer, READ_DONE).is_some() {
+        let result = read_answer(&self.port.seen[from..end]);
+        if result.is_ok() {
             progress("READ took the file");
-            Ok(())
-        } else if let Some(at) = find(answer, READ_ERROR) {
-            let why = &answer[at + READ_ERROR.len()..answer.len() - FOR_MENU.len()];
-            Err(LinkError::Refused(
-                String::from_utf8_lossy(why).into_owned(),
-            ))
-        } else {
-            Err(LinkError::StrangeAnswer(shown(answer, 0)))
-        };
+        }
         self.back_to_page(progress)?;
         result?;
         Ok(hex)
@@ -422,10 +432,7 @@ impl Session {
         self.transfer_screen(prompt, WRITE_READY)?;
         let from = self.port.seen.len();
         self.port.send(b"\r")?;
-        let Some((_, end)) = self
-            .port
-            .wait_for(from, &[EOF_RECORD], Duration::from_secs(5))?
-        else {
+        let Some((_, end)) = self.port.wait_for(from, &[EOF_RECORD], self.waits.answer)? else {
             return Err(LinkError::NoEndOfFile(shown(&self.port.seen, from)));
         };
         // The records, from the first ':' on, one per line as WRITE sent them.
@@ -456,7 +463,7 @@ impl Session {
         match self.port.wait_for(
             from,
             &[STORED, STORE_FAILED, UNRECOGNIZED],
-            Duration::from_secs(5),
+            self.waits.answer,
         )? {
             Some((0, _)) => {
                 progress("stored");
@@ -521,6 +528,29 @@ mod tests {
             return false;
         };
         t < p && out.ends_with(b"H") && out.len() - p <= PARK.len() + 3
+    }
+
+    #[test]
+    fn a_garbled_read_answer_is_told_in_words_never_a_panic() {
+        let refused = [READ_ERROR, b"checksum", FOR_MENU].concat();
+        assert!(matches!(read_answer(&refused), Err(LinkError::Refused(w)) if w == "checksum"));
+        let done = [b"\x1b[24;2H".as_slice(), READ_DONE, FOR_MENU].concat();
+        assert!(read_answer(&done).is_ok());
+        // The reason lost on the line: the error's " - " is the menu's, the indices cross.
+        let garbled = [READ_ERROR, FOR_MENU].concat();
+        let garbled = &garbled[..];
+        let crossed = [&b"Read error! - 'CR' for menu -->"[..], garbled];
+        for answer in crossed {
+            match read_answer(answer) {
+                Err(LinkError::StrangeAnswer(shown)) => assert!(shown.contains("Read error")),
+                other => panic!("{:?}: {other:?}", String::from_utf8_lossy(answer)),
+            }
+        }
+        // Every cut of a refusal, as a garbled line may leave it, ending with the menu's text.
+        for cut in 0..refused.len() {
+            let answer = [&refused[cut..], FOR_MENU].concat();
+            let _ = read_answer(&answer);
+        }
     }
 
     #[test]

@@ -1,8 +1,10 @@
 //! The JSON API's documents besides the view itself (a program's listing is
 //! [`Listing`](super::view::Listing)): a write's body and answer, the trend, and the one error
-//! type. Every failure, axum's own rejections included (a path that names no address, a body
-//! that is not JSON), is answered as `{"error": "…"}` with its status, in words the page
-//! shows as they are.
+//! type, [`ApiError`], with one [`IntoResponse`] (as axum's error-handling example): every
+//! failure of every route, axum's own rejections included (a path that names no address, a
+//! body that is not JSON), the line's ([`Failure`]), a send's ([`SendFailure`]), a hold's
+//! ([`ScanError`]) and the rig's ([`RigError`]), is answered as `{"error": "…"}` with its
+//! status, in words the page shows as they are (a listing's mistake adds its `"line"`).
 
 use axum::extract::rejection::{JsonRejection, PathRejection};
 use axum::http::StatusCode;
@@ -13,15 +15,60 @@ use serde_json::Value;
 
 use utile_core::modbus::MAX_ADDRESS;
 
-use super::queue::Failure;
+use super::hold::ScanError;
+use super::job::{Failure, SendFailure};
+use super::lease::{BadPage, TooManyPages};
 use super::rtu::exception_text;
 use super::signals::Refused;
 
-/// `{"error": "…"}`.
+/// `{"error": "…"}`, and for a listing's mistake its line.
 #[derive(Debug, Serialize, Deserialize)]
 pub struct ErrorDoc {
     /// What went wrong, and what the user can do.
     pub error: String,
+    /// The listing's line the mistake is on, 1-based (a send's refused listing).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub line: Option<usize>,
+}
+
+/// Why a request to the virtual rig failed (`--rig`).
+#[derive(Debug, thiserror::Error)]
+pub enum RigError {
+    /// `utile live` has no `--rig`.
+    #[error(
+        "no rig: this utile live was started without --rig PATH (the virtual Nano's \
+         --control socket; ./x run --live wires it)"
+    )]
+    NoRig,
+    /// The socket does not answer.
+    #[error("the rig does not answer: {0}")]
+    NotConnected(String),
+    /// Too many requests wait for the rig.
+    #[error("too many requests are waiting for the rig: nothing was sent; try again")]
+    Busy,
+    /// The body is no rig request.
+    #[error(
+        "a rig request is one JSON object of press, release (switches 0..5), a6, a7 (volts), \
+         d8, d9 (true or false), reset, e.g. {{\"press\": 0}}: {0}"
+    )]
+    NotARequest(String),
+    /// The page named the Nano itself.
+    #[error("the uTile's address picks its Nano: leave \"nano\" out")]
+    NanoGiven,
+    /// The bus has no Nano at the uTile's address.
+    #[error("the rig's bus has no Nano at address {addr} (Nanos 1..{nanos})")]
+    NoNano {
+        /// The uTile's address.
+        addr: u8,
+        /// How many Nanos the rig has.
+        nanos: usize,
+    },
+    /// The rig refused the request (nothing changed).
+    #[error("the rig refused it: {0}")]
+    Refused(String),
+    /// No answer in time (within this many seconds).
+    #[error("the rig did not answer within {0} s")]
+    NoAnswer(u64),
 }
 
 /// Why a request to the API failed.
@@ -59,27 +106,59 @@ pub enum ApiError {
     /// `--read-only`, for keys.
     #[error("read-only: keys are refused")]
     ReadOnlyKeys,
-    /// The line's owner is gone.
-    #[error("the line has stopped")]
-    LineStopped,
-    /// The line did not carry it out.
-    #[error("{}", .0.text())]
-    Line(Failure),
-    /// The line did not get to it in time.
-    #[error("the line did not get to it")]
-    LineTimeout,
+    /// Keys sent as JSON that is not `{"keys": "…"}`.
+    #[error("keys as JSON are {{\"keys\": \"EX0\\r\"}}: {0}")]
+    KeysBody(String),
+    /// The line did not carry the request out, or got no reply.
+    #[error(transparent)]
+    Line(#[from] Failure),
     /// The uTile answered with an exception.
-    #[error("uTile {addr} refused {signal} = {value}: {}", exception_text(*code))]
+    #[error("uTile {addr} refused {what}: {}", exception_text(*code))]
     Exception {
         /// The uTile.
         addr: u8,
-        /// The signal written.
-        signal: String,
-        /// The value.
-        value: i64,
+        /// What was asked (`U0 = 5`, `hold`).
+        what: String,
         /// The exception code.
         code: u8,
     },
+    /// A write that is never sent twice (a step) got no answer: it may have landed.
+    #[error("uTile {addr} did not answer {what}: it may have been carried out (it is never sent twice); the card shows what it did")]
+    Unanswered {
+        /// The uTile.
+        addr: u8,
+        /// What was asked (`step 10`).
+        what: String,
+    },
+    /// A hold, run or step refused before anything was sent.
+    #[error(transparent)]
+    Scan(#[from] ScanError),
+    /// A listing to send has a mistake: nothing was sent.
+    #[error("line {line}: {message} (nothing was sent)")]
+    Listing {
+        /// The first mistake's line, 1-based.
+        line: usize,
+        /// `utile asm`'s words.
+        message: String,
+    },
+    /// A send failed on the line.
+    #[error(transparent)]
+    Send(#[from] SendFailure),
+    /// The rig refused or did not answer.
+    #[error(transparent)]
+    Rig(#[from] RigError),
+    /// A page named itself wrongly (`?page=`, `"page"`).
+    #[error(transparent)]
+    Page(#[from] BadPage),
+    /// Too many pages follow the events.
+    #[error(transparent)]
+    TooManyPages(#[from] TooManyPages),
+    /// The state could not be written as JSON (a bug).
+    #[error("the state cannot be serialized: {0}")]
+    Unserializable(String),
+    /// Refused at the door: what another web page could send (`origin.rs`).
+    #[error(transparent)]
+    Door(#[from] super::origin::Refused),
     /// No such route.
     #[error("there is no {0} in this API: see docs/LIVE.md")]
     NoRoute(String),
@@ -92,22 +171,42 @@ impl ApiError {
     /// The HTTP status.
     pub fn status(&self) -> StatusCode {
         match self {
-            ApiError::NoUnit(_) | ApiError::NoProgram | ApiError::NoRoute(_) => {
-                StatusCode::NOT_FOUND
-            }
+            ApiError::NoUnit(_)
+            | ApiError::NoProgram
+            | ApiError::NoRoute(_)
+            | ApiError::Rig(RigError::NoRig | RigError::NoNano { .. }) => StatusCode::NOT_FOUND,
             ApiError::BadAddress(_)
             | ApiError::BadPath(_)
             | ApiError::NotANumber(_)
-            | ApiError::Refused(_) => StatusCode::BAD_REQUEST,
+            | ApiError::KeysBody(_)
+            | ApiError::Refused(_)
+            | ApiError::Scan(ScanError::Action(_) | ScanError::Steps(_))
+            | ApiError::Listing { .. }
+            | ApiError::Page(_)
+            | ApiError::Rig(
+                RigError::NotARequest(_) | RigError::NanoGiven | RigError::Refused(_),
+            ) => StatusCode::BAD_REQUEST,
             ApiError::BadBody { status, .. } => *status,
             ApiError::ReadOnly | ApiError::ReadOnlyKeys => StatusCode::FORBIDDEN,
-            ApiError::LineStopped => StatusCode::SERVICE_UNAVAILABLE,
-            ApiError::Line(Failure::Editing) => StatusCode::CONFLICT,
-            ApiError::Line(Failure::NoAnswer) | ApiError::LineTimeout => {
-                StatusCode::GATEWAY_TIMEOUT
+            ApiError::Line(Failure::Editing)
+            | ApiError::Scan(ScanError::NoHold)
+            | ApiError::Send(SendFailure::Bus(_) | SendFailure::NoKey) => StatusCode::CONFLICT,
+            ApiError::Line(Failure::NoAnswer)
+            | ApiError::Unanswered { .. }
+            | ApiError::Send(SendFailure::NoAnswer(_) | SendFailure::Lost(_))
+            | ApiError::Rig(RigError::NoAnswer(_)) => StatusCode::GATEWAY_TIMEOUT,
+            ApiError::Line(
+                Failure::PortClosed | Failure::Busy | Failure::Stopped | Failure::NotTaken(_),
+            )
+            | ApiError::TooManyPages(_)
+            | ApiError::Rig(RigError::NotConnected(_) | RigError::Busy) => {
+                StatusCode::SERVICE_UNAVAILABLE
             }
-            ApiError::Line(_) => StatusCode::SERVICE_UNAVAILABLE,
-            ApiError::Exception { .. } => StatusCode::UNPROCESSABLE_ENTITY,
+            ApiError::Exception { .. } | ApiError::Send(SendFailure::Refused(_)) => {
+                StatusCode::UNPROCESSABLE_ENTITY
+            }
+            ApiError::Unserializable(_) => StatusCode::INTERNAL_SERVER_ERROR,
+            ApiError::Door(r) => r.status(),
             ApiError::Method(_) => StatusCode::METHOD_NOT_ALLOWED,
         }
     }
@@ -119,13 +218,12 @@ impl IntoResponse for ApiError {
         if status.is_server_error() {
             tracing::warn!(%status, error = %self, "an API request failed");
         }
-        (
-            status,
-            Json(ErrorDoc {
-                error: self.to_string(),
-            }),
-        )
-            .into_response()
+        let line = match &self {
+            ApiError::Listing { line, .. } => Some(*line),
+            _ => None,
+        };
+        let error = self.to_string();
+        (status, Json(ErrorDoc { error, line })).into_response()
     }
 }
 
@@ -188,6 +286,14 @@ pub struct WriteDone {
     pub waited_ms: f64,
     /// Its time on the line, ms.
     pub on_line_ms: f64,
+}
+
+/// `POST /api/terminal`'s body as JSON (`Content-Type: application/json`): the keys as text.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KeysBody {
+    /// What is typed, e.g. `"EX0\r"`.
+    pub keys: String,
 }
 
 /// Keys sent.

@@ -8,6 +8,7 @@ use clap::Parser;
 
 use super::allow::Cidr;
 use super::mqtt::options::Flags;
+use super::origin::host_name;
 use crate::cli::{socket_address, BootWait};
 
 /// The examples under `utile live --help`.
@@ -21,12 +22,13 @@ Examples:
   utile live --port /dev/ttyUSB0 --http 0.0.0.0:8080 --tcp 0.0.0.0:1502 --tcp-allow 192.168.1.0/24
   utile live --port /dev/ttyUSB0 --mqtt mqtt://127.0.0.1 --ha-discovery --mqtt-commands
 
-Beyond loopback (docs/LIVE.md, Security): the page needs a token (printed at start, or
---token-file FILE) for every write, and for reads unless --public-read; the gateway needs
---tcp-allow with its clients' networks.";
+Security (docs/LIVE.md): no other web page can act here (its Host and Origin are checked;
+--allow-host NAME lets a reverse proxy's name in). Beyond loopback the page needs a token
+(printed at start, or --token-file FILE) for every write, and for reads unless --public-read;
+the gateway needs --tcp-allow with its clients' networks.";
 
-/// The help's heading for the flags beyond loopback.
-const SECURITY: &str = "Beyond loopback (docs/LIVE.md, Security)";
+/// The help's heading for the security flags.
+const SECURITY: &str = "Security (docs/LIVE.md)";
 
 /// `utile live`: every uTile on the line live in the browser, the terminal beside it, a
 /// Modbus TCP gateway.
@@ -79,6 +81,10 @@ pub struct LiveArgs {
     #[arg(long, value_name = "CIDR,...", value_delimiter = ',', num_args = 1,
           value_parser = Cidr::parse, conflicts_with = "no_tcp", help_heading = SECURITY)]
     pub tcp_allow: Vec<Cidr>,
+    /// Answer to this host name too (a reverse proxy's), besides localhost, 127.0.0.1, [::1]
+    #[arg(long, value_name = "NAME,...", value_delimiter = ',', num_args = 1,
+          value_parser = host_name, help_heading = SECURITY)]
+    pub allow_host: Vec<String>,
 }
 
 /// Options of one run.
@@ -110,6 +116,8 @@ pub struct Options {
     pub public_read: bool,
     /// `--tcp-allow`: the networks the gateway takes clients from.
     pub tcp_allow: Vec<Cidr>,
+    /// `--allow-host`: names the page answers to besides this computer's own.
+    pub allow_host: Vec<String>,
 }
 
 impl From<LiveArgs> for Options {
@@ -137,6 +145,7 @@ impl From<LiveArgs> for Options {
             token_file: a.token_file,
             public_read: a.public_read,
             tcp_allow: a.tcp_allow,
+            allow_host: a.allow_host,
         }
     }
 }
@@ -231,6 +240,13 @@ mod tests {
         let o = parse(&words("--port p --tcp-allow 10.0.0.0/8,192.168.1.7")).unwrap();
         assert_eq!(o.tcp_allow.len(), 2);
         assert!(parse(&words("--port p --no-tcp --tcp-allow 10.0.0.0/8")).is_err());
+        let o = parse(&words(
+            "--port p --allow-host plc.example,PLC2.lan --allow-host 10.0.0.7",
+        ))
+        .unwrap();
+        assert_eq!(o.allow_host, ["plc.example", "plc2.lan", "10.0.0.7"]);
+        let e = parse(&words("--port p --allow-host plc.example:443")).unwrap_err();
+        assert!(e.to_string().contains("without a port"), "{e}");
         for stray in [
             "--mqtt-commands",
             "--ha-discovery",

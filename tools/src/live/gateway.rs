@@ -2,24 +2,98 @@
 //! framing; each request goes, as an RTU request to the slave its unit id names, into the one
 //! queue in front of the line, and the reply comes back as the uTile gave it (any function
 //! code, exceptions included). A uTile that does not answer gives exception 0x0B, as
-//! gateways do; `--read-only` refuses every write with exception 01.
+//! gateways do; a line too busy to take the request within [`WAIT`], exception 06 (nothing
+//! was sent); `--read-only` refuses every write with exception 01. The gateway owns its
+//! counters and publishes them ([`Counters`], a `watch`) for the state's `line.tcp_…`.
 
 use std::future::Future;
 use std::net::SocketAddr;
 use std::pin::Pin;
 use std::sync::Arc;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
+use serde::Serialize;
 use tokio::net::TcpListener;
+use tokio::sync::watch;
 use tokio_modbus::bytes::Bytes;
 use tokio_modbus::server::tcp::Server;
 use tokio_modbus::{ExceptionCode, Request, Response, SlaveRequest};
 use utile_core::modbus::{BROADCAST, MAX_ADDRESS};
 
 use super::allow::{self, Cidr};
-use super::hub::{Hub, Input};
-use super::queue::{Failure, Job, Origin};
+use super::hub::Hub;
+use super::job::{Failure, Job};
 use super::rtu;
+
+/// The longest a request waits for the line to take it (then exception 06, nothing sent).
+const WAIT: Duration = Duration::from_secs(5);
+
+/// A mean and a largest figure.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct Overhead {
+    /// The mean.
+    pub mean: f64,
+    /// The largest.
+    pub max: f64,
+}
+
+/// The gateway's figures, as the state shows them beside the line's (`line.tcp_…`).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Figures {
+    /// Connections open now.
+    pub tcp_clients: u64,
+    /// Requests carried out.
+    pub tcp_requests: u64,
+    /// Requests refused (read-only, an address outside 1..247, no answer, busy).
+    pub tcp_refused: u64,
+    /// Clients refused: not in `--tcp-allow`'s networks.
+    pub tcp_refused_clients: u64,
+    /// What the gateway added to its requests beyond the wait for the line and the time on
+    /// it, ms.
+    pub tcp_overhead_ms: Overhead,
+    /// The overheads' sum, ms.
+    #[serde(skip)]
+    overhead_sum_ms: f64,
+}
+
+/// The gateway's counters: its tasks count, whoever shows them follows the `watch`.
+#[derive(Debug)]
+pub struct Counters(watch::Sender<Figures>);
+
+impl Default for Counters {
+    fn default() -> Self {
+        Counters(watch::channel(Figures::default()).0)
+    }
+}
+
+impl Counters {
+    /// The figures as they change.
+    pub fn figures(&self) -> watch::Receiver<Figures> {
+        self.0.subscribe()
+    }
+
+    /// The figures now.
+    pub fn now(&self) -> Figures {
+        self.0.borrow().clone()
+    }
+
+    fn count(&self, change: impl FnOnce(&mut Figures)) {
+        self.0.send_modify(change);
+    }
+
+    /// One request carried out, and what the gateway added to it.
+    fn carried_out(&self, overhead: Duration) {
+        let ms = overhead.as_secs_f64() * 1e3;
+        self.count(|f| {
+            f.tcp_requests += 1;
+            f.overhead_sum_ms += ms;
+            f.tcp_overhead_ms = Overhead {
+                mean: f.overhead_sum_ms / f.tcp_requests as f64,
+                max: f.tcp_overhead_ms.max.max(ms),
+            };
+        });
+    }
+}
 
 /// The RTU PDU of a request as the TCP client sent it.
 pub fn request_pdu(req: &Request<'_>) -> Vec<u8> {
@@ -86,13 +160,13 @@ pub fn request_pdu(req: &Request<'_>) -> Vec<u8> {
 /// One TCP connection's service.
 struct Gateway {
     hub: Arc<Hub>,
+    counters: Arc<Counters>,
     peer: SocketAddr,
 }
 
 impl Drop for Gateway {
     fn drop(&mut self) {
-        let tcp = &self.hub.tcp;
-        tcp.count(&tcp.clients, -1);
+        self.counters.count(|f| f.tcp_clients -= 1);
         tracing::debug!(peer = %self.peer, "a gateway client left");
     }
 }
@@ -106,19 +180,18 @@ impl tokio_modbus::server::Service for Gateway {
     type Future = Pin<Box<dyn Future<Output = Reply> + Send>>;
 
     fn call(&self, req: Self::Request) -> Self::Future {
-        let hub = self.hub.clone();
-        Box::pin(async move { forward(&hub, req).await })
+        let (hub, counters) = (self.hub.clone(), self.counters.clone());
+        Box::pin(async move { forward(&hub, &counters, req).await })
     }
 }
 
 /// Carries one request through the line's queue.
-async fn forward(hub: &Hub, req: SlaveRequest<'static>) -> Reply {
+async fn forward(hub: &Hub, counters: &Counters, req: SlaveRequest<'static>) -> Reply {
     let t0 = Instant::now();
     let pdu = request_pdu(&req.request);
     let function = pdu[0];
-    let tcp = &hub.tcp;
     let refuse = |code| {
-        tcp.count(&tcp.refused, 1);
+        counters.count(|f| f.tcp_refused += 1);
         Err(code)
     };
     if req.slave == BROADCAST || req.slave > MAX_ADDRESS {
@@ -128,20 +201,21 @@ async fn forward(hub: &Hub, req: SlaveRequest<'static>) -> Reply {
     if hub.read_only && rtu::is_write(function) {
         return refuse(ExceptionCode::IllegalFunction);
     }
-    let (job, rx) = Job::new(req.slave, pdu, Origin::Gateway);
-    if hub.inputs.send(Input::Job(job)).is_err() {
-        tracing::warn!("a gateway request found the line stopped");
-        return refuse(ExceptionCode::GatewayPathUnavailable);
-    }
-    let done = match rx.await {
-        Ok(Ok(done)) => done,
-        Ok(Err(Failure::Busy)) => return refuse(ExceptionCode::ServerDeviceBusy),
-        Ok(Err(_)) | Err(_) => return refuse(ExceptionCode::GatewayTargetDevice),
+    let done = match hub.ask(Job::gateway(req.slave, pdu), WAIT).await {
+        Ok(done) => done,
+        Err(Failure::Busy | Failure::NotTaken(_)) => {
+            return refuse(ExceptionCode::ServerDeviceBusy)
+        }
+        Err(Failure::Stopped) => {
+            tracing::warn!("a gateway request found the line stopped");
+            return refuse(ExceptionCode::GatewayPathUnavailable);
+        }
+        Err(Failure::NoAnswer | Failure::Editing | Failure::PortClosed) => {
+            return refuse(ExceptionCode::GatewayTargetDevice)
+        }
     };
     // What the gateway itself adds: all but the wait for the line and the time on it.
-    let overhead = t0.elapsed().saturating_sub(done.waited + done.on_line);
-    tcp.overhead(overhead);
-    tcp.count(&tcp.requests, 1);
+    counters.carried_out(t0.elapsed().saturating_sub(done.waited + done.on_line));
     let Some((&f, data)) = done.pdu.split_first() else {
         return Err(ExceptionCode::ServerDeviceFailure);
     };
@@ -151,25 +225,37 @@ async fn forward(hub: &Hub, req: SlaveRequest<'static>) -> Reply {
     Ok(Response::Custom(f, Bytes::copy_from_slice(data)))
 }
 
-/// Serves Modbus TCP on `listener` until the program ends; a client from outside `allow`
-/// (when given) has its connection closed at once and is counted.
-pub async fn serve(listener: TcpListener, hub: Arc<Hub>, allow: Vec<Cidr>) -> std::io::Result<()> {
+/// Serves Modbus TCP on `listener` until the program ends, counting in `counters`; a client
+/// from outside `allow` (when given) has its connection closed at once and is counted.
+pub async fn serve(
+    listener: TcpListener,
+    hub: Arc<Hub>,
+    allow: Vec<Cidr>,
+    counters: Arc<Counters>,
+) -> std::io::Result<()> {
     let server = Server::new(listener);
     let on_connected = |stream, peer: SocketAddr| {
-        let hub = hub.clone();
+        let (hub, counters) = (hub.clone(), counters.clone());
         let allowed = allow::allowed(&allow, peer.ip());
         async move {
             if !allowed {
-                hub.tcp.count(&hub.tcp.refused_clients, 1);
+                counters.count(|f| f.tcp_refused_clients += 1);
                 tracing::info!(%peer, "a gateway client outside --tcp-allow refused");
                 return Ok(None);
             }
-            hub.tcp.count(&hub.tcp.clients, 1);
+            counters.count(|f| f.tcp_clients += 1);
             tracing::debug!(%peer, "a gateway client connected");
             if let Err(e) = tokio::net::TcpStream::set_nodelay(&stream, true) {
                 tracing::debug!(%peer, error = %e, "no TCP_NODELAY: replies may wait");
             }
-            Ok(Some((Gateway { hub, peer }, stream)))
+            Ok(Some((
+                Gateway {
+                    hub,
+                    counters,
+                    peer,
+                },
+                stream,
+            )))
         }
     };
     // A client that sends garbage loses its connection; the others go on.

@@ -51,10 +51,11 @@ pub enum GuardError {
         /// Why.
         source: std::io::Error,
     },
-    /// `--token-file`'s token is too short or has characters a cookie cannot carry.
+    /// The token is too short or has characters the URL, a paste or the cookie would change.
     #[error(
-        "--token-file {0}: the token must be at least 16 printable characters without spaces \
-         or ';'"
+        "{0}: the token must be at least 16 characters, each a letter (A-Z, a-z), a digit, \
+         '-', '.', '_' or '~': others do not go through the page's URL, a paste and the \
+         cookie unchanged"
     )]
     Unfit(String),
 }
@@ -70,6 +71,22 @@ struct TokenNeeded {
 #[derive(Debug, Serialize)]
 struct TokenTaken {
     ok: bool,
+}
+
+/// `token` (from `whence`) when every character goes through the URL printed at start (as
+/// `?token=`, read by the server without decoding), the page's paste (sent
+/// `encodeURIComponent`ed) and the cookie unchanged: URL's unreserved characters (RFC 3986),
+/// at least 16.
+fn fit(token: &str, whence: &str) -> Result<String, GuardError> {
+    let fits = token.len() >= 16
+        && token
+            .bytes()
+            .all(|b| b.is_ascii_alphanumeric() || b"-._~".contains(&b));
+    if fits {
+        Ok(token.to_string())
+    } else {
+        Err(GuardError::Unfit(whence.to_string()))
+    }
 }
 
 /// A new random token: 128 bits from the system's generator, in hex.
@@ -102,14 +119,9 @@ impl Guard {
                     file: f.to_string(),
                     source,
                 })?;
-                let t = t.trim().to_string();
-                let fits = t.len() >= 16 && t.bytes().all(|b| b.is_ascii_graphic() && b != b';');
-                if !fits {
-                    return Err(GuardError::Unfit(f.to_string()));
-                }
-                t
+                fit(t.trim(), &format!("--token-file {f}"))?
             }
-            None => new_token()?,
+            None => fit(&new_token()?, "the new token")?,
         };
         Ok(Guard {
             token: Some(token),
@@ -236,5 +248,26 @@ mod tests {
             format!("http://pi:8080/?token={t}")
         );
         assert!(same("abc", "abc") && !same("abc", "abd") && !same("abc", "ab"));
+    }
+
+    #[test]
+    fn a_token_has_only_what_the_url_the_paste_and_the_cookie_carry() {
+        assert!(fit("a-token_kept.in~a-file-42", "f").is_ok());
+        for bad in [
+            "short",
+            "token+with+plus+signs",
+            "token&and=more-things",
+            "token%20percent-x",
+            "token#with-a-hash-x",
+            "token\"quoted\"-xxxxx",
+            "token,comma,separated",
+            "token\\backslash-xxxx",
+            "token;semicolon-xxxx",
+            "token with spaces-xx",
+            "tökén-with-accents-x",
+        ] {
+            let e = fit(bad, "--token-file t").unwrap_err().to_string();
+            assert!(e.contains("'-', '.', '_' or '~'"), "{bad}: {e}");
+        }
     }
 }

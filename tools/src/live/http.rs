@@ -1,7 +1,9 @@
 //! The web server (axum): the page's files, the JSON API, the server-sent events that carry
 //! every change, writes by POST, and the terminal's WebSocket. docs/LIVE.md documents the API.
 //! Every handler reads the latest published view (never a lock the line waits on); the
-//! events carry the state as serialized once per change, the same bytes for every page.
+//! events carry the state as serialized once per change, the same bytes for every page. The
+//! state is the line's view with the figures of the parts that publish their own beside it
+//! (the gateway's counters, the rig's state), each from its owner's `watch`.
 
 use std::convert::Infallible;
 use std::sync::Arc;
@@ -10,35 +12,103 @@ use std::time::{Duration, Instant};
 use axum::body::Bytes;
 use axum::extract::rejection::{JsonRejection, PathRejection};
 use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
-use axum::extract::{Path, State};
-use axum::http::{header, Method, StatusCode, Uri};
+use axum::extract::{FromRef, Path, Query, State};
+use axum::http::{header, HeaderMap, Method, StatusCode, Uri};
 use axum::response::sse::{Event, KeepAlive, Sse};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
 use axum::{Json, Router};
 use futures_util::stream::{self, Stream};
+use serde::{Deserialize, Serialize};
+use tokio::sync::mpsc;
 
-use super::api::{ApiError, KeysSent, TrendDoc, WriteBody, WriteDone};
+use super::api::{ApiError, KeysBody, KeysSent, TrendDoc, WriteBody, WriteDone};
 use super::assets;
 use super::check;
-use super::hub::{Hub, Input};
+use super::gateway::{Counters, Figures};
+use super::hub::Hub;
+use super::job::{Done, Job, TAKEN_WAIT};
 use super::ladder;
-use super::queue::{Done, Job, Origin};
-use super::rig;
+use super::lease::PageId;
+use super::origin::{self, Door};
+use super::rig::{self, Rig, RigView};
 use super::rtu;
 use super::scan_control;
 use super::send;
 use super::signals::{self, SIGNALS};
 use super::unit::TREND_STEP;
-use super::view::{View, TREND_SIGNALS};
+use super::view::{LineFigures, View, TREND_SIGNALS};
 
 /// The events are sent at most this often (the line refreshes a uTile about every 53 ms).
 const EVENT_GAP: Duration = Duration::from_millis(20);
-/// The longest a page's write waits for the line.
+/// The longest a page's write (or keys) waits for the line to take it.
 const WRITE_WAIT: Duration = Duration::from_secs(5);
 
-/// The routes: one line each (hold and step, a program sent, a rig panel go here too).
-pub fn router(hub: Arc<Hub>) -> Router {
+/// What the web server's handlers share: the hub, and the parts that publish their own
+/// state beside the line's (the rig's client, the gateway's counters).
+#[derive(Clone)]
+pub struct App {
+    /// Where the parts meet.
+    pub hub: Arc<Hub>,
+    /// `--rig`'s client.
+    pub rig: Option<Arc<Rig>>,
+    /// The gateway's counters (all zero without a gateway).
+    pub gateway: Arc<Counters>,
+}
+
+impl FromRef<App> for Arc<Hub> {
+    fn from_ref(app: &App) -> Arc<Hub> {
+        app.hub.clone()
+    }
+}
+
+impl FromRef<App> for Option<Arc<Rig>> {
+    fn from_ref(app: &App) -> Option<Arc<Rig>> {
+        app.rig.clone()
+    }
+}
+
+/// `/api/state`: the line's view, its figures with the gateway's, the rig's state.
+#[derive(Serialize)]
+struct StateDoc<'a> {
+    #[serde(flatten)]
+    view: &'a View,
+    line: LineDoc<'a>,
+    rig: Option<&'a RigView>,
+}
+
+/// The state's `line`: the line's figures and the gateway's.
+#[derive(Serialize)]
+struct LineDoc<'a> {
+    #[serde(flatten)]
+    line: &'a LineFigures,
+    #[serde(flatten)]
+    gateway: &'a Figures,
+}
+
+impl App {
+    /// The state as of now, as JSON.
+    fn state_json(&self) -> Result<Bytes, ApiError> {
+        let view = self.hub.view();
+        let gateway = self.gateway.now();
+        let rig = self.rig.as_ref().map(|r| r.view());
+        let doc = StateDoc {
+            view: &view,
+            line: LineDoc {
+                line: &view.line,
+                gateway: &gateway,
+            },
+            rig: rig.as_ref(),
+        };
+        serde_json::to_vec(&doc)
+            .map(Bytes::from)
+            .map_err(|e| ApiError::Unserializable(e.to_string()))
+    }
+}
+
+/// The routes: one line each (hold and step, a program sent, a rig panel go here too), behind
+/// `door`'s rules (`origin.rs`: what another web page could send is refused first).
+pub fn router(app: App, door: Door) -> Router {
     Router::new()
         .route("/api/state", get(state))
         .route("/api/events", get(events))
@@ -53,23 +123,50 @@ pub fn router(hub: Arc<Hub>) -> Router {
         .route("/api/terminal", get(terminal).post(keys))
         .fallback(file)
         .method_not_allowed_fallback(wrong_method)
-        .with_state(hub)
+        .with_state(app)
+        .layer(axum::middleware::from_fn_with_state(
+            Arc::new(door),
+            origin::check,
+        ))
 }
 
-/// Serializes each new view once (at most one per [`EVENT_GAP`]) for every page that
-/// follows the events; runs until the line's owner is gone.
-pub async fn serialize_views(hub: Arc<Hub>) {
-    let mut views = hub.views();
+/// Serializes the state once per change of the line's view, the gateway's figures or the
+/// rig's state (at most once per [`EVENT_GAP`]) for every page that follows the events;
+/// runs until the line's owner is gone.
+pub async fn serialize_views(app: App) {
+    let mut views = app.hub.views();
+    let mut gateway = app.gateway.figures();
+    let mut rig = app.rig.as_ref().map(|r| r.views());
     loop {
-        let view = views.borrow_and_update().clone();
-        match serde_json::to_vec(&*view) {
+        views.mark_unchanged();
+        gateway.mark_unchanged();
+        if let Some(r) = rig.as_mut() {
+            r.mark_unchanged();
+        }
+        match app.state_json() {
             Ok(json) => {
-                hub.state_json.send_replace(Bytes::from(json));
+                app.hub.state_json.send_replace(json);
             }
             Err(e) => tracing::error!(error = %e, "the state cannot be serialized"),
         }
         let sent = Instant::now();
-        if views.changed().await.is_err() {
+        // A rig's client that has stopped changes nothing more.
+        let rig_changed = async {
+            let moved = match rig.as_mut() {
+                Some(r) => r.changed().await.is_ok(),
+                None => false,
+            };
+            if !moved {
+                std::future::pending::<()>().await;
+            }
+        };
+        // The counters live as long as `app`: they always can change.
+        let gone = tokio::select! {
+            r = views.changed() => r.is_err(),
+            _ = gateway.changed() => false,
+            () = rig_changed => false,
+        };
+        if gone {
             return;
         }
         let since = sent.elapsed();
@@ -111,16 +208,9 @@ fn json_bytes(json: Bytes) -> Response {
     ([(header::CONTENT_TYPE, "application/json")], json).into_response()
 }
 
-/// `GET /api/state`: the latest view.
-async fn state(State(hub): State<Arc<Hub>>) -> Result<Response, ApiError> {
-    let view = hub.view();
-    match serde_json::to_vec(&*view) {
-        Ok(json) => Ok(json_bytes(Bytes::from(json))),
-        Err(e) => {
-            tracing::error!(error = %e, "the state cannot be serialized");
-            Err(ApiError::LineStopped)
-        }
-    }
+/// `GET /api/state`: the state as of now.
+async fn state(State(app): State<App>) -> Result<Response, ApiError> {
+    app.state_json().map(json_bytes)
 }
 
 /// `GET /api/signals`: the signal table (name, what, how written, range, unit).
@@ -128,28 +218,72 @@ async fn signal_table() -> Json<&'static [signals::Signal]> {
     Json(SIGNALS.as_slice())
 }
 
+/// `GET /api/events`'s query: the page that follows them (`?page=ID`, made by the page).
+#[derive(Debug, Deserialize)]
+struct EventsQuery {
+    page: Option<String>,
+}
+
+/// A page following the events: while its stream lives its holds do; dropped with the
+/// stream, it tells the hub when the page closed.
+struct Following {
+    hub: Arc<Hub>,
+    page: PageId,
+}
+
+impl Following {
+    /// Page `page` follows the events from now on (refused when too many do).
+    fn start(hub: Arc<Hub>, page: PageId) -> Result<Following, ApiError> {
+        let mut opened = Ok(());
+        hub.pages
+            .send_modify(|p| opened = p.opened(&page, Instant::now()));
+        opened?;
+        Ok(Following { hub, page })
+    }
+}
+
+impl Drop for Following {
+    fn drop(&mut self) {
+        let page = &self.page;
+        self.hub
+            .pages
+            .send_modify(|p| p.closed(page, Instant::now()));
+    }
+}
+
 /// Every change as an event `state` carrying what `/api/state` gives, as serialized once.
-async fn events(State(hub): State<Arc<Hub>>) -> Sse<impl Stream<Item = Result<Event, Infallible>>> {
+/// A page that names itself (`?page=ID`) holds what it holds while it follows them.
+async fn events(
+    State(hub): State<Arc<Hub>>,
+    Query(query): Query<EventsQuery>,
+) -> Result<Sse<impl Stream<Item = Result<Event, Infallible>>>, ApiError> {
+    let following = match query.page.as_deref() {
+        Some(name) => Some(Following::start(hub.clone(), PageId::parse(name)?)?),
+        None => None,
+    };
     let rx = hub.state_json.subscribe();
-    let stream = stream::unfold((rx, true), |(mut rx, first)| async move {
-        if !first && rx.changed().await.is_err() {
-            return None;
-        }
-        loop {
-            let json = rx.borrow_and_update().clone();
-            if !json.is_empty() {
-                let event = Event::default()
-                    .event("state")
-                    .data(String::from_utf8_lossy(&json));
-                return Some((Ok(event), (rx, false)));
-            }
-            // Nothing serialized yet: the first comes at once.
-            if rx.changed().await.is_err() {
+    let stream = stream::unfold(
+        (rx, true, following),
+        |(mut rx, first, following)| async move {
+            if !first && rx.changed().await.is_err() {
                 return None;
             }
-        }
-    });
-    Sse::new(stream).keep_alive(KeepAlive::default())
+            loop {
+                let json = rx.borrow_and_update().clone();
+                if !json.is_empty() {
+                    let event = Event::default()
+                        .event("state")
+                        .data(String::from_utf8_lossy(&json));
+                    return Some((Ok(event), (rx, false, following)));
+                }
+                // Nothing serialized yet: the first comes at once.
+                if rx.changed().await.is_err() {
+                    return None;
+                }
+            }
+        },
+    );
+    Ok(Sse::new(stream).keep_alive(KeepAlive::default()))
 }
 
 /// The uTile at the path's address in `view`, or why not.
@@ -192,21 +326,11 @@ pub async fn write_signal(hub: &Hub, addr: u8, signal: &str, value: i64) -> Resu
         return Err(ApiError::NoUnit(addr));
     }
     let w = signals::write(signal, value)?;
-    let (job, rx) = Job::new(addr, w.pdu(), Origin::Page);
-    hub.inputs
-        .send(Input::Job(job))
-        .map_err(|_| ApiError::LineStopped)?;
-    let done = match tokio::time::timeout(WRITE_WAIT, rx).await {
-        Ok(Ok(Ok(done))) => done,
-        Ok(Ok(Err(f))) => return Err(ApiError::Line(f)),
-        Ok(Err(_)) => return Err(ApiError::LineStopped),
-        Err(_) => return Err(ApiError::LineTimeout),
-    };
+    let done = hub.ask(Job::page(addr, w.pdu()), WRITE_WAIT).await?;
     if let Some(code) = rtu::exception(&done.pdu) {
         return Err(ApiError::Exception {
             addr,
-            signal: signal.to_string(),
-            value,
+            what: format!("{signal} = {value}"),
             code,
         });
     }
@@ -255,21 +379,37 @@ async fn trend(
     }))
 }
 
-/// `POST /api/terminal`: the body's bytes typed into the terminal (for scripts).
-async fn keys(State(hub): State<Arc<Hub>>, body: Bytes) -> Result<Json<KeysSent>, ApiError> {
+/// `POST /api/terminal`: the body's bytes typed into the terminal (for scripts), or with
+/// `Content-Type: application/json` the text of `{"keys": "…"}` (the door lets no other type
+/// through), once they went; refused while the port is closed (never kept for later).
+async fn keys(
+    State(hub): State<Arc<Hub>>,
+    headers: HeaderMap,
+    body: Bytes,
+) -> Result<Json<KeysSent>, ApiError> {
     if hub.read_only {
         return Err(ApiError::ReadOnlyKeys);
     }
-    hub.inputs
-        .send(Input::Keys(body.to_vec()))
-        .map_err(|_| ApiError::LineStopped)?;
+    let keys = if origin::keys_as_json(&headers) {
+        serde_json::from_slice::<KeysBody>(&body)
+            .map_err(|e| ApiError::KeysBody(e.to_string()))?
+            .keys
+            .into_bytes()
+    } else {
+        body.to_vec()
+    };
+    hub.keys(keys)?.answer(WRITE_WAIT, TAKEN_WAIT).await?;
     Ok(Json(KeysSent { ok: true }))
 }
 
-/// The terminal's WebSocket: uTile's output as binary messages, keys back.
+/// The terminal's WebSocket: uTile's output as binary messages, keys back; keys the line
+/// refused are answered with a text message saying why (the page shows it by the terminal).
 async fn terminal(State(hub): State<Arc<Hub>>, ws: WebSocketUpgrade) -> Response {
     ws.on_upgrade(move |socket| terminal_session(socket, hub))
 }
+
+/// At most this many refusals wait to be told to one terminal (more say the same).
+const REFUSALS: usize = 4;
 
 async fn terminal_session(mut socket: WebSocket, hub: Arc<Hub>) {
     let (kept, mut rx) = hub.terminal.subscribe();
@@ -280,6 +420,7 @@ async fn terminal_session(mut socket: WebSocket, hub: Arc<Hub>) {
     {
         return;
     }
+    let (refused_tx, mut refused) = mpsc::channel::<String>(REFUSALS);
     loop {
         tokio::select! {
             out = rx.recv() => match out {
@@ -293,6 +434,11 @@ async fn terminal_session(mut socket: WebSocket, hub: Arc<Hub>) {
                 }
                 Err(_) => return,
             },
+            Some(why) = refused.recv() => {
+                if socket.send(Message::Text(why.into())).await.is_err() {
+                    return;
+                }
+            }
             msg = socket.recv() => {
                 let keys = match msg {
                     Some(Ok(Message::Text(t))) => t.as_str().as_bytes().to_vec(),
@@ -304,9 +450,19 @@ async fn terminal_session(mut socket: WebSocket, hub: Arc<Hub>) {
                     // Keys can stop a program (`/`): a read-only view takes none.
                     continue;
                 }
-                if hub.inputs.send(Input::Keys(keys)).is_err() {
-                    return;
-                }
+                // Handed over now, in the order typed; whether they went comes later.
+                let went = hub.keys(keys);
+                let tell = refused_tx.clone();
+                tokio::spawn(async move {
+                    let outcome = match went {
+                        Ok(asked) => asked.answer(WRITE_WAIT, TAKEN_WAIT).await,
+                        Err(why) => Err(why),
+                    };
+                    if let Err(why) = outcome {
+                        // A full channel: the terminal is being told the same already.
+                        let _ = tell.try_send(format!("keys not typed: {why}"));
+                    }
+                });
             }
         }
     }

@@ -12,20 +12,23 @@
 //! | `check.rs` | a listing checked by the kit's parser for the page's editor (`POST /api/check`) |
 //! | `send.rs` | a program sent from the page (`POST /api/units/{addr}/program`): checked, then `utile push --stop`'s steps as a job of the line |
 //! | `rig.rs` | `--rig`: the virtual Nano's rig over its control socket, the API's route for the page's rig panel |
-//! | `scan_control.rs` | hold, run and step (SPEC §18): the API's route, whether a uTile's firmware has them |
-//! | `unwatched.rs` | a hold from the page ends with the page: no page open for 10 s, the uTiles held from it run |
-//! | `queue.rs` | the queue in front of the line: writes first, reads and polls in turn |
+//! | `hold.rs` | SPEC §18 as the tool speaks it: hold, run and step as register writes, whether a uTile's firmware has them |
+//! | `scan_control.rs` | hold, run and step: the API's route |
+//! | `lease.rs` | holds that keep their word: a lease per holder (a page while it follows the events, a script 10 s past its last request), Run when the last one ran out |
+//! | `job.rs` | what the line is asked (a Modbus request, keys, a send) and how its answer comes back: once or not at all |
+//! | `queue.rs` | the queue in front of the line: writes first, reads and polls in turn, bounded |
 //! | `screen.rs` | EDIT or RUN, told from the terminal's output |
 //! | `unit.rs` | one uTile as the line's owner keeps it: snapshot, presets, program, back-off, link health, trend |
 //! | `signals.rs` | the signal table: each name, where it is read, how it is written, its range and unit |
 //! | `program.rs` | the program, live: listing and each line's value from the core's engine |
 //! | `ladder.rs` | the program drawn as ladder for the page's Ladder tab (`GET /api/units/{addr}/ladder`), lit from the line values |
 //! | `view.rs` | the immutable view the line publishes after each transaction (the API's state) |
-//! | `hub.rs` | where the parts meet: the line's inputs, the published view, the state's JSON, the terminal, the gateway's counters |
+//! | `hub.rs` | where the parts meet: the one way to ask the line, the published view, the state's JSON, the terminal, the pages following |
 //! | `api.rs` | the API's documents and its one error type (JSON `{"error": …}`) |
 //! | `terminal.rs` | the terminal's output for the pages (xterm.js) |
 //! | `http.rs` | the web server: its routes, the events, the terminal WebSocket |
 //! | `gateway.rs` | the Modbus TCP gateway |
+//! | `origin.rs` | on every bind: what another web page could send is refused (Host, Origin, the keys' type) |
 //! | `guard.rs`, `allow.rs` | beyond loopback: the page's token; the gateway's networks |
 //! | `mqtt/` | the MQTT publisher, Home Assistant discovery, `set` commands |
 //! | `assets.rs`, `page/` | the page's files, built into the binary |
@@ -37,12 +40,16 @@ pub mod assets;
 pub mod check;
 pub mod gateway;
 pub mod guard;
+pub mod hold;
 pub mod http;
 pub mod hub;
+pub mod job;
 pub mod ladder;
+pub mod lease;
 pub mod line;
 pub mod line_use;
 pub mod mqtt;
+pub mod origin;
 pub mod port;
 pub mod program;
 pub mod queue;
@@ -54,7 +61,6 @@ pub mod send;
 pub mod signals;
 pub mod terminal;
 pub mod unit;
-pub mod unwatched;
 pub mod view;
 
 use std::net::SocketAddr;
@@ -64,7 +70,8 @@ use std::sync::Arc;
 use utile_core::modbus::snapshot;
 use utile_kit::listing;
 
-use hub::{Hub, ProgramFile};
+use hub::Hub;
+use program::ProgramFile;
 use view::View;
 
 /// Why `utile live` cannot start or go on.
@@ -122,6 +129,8 @@ pub enum LiveError {
 pub struct Running {
     /// Where the parts meet (the published view, the line's inputs).
     pub hub: Arc<Hub>,
+    /// What the web server's handlers share (the hub, the rig, the gateway's counters).
+    pub app: http::App,
     /// The page's address.
     pub http: SocketAddr,
     /// The gateway's address.
@@ -197,20 +206,21 @@ pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Ru
         say(&note);
         notes.push(note);
     }
-    let rig = opts.rig.clone().map(rig::Rig::spawn);
-    let (hub, ends) = Hub::new(
-        View::starting(&opts.port, opts.read_only, notes.clone()),
-        rig,
-    );
+    let (hub, ends) = Hub::new(View::starting(&opts.port, opts.read_only, notes.clone()));
+    let app = http::App {
+        hub: hub.clone(),
+        rig: opts.rig.clone().map(|p| Arc::new(rig::Rig::spawn(p))),
+        gateway: Arc::default(),
+    };
     let (http, http_addr) = listen("--http", opts.http).await?;
     let guard = guard::Guard::new(&http_addr, opts.token_file.as_deref(), opts.public_read)?;
     let tcp_addr = match opts.tcp {
         Some(a) => {
             let (l, bound) = listen("--tcp", a).await?;
-            let hub = hub.clone();
+            let (hub, counters) = (hub.clone(), app.gateway.clone());
             let allow = opts.tcp_allow.clone();
             tokio::spawn(async move {
-                if let Err(e) = gateway::serve(l, hub, allow).await {
+                if let Err(e) = gateway::serve(l, hub, allow, counters).await {
                     tracing::error!(error = %e, "the Modbus TCP gateway stopped");
                 }
             });
@@ -218,10 +228,10 @@ pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Ru
         }
         None => None,
     };
-    tokio::spawn(http::serialize_views(hub.clone()));
-    tokio::spawn(unwatched::watch(hub.clone()));
+    tokio::spawn(http::serialize_views(app.clone()));
     let token_url = guard.url(&http_addr, &mqtt::options::host_name());
-    let router = guard::layer(http::router(hub.clone()), guard);
+    let door = origin::Door::new(http_addr, &opts.allow_host);
+    let router = guard::layer(http::router(app.clone(), door), guard);
     tokio::spawn(async move {
         if let Err(e) = axum::serve(http, router).await {
             tracing::error!(error = %e, "the web server stopped");
@@ -292,6 +302,7 @@ pub async fn start(opts: &args::Options, say: &mut dyn FnMut(&str)) -> Result<Ru
     }
     Ok(Running {
         hub,
+        app,
         http: http_addr,
         tcp: tcp_addr,
         line: Some(line),

@@ -13,6 +13,15 @@ use utile_core::opcodes::{self, BLANK, POP_LAST};
 
 use super::signals::Holdings;
 
+/// A listing given with `--program`: its name and fingerprint.
+#[derive(Clone, Debug)]
+pub struct ProgramFile {
+    /// As given on the command line.
+    pub name: String,
+    /// Its fingerprint (SPEC §17).
+    pub fingerprint: u16,
+}
+
 /// One line of the listing: its number, opcode and the listing's name for it.
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
 pub struct ListingLine {

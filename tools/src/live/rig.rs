@@ -2,9 +2,10 @@
 //! object a line) worked from the page. A task keeps the socket open (and opens it again when
 //! the virtual Nano restarts), asks the rig's state every [`ASK_EVERY`] and carries out the
 //! page's requests: `POST /api/units/{addr}/rig` takes the socket's own JSON (`{"press": 0}`,
-//! `{"release": 0}`, `{"a6": 2.5}`, `{"d8": true}`, `{"reset": true}`, `{}`) and answers the
-//! rig's state after it. The line's owner publishes the latest [`RigView`] with its view
-//! (`/api/state`'s `rig`), so the page shows its rig panel only while a rig answers.
+//! `{"release": 0}`, `{"a6": 2.5}`, `{"d8": true}`, `{"reset": true}`, `{}`: the socket's
+//! [`RigRequest`], the one struct both ends use) and answers the rig's state after it. The
+//! client publishes the latest [`RigView`] (a `watch` it owns; the state's `rig`), so the page
+//! shows its rig panel only while a rig answers.
 //!
 //! On a bus (`cargo nano --bus N --control PATH`) the socket serves N Nanos, Nano k being
 //! the one at slave address k: each is asked in turn, the view holds each one's state, and
@@ -12,14 +13,11 @@
 //! single Nano's rig is on every card.
 
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
 use axum::extract::rejection::{JsonRejection, PathRejection};
 use axum::extract::{Path, State};
-use axum::http::StatusCode;
-use axum::response::{IntoResponse, Response};
 use axum::Json;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
@@ -27,9 +25,13 @@ use tokio::io::{AsyncBufReadExt, AsyncWriteExt, BufReader};
 use tokio::net::UnixStream;
 use tokio::sync::{mpsc, oneshot, watch};
 
-use super::api::{ApiError, ErrorDoc};
+use super::api::{ApiError, RigError};
 use super::hub::Hub;
+use crate::vnano::control::RigRequest;
 
+/// At most this many requests wait for the rig (a page's buttons and sliders); more are
+/// refused as busy.
+const REQUESTS: usize = 16;
 /// How often the rig's state is asked when the page asks nothing (the plant and the
 /// terminal's rig keys move it too).
 pub const ASK_EVERY: Duration = Duration::from_millis(200);
@@ -82,13 +84,12 @@ pub struct RigView {
 }
 
 /// One request for the rig and where its answer goes.
-type Request = (Value, oneshot::Sender<Result<RigState, RigError>>);
+type Request = (RigRequest, oneshot::Sender<Result<RigState, RigError>>);
 
 /// The rig's client: its requests and its latest view.
 pub struct Rig {
-    requests: mpsc::UnboundedSender<Request>,
+    requests: mpsc::Sender<Request>,
     view: watch::Receiver<RigView>,
-    changes: Arc<AtomicU64>,
 }
 
 impl RigView {
@@ -106,32 +107,19 @@ impl RigView {
 impl Rig {
     /// Starts the client of the socket at `path` on the current tokio runtime.
     pub fn spawn(path: PathBuf) -> Rig {
-        let (requests, rx) = mpsc::unbounded_channel();
+        let (requests, rx) = mpsc::channel(REQUESTS);
         let (tx, view) = watch::channel(RigView {
             path: path.display().to_string(),
             error: Some("not connected yet".into()),
             ..RigView::default()
         });
-        let changes = Arc::new(AtomicU64::new(0));
-        let counter = changes.clone();
-        let mut seen = view.clone();
-        // Counts each change, so the line's owner publishes a view when the rig moved.
-        tokio::spawn(async move {
-            while seen.changed().await.is_ok() {
-                counter.fetch_add(1, Ordering::Relaxed);
-            }
-        });
         tokio::spawn(run(path, rx, tx));
-        Rig {
-            requests,
-            view,
-            changes,
-        }
+        Rig { requests, view }
     }
 
-    /// How many times the view changed so far.
-    pub fn changes(&self) -> u64 {
-        self.changes.load(Ordering::Relaxed)
+    /// Each new view as it comes.
+    pub fn views(&self) -> watch::Receiver<RigView> {
+        self.view.clone()
     }
 
     /// The latest view.
@@ -140,76 +128,21 @@ impl Rig {
     }
 
     /// Carries `request` out on the rig: its state after it.
-    pub async fn ask(&self, request: Value) -> Result<RigState, RigError> {
+    pub async fn ask(&self, request: RigRequest) -> Result<RigState, RigError> {
         let (tx, rx) = oneshot::channel();
-        self.requests
-            .send((request, tx))
-            .map_err(|_| RigError::NotConnected("the rig's client has stopped".into()))?;
+        self.requests.try_send((request, tx)).map_err(|e| match e {
+            mpsc::error::TrySendError::Full(_) => RigError::Busy,
+            mpsc::error::TrySendError::Closed(_) => {
+                RigError::NotConnected("the rig's client has stopped".into())
+            }
+        })?;
         match tokio::time::timeout(ANSWER_WAIT * 2, rx).await {
             Ok(Ok(answer)) => answer,
             Ok(Err(_)) => Err(RigError::NotConnected(
                 "the rig's client has stopped".into(),
             )),
-            Err(_) => Err(RigError::NoAnswer),
+            Err(_) => Err(RigError::NoAnswer(ANSWER_WAIT.as_secs())),
         }
-    }
-}
-
-/// Why a rig request failed.
-#[derive(Debug, thiserror::Error)]
-pub enum RigError {
-    /// What any route of the API may answer.
-    #[error(transparent)]
-    Api(#[from] ApiError),
-    /// `utile live` has no `--rig`.
-    #[error(
-        "no rig: this utile live was started without --rig PATH (the virtual Nano's \
-         --control socket; ./x run --live wires it)"
-    )]
-    NoRig,
-    /// The socket does not answer.
-    #[error("the rig does not answer: {0}")]
-    NotConnected(String),
-    /// The body is no JSON object.
-    #[error("a rig request is one JSON object, e.g. {{\"press\": 0}}")]
-    NotAnObject,
-    /// The page named the Nano itself.
-    #[error("the uTile's address picks its Nano: leave \"nano\" out")]
-    NanoGiven,
-    /// The bus has no Nano at the uTile's address.
-    #[error("the rig's bus has no Nano at address {addr} (Nanos 1..{nanos})")]
-    NoNano {
-        /// The uTile's address.
-        addr: u8,
-        /// How many Nanos the rig has.
-        nanos: usize,
-    },
-    /// The rig refused the request (nothing changed).
-    #[error("the rig refused it: {0}")]
-    Refused(String),
-    /// No answer in time.
-    #[error("the rig did not answer within {} s", ANSWER_WAIT.as_secs())]
-    NoAnswer,
-}
-
-impl IntoResponse for RigError {
-    fn into_response(self) -> Response {
-        let status = match &self {
-            RigError::Api(e) => e.status(),
-            RigError::NoRig | RigError::NoNano { .. } => StatusCode::NOT_FOUND,
-            RigError::NotConnected(_) => StatusCode::SERVICE_UNAVAILABLE,
-            RigError::NotAnObject | RigError::NanoGiven | RigError::Refused(_) => {
-                StatusCode::BAD_REQUEST
-            }
-            RigError::NoAnswer => StatusCode::GATEWAY_TIMEOUT,
-        };
-        (
-            status,
-            Json(ErrorDoc {
-                error: self.to_string(),
-            }),
-        )
-            .into_response()
     }
 }
 
@@ -225,11 +158,7 @@ fn answer(line: &str) -> Result<RigState, RigError> {
 }
 
 /// The client: connects, serves, connects again.
-async fn run(
-    path: PathBuf,
-    mut rx: mpsc::UnboundedReceiver<Request>,
-    view: watch::Sender<RigView>,
-) {
+async fn run(path: PathBuf, mut rx: mpsc::Receiver<Request>, view: watch::Sender<RigView>) {
     let name = path.display().to_string();
     loop {
         let why = match UnixStream::connect(&path).await {
@@ -265,7 +194,7 @@ async fn run(
 /// Serves one connection until it fails; the reason in words.
 async fn serve(
     stream: UnixStream,
-    rx: &mut mpsc::UnboundedReceiver<Request>,
+    rx: &mut mpsc::Receiver<Request>,
     view: &watch::Sender<RigView>,
     name: &str,
 ) -> String {
@@ -278,7 +207,7 @@ async fn serve(
     let mut nanos: Vec<RigState> = Vec::new();
     let mut tick = tokio::time::interval(ASK_EVERY);
     loop {
-        let asks: Vec<(Value, Option<_>)> = tokio::select! {
+        let asks: Vec<(RigRequest, Option<_>)> = tokio::select! {
             r = rx.recv() => match r {
                 Some((request, reply)) => vec![(request, Some(reply))],
                 None => return "utile live is stopping".into(),
@@ -324,11 +253,10 @@ async fn serve(
 
 /// The periodic request for Nano `k` of `count`: `{}` for a single one (or before the first
 /// answer), `{"nano": k}` on a bus.
-fn ask_of(k: usize, count: usize) -> Value {
-    if count > 1 {
-        serde_json::json!({ "nano": k })
-    } else {
-        serde_json::json!({})
+fn ask_of(k: usize, count: usize) -> RigRequest {
+    RigRequest {
+        nano: (count > 1).then(|| u8::try_from(k).unwrap_or(u8::MAX)),
+        ..RigRequest::default()
     }
 }
 
@@ -341,9 +269,9 @@ struct Socket<'a> {
 
 impl Socket<'_> {
     /// Sends one request line and reads its answer; why not, in words.
-    async fn exchange(&mut self, request: &Value) -> Result<String, String> {
+    async fn exchange(&mut self, request: &RigRequest) -> Result<String, String> {
         let name = self.name;
-        let mut text = request.to_string();
+        let mut text = serde_json::to_string(request).map_err(|e| format!("{name}: {e}"))?;
         text.push('\n');
         if let Err(e) = self.write.write_all(text.as_bytes()).await {
             return Err(format!("{name}: {e}"));
@@ -363,34 +291,37 @@ impl Socket<'_> {
 /// `POST /api/units/{addr}/rig`: one request for the rig (the socket's JSON), its state after.
 pub async fn post(
     State(hub): State<Arc<Hub>>,
+    State(rig): State<Option<Arc<Rig>>>,
     addr: Result<Path<u8>, PathRejection>,
     body: Result<Json<Value>, JsonRejection>,
-) -> Result<Json<RigState>, RigError> {
-    let Path(addr) = addr.map_err(ApiError::from)?;
+) -> Result<Json<RigState>, ApiError> {
+    let Path(addr) = addr?;
     hub.view().unit(addr).ok_or(ApiError::NoUnit(addr))?;
-    let Json(body) = body.map_err(ApiError::from)?;
-    if hub.read_only {
-        return Err(ApiError::ReadOnly.into());
-    }
-    let rig = hub.rig.as_ref().ok_or(RigError::NoRig)?;
-    let Value::Object(mut request) = body else {
-        return Err(RigError::NotAnObject);
+    let Json(body) = body?;
+    // Read as the socket reads it (a JSON array would make a struct by position).
+    let Value::Object(fields) = body else {
+        return Err(RigError::NotARequest(format!("not {body}")).into());
     };
-    if request.contains_key("nano") {
-        return Err(RigError::NanoGiven);
+    let mut request = RigRequest::from_object(&fields).map_err(RigError::NotARequest)?;
+    if hub.read_only {
+        return Err(ApiError::ReadOnly);
+    }
+    let rig = rig.as_ref().ok_or(RigError::NoRig)?;
+    if request.nano.is_some() {
+        return Err(RigError::NanoGiven.into());
     }
     let view = rig.view();
     if !view.connected {
-        return Err(RigError::NotConnected(view.error.unwrap_or_default()));
+        return Err(RigError::NotConnected(view.error.unwrap_or_default()).into());
     }
     let nano = view.nano_of(addr).ok_or(RigError::NoNano {
         addr,
         nanos: view.nanos.len(),
     })?;
     if view.nanos.len() > 1 {
-        request.insert("nano".into(), nano.into());
+        request.nano = Some(nano);
     }
-    Ok(Json(rig.ask(Value::Object(request)).await?))
+    Ok(Json(rig.ask(request).await?))
 }
 
 #[cfg(test)]

@@ -22,9 +22,9 @@ const READ_FILE_RECORD: u8 = 0x14;
 /// Function code 21: write file record.
 const WRITE_FILE_RECORD: u8 = 0x15;
 /// Function code 22: mask write register.
-const MASK_WRITE_REGISTER: u8 = 0x16;
+pub const MASK_WRITE_REGISTER: u8 = 0x16;
 /// Function code 23: read/write multiple registers.
-const READ_WRITE_MULTIPLE_REGISTERS: u8 = 0x17;
+pub const READ_WRITE_MULTIPLE_REGISTERS: u8 = 0x17;
 
 /// Whether a reply's function code is an exception's.
 pub fn is_exception(function: u8) -> bool {
@@ -96,6 +96,10 @@ pub fn frame_gap() -> Duration {
 /// A uTile starts its reply ≤ 5 ms after the request (SPEC §13); the rest of the wait is for
 /// the host: a USB adapter's latency, a simulation that runs behind the wall clock.
 pub const ANSWER_SLACK: Duration = Duration::from_millis(120);
+
+/// The most a reply may be late before it counts as missing (the line's learnt slack never
+/// passes it; a reply whose bytes are still coming is waited for twice as long).
+pub const SLACK_MAX: Duration = Duration::from_millis(1500);
 
 /// The longest reply any request can get: address, 253 bytes of PDU, CRC.
 pub const MAX_FRAME: usize = 256;

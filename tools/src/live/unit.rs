@@ -14,12 +14,12 @@ use utile_core::modbus::snapshot::{self, Snapshot, PROGRAM_LEN, SNAPSHOT_LEN};
 use utile_core::modbus::Exception;
 use utile_kit::modbus::registers;
 
+use super::hold::ScanControl;
 use super::line_use::LineUse;
 use super::program;
 use super::rtu;
-use super::scan_control::ScanControl;
 use super::signals::Holdings;
-use super::view::{Listing, Trend};
+use super::view::{Link, Listing, Trend};
 
 mod card;
 mod legacy;
@@ -39,27 +39,6 @@ pub const TREND_STEP: Duration = Duration::from_millis(250);
 pub const TREND_POINTS: usize = 2_400;
 /// The window over which refreshes per second and the line's share are counted.
 const WINDOW: Duration = Duration::from_secs(2);
-
-/// The link's health, as counted by the master.
-#[derive(Clone, Debug, Default, serde::Serialize)]
-pub struct Link {
-    /// Requests sent to this address.
-    pub requests: u64,
-    /// Requests that got no (whole, right) reply in time.
-    pub timeouts: u64,
-    /// Replies from this address whose CRC was wrong (among the time-outs): whole frames
-    /// for the request's function, nothing else.
-    pub crc_errors: u64,
-    /// Bytes that came after a request to this address and were no reply (noise, a reply
-    /// cut short, the terminal's text).
-    pub not_reply_bytes: u64,
-    /// Exceptions answered.
-    pub exceptions: u64,
-    /// Round trip of the last answered request, ms (request out to the reply's last byte).
-    pub rtt_ms: f64,
-    /// Share of the line's time this address used over the last two seconds (0..1).
-    pub share: f64,
-}
 
 /// One uTile as the live view knows it.
 pub struct Unit {

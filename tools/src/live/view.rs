@@ -1,7 +1,8 @@
 //! What the line's owner publishes after each transaction: an immutable view of the line and
 //! of every uTile on it (a `tokio::sync::watch` of `Arc<View>`). The web server, the events,
 //! the gateway's checks and a publisher such as MQTT read it without ever holding anything
-//! the line waits for. Its serde form is the JSON of `GET /api/state` (docs/LIVE.md).
+//! the line waits for. With the gateway's figures and the rig's state, which their owners
+//! publish, its serde form is the JSON of `GET /api/state` (docs/LIVE.md, `http.rs`).
 
 use std::collections::VecDeque;
 use std::sync::Arc;
@@ -11,12 +12,10 @@ use serde::Serialize;
 
 use utile_core::engine::UNITS;
 
+use super::hold::ScanControl;
 use super::program::ListingLine;
-use super::rig::RigView;
-use super::scan_control::ScanControl;
 use super::screen::Mode;
 use super::signals::Values;
-use super::unit::Link;
 
 /// What a user does about EDIT mode: said once, here (the line's message and the cards).
 pub const EDIT_ADVICE: &str = "EDIT mode: the program is not running. Start it in the \
@@ -55,13 +54,11 @@ pub struct View {
     pub read_only: bool,
     /// Each timer's unit, ms (the core's).
     pub timer_unit_ms: [u32; UNITS],
-    /// The line's figures.
+    /// The line's figures (the state's `line`, with the gateway's beside them).
+    #[serde(skip)]
     pub line: LineFigures,
     /// The uTiles, by address.
     pub units: Vec<UnitView>,
-    /// `--rig`: the virtual Nano's rig (`null` without it; the page's rig panel shows while it
-    /// is `connected`).
-    pub rig: Option<RigView>,
     /// Views published before this one.
     #[serde(skip)]
     pub seq: u64,
@@ -74,7 +71,7 @@ impl View {
     }
 }
 
-/// The line's figures, and the gateway's.
+/// The line's figures.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct LineFigures {
     /// Share of the line's time in use over the last two seconds (0..1).
@@ -89,25 +86,6 @@ pub struct LineFigures {
     pub writes: u64,
     /// How late a reply may be before it is missing, as the line has learnt it, ms.
     pub reply_slack_ms: u64,
-    /// Gateway connections open.
-    pub tcp_clients: u64,
-    /// Gateway requests carried out.
-    pub tcp_requests: u64,
-    /// Gateway requests refused.
-    pub tcp_refused: u64,
-    /// Gateway clients refused: not in `--tcp-allow`'s networks.
-    pub tcp_refused_clients: u64,
-    /// What the gateway adds to a request, ms.
-    pub tcp_overhead_ms: Overhead,
-}
-
-/// A mean and a largest figure.
-#[derive(Clone, Copy, Debug, Default, Serialize)]
-pub struct Overhead {
-    /// The mean.
-    pub mean: f64,
-    /// The largest.
-    pub max: f64,
 }
 
 /// One uTile.
@@ -147,6 +125,27 @@ pub struct UnitView {
     /// The trend (`GET /api/units/N/trend`).
     #[serde(skip)]
     pub trend: Arc<Trend>,
+}
+
+/// The link's health, as counted by the master.
+#[derive(Clone, Debug, Default, serde::Serialize)]
+pub struct Link {
+    /// Requests sent to this address.
+    pub requests: u64,
+    /// Requests that got no (whole, right) reply in time.
+    pub timeouts: u64,
+    /// Replies from this address whose CRC was wrong (among the time-outs): whole frames
+    /// for the request's function, nothing else.
+    pub crc_errors: u64,
+    /// Bytes that came after a request to this address and were no reply (noise, a reply
+    /// cut short, the terminal's text).
+    pub not_reply_bytes: u64,
+    /// Exceptions answered.
+    pub exceptions: u64,
+    /// Round trip of the last answered request, ms (request out to the reply's last byte).
+    pub rtt_ms: f64,
+    /// Share of the line's time this address used over the last two seconds (0..1).
+    pub share: f64,
 }
 
 /// The running program with each line's value in the latest snapshot.
@@ -208,7 +207,6 @@ impl View {
             timer_unit_ms: utile_core::engine::TIMER_UNIT_MS,
             line: LineFigures::default(),
             units: Vec::new(),
-            rig: None,
             seq: 0,
         }
     }

@@ -147,3 +147,50 @@ pub fn read(path: &Path) -> Result<Scenario, TraceError> {
         error,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_scenario_of_the_playground_reads_and_names_its_image() {
+        let dir = utile_kit::setup::workspace_root().join("play/scenarios");
+        let mut read = 0;
+        for entry in std::fs::read_dir(&dir).expect("play/scenarios") {
+            let path = entry.expect("an entry").path();
+            let scenario = read_scenario(&path);
+            assert!(!scenario.steps.is_empty(), "{}", path.display());
+            assert!(scenario.scan_us > 0);
+            assert_eq!(
+                scenario.image.extension().and_then(|e| e.to_str()),
+                Some("hex")
+            );
+            read += 1;
+        }
+        assert!(read >= 9, "{read} scenarios");
+    }
+
+    fn read_scenario(path: &Path) -> Scenario {
+        read(path).unwrap_or_else(|e| panic!("{e:#?}"))
+    }
+
+    #[test]
+    fn a_step_it_does_not_know_is_refused_by_name() {
+        let text = r#"{"about": "x", "scan_us": 10, "steps": [{"run_ms": 5}, {"jump": 1}]}"#;
+        let err = serde_json::from_str::<Scenario>(text)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("unknown variant `jump`"), "{err}");
+        let steps: Vec<Step> =
+            serde_json::from_str(r#"["reset", {"volts": ["A6", 2.5]}, {"type": "EX0\r"}]"#)
+                .expect("steps");
+        assert_eq!(
+            steps,
+            vec![
+                Step::Reset,
+                Step::Volts("A6".into(), 2.5),
+                Step::Type("EX0\r".into())
+            ]
+        );
+    }
+}

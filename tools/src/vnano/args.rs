@@ -112,7 +112,9 @@ pub struct Args {
     /// each answered with the rig's state: switches, jumpers, A6/A7 in volts, outputs Y0..Y7,
     /// the simulated seconds.
     /// With --bus a request names its Nano, {"nano": 2, "press": 0}: Nanos are 1..N as their
-    /// slave addresses (Nano 1 when left out)
+    /// slave addresses (Nano 1 when left out). A line is at most 1024 bytes. PATH must be
+    /// free or a socket left by an earlier run (any other file there is refused, never
+    /// deleted)
     #[arg(long, value_name = "PATH")]
     pub control: Option<PathBuf>,
 }

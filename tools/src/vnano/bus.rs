@@ -1,17 +1,19 @@
 //! `cargo nano --bus N`: N virtual Nanos on one RS-485 line (the kit's [`Bus`]), the line on
 //! a pty whose client is the Modbus master (an HMI, pymodbus, mbpoll). Each Nano has slave
-//! address i + 1 (`ADDR`'s EEPROM cell), the D8 jumper fitted, and the `--eeprom` program
+//! address i + 1 (`ADDR`'s EEPROM cells), the D8 jumper fitted, and the `--eeprom` program
 //! (by default `PU. .PY KEY END`: outputs Y0..Y7 follow coils 8..15). `--a6`/`--a7` and
 //! `--press` set every Nano's rig at start; the console's rig keys (as with `--pty`) work the
 //! Nano that `@N` picked last (Nano 1 until then), and each change prints its status line.
 //! `--control PATH` works each Nano's rig from another program: a request names its Nano
-//! (`{"nano": 2, "press": 0}`, Nano N being the one at slave address N).
+//! (`{"nano": 2, "press": 0}`, Nano N being the one at slave address N). A Nano's byte
+//! reaches the line only if its D10 was high over the byte's whole wire time; two drivers
+//! at once and a byte half on the line (D10 changed inside it) are reported.
 
 use std::io::Write;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use utile_core::store::ADDR_CELL;
+use utile_core::store::address_cells;
 use utile_kit::listing;
 use utile_kit::sim::stored_eeprom;
 use utile_kit::simavr::{Bus, Chip, RigPin, F_CPU};
@@ -38,10 +40,9 @@ fn eeprom(o: &Options, i: usize) -> Result<Vec<u8>, VnanoError> {
         }
     };
     ee.resize(1024, 0xFF);
-    let a = (i + 1) as u8;
-    let at = usize::from(ADDR_CELL);
-    ee[at] = a;
-    ee[at + 1] = !a;
+    for (cell, value) in address_cells((i + 1) as u8) {
+        ee[usize::from(cell)] = value;
+    }
     Ok(ee)
 }
 
@@ -78,6 +79,7 @@ pub fn run(o: &Options, n: usize, elf: &Path) -> Result<(), VnanoError> {
     let limit = o.run_for.map(|secs| (secs * F_CPU as f64) as u64);
     let (wall0, sim0) = (Instant::now(), bus.cycle());
     let mut collisions = 0;
+    let mut half_on = 0;
     let mut arrivals = Arrivals::default();
     let mut keys = Keys {
         selected: 0,
@@ -124,6 +126,18 @@ pub fn run(o: &Options, n: usize, elf: &Path) -> Result<(), VnanoError> {
         if bus.collisions().len() != collisions {
             collisions = bus.collisions().len();
             let _ = writeln!(out, "vnano: {collisions} collisions (two drivers at once)");
+            let _ = out.flush();
+        }
+        if bus.half_on().len() != half_on {
+            half_on = bus.half_on().len();
+            let b = bus.half_on()[half_on - 1];
+            let _ = writeln!(
+                out,
+                "vnano: {half_on} bytes half on the line (Nano {}'s D10 changed while 0x{:02X} \
+                 was on the wire)",
+                b.from + 1,
+                b.byte
+            );
             let _ = out.flush();
         }
         if !o.fast {

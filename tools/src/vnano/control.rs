@@ -13,16 +13,75 @@
 //! numbered 1..N, as their slave addresses (Nano 2 answers Modbus at address 2); without
 //! `"nano"` a request works Nano 1 (the only one of a single run). A Nano that is not there
 //! is answered `{"error": "no Nano 5 here: …", "nanos": N}` and nothing changes.
+//!
+//! A request is a [`RigRequest`], the one struct `utile live --rig`'s client (`live/rig.rs`)
+//! sends too. A line longer than [`MAX_LINE`] is discarded to its newline, none of it carried
+//! out, and answered with an error. PATH is taken only when nothing is there or a socket no
+//! program listens on (left by an earlier run): any other file is refused, never deleted.
 
 use std::io::{ErrorKind, Read, Write};
+use std::os::unix::fs::FileTypeExt;
 use std::os::unix::net::{UnixListener, UnixStream};
 use std::path::{Path, PathBuf};
 
-use serde_json::{json, Map, Value};
+use serde::{Deserialize, Serialize};
+use serde_json::{json, Value};
 use utile_kit::simavr::{Chip, Reset, RigPin, VCC_MV};
 
-/// Longest request line kept (a longer one is refused whole).
-const MAX_LINE: usize = 1024;
+use super::error::VnanoError;
+
+/// Longest request line kept, newline left out (a longer one is refused whole).
+pub const MAX_LINE: usize = 1024;
+
+/// One request on the control socket: what to change, each field left out when unchanged;
+/// `{}` asks. Sent by `utile live --rig` (`live/rig.rs`) and read here, so both ends have one
+/// list of fields.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RigRequest {
+    /// The Nano of a bus, 1..N (its slave address); left out: Nano 1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub nano: Option<u8>,
+    /// Press switch 0..5 (A0..A5).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub press: Option<u8>,
+    /// Release switch 0..5.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub release: Option<u8>,
+    /// A6's level, volts 0..5.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub a6: Option<f64>,
+    /// A7's level, volts 0..5.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub a7: Option<f64>,
+    /// Jumper D8 fitted (`true`) or removed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub d8: Option<bool>,
+    /// Jumper D9 fitted (`true`) or removed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub d9: Option<bool>,
+    /// `true`: a warm reset, as the rig's `r` key.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reset: Option<bool>,
+}
+
+impl RigRequest {
+    /// The request a JSON object makes, or why not in words, naming the field at fault.
+    /// Always read from an object: serde would take a JSON array as the fields by position.
+    pub fn from_object(fields: &serde_json::Map<String, Value>) -> Result<RigRequest, String> {
+        RigRequest::deserialize(Value::Object(fields.clone())).map_err(|e| {
+            // serde names no field for a wrong value: try each alone to say which.
+            let field = fields.iter().find(|(k, v)| {
+                let alone = serde_json::Map::from_iter([((*k).clone(), (*v).clone())]);
+                RigRequest::deserialize(Value::Object(alone)).is_err()
+            });
+            match field {
+                Some((k, _)) if !e.to_string().starts_with("unknown field") => format!("{k}: {e}"),
+                _ => e.to_string(),
+            }
+        })
+    }
+}
 
 /// The control socket and its clients.
 pub struct Control {
@@ -35,6 +94,8 @@ pub struct Control {
 struct Client {
     stream: UnixStream,
     line: Vec<u8>,
+    /// The line under way grew past [`MAX_LINE`]: its bytes are dropped to its newline.
+    discarding: bool,
 }
 
 /// The Nanos a control socket works: the one of a single run, or each of a bus.
@@ -59,17 +120,26 @@ impl Nanos for One<'_> {
 }
 
 impl Control {
-    /// Listen at `path` (a stale socket file there is replaced).
-    pub fn bind(path: &Path) -> Result<Control, super::error::VnanoError> {
-        let failed = |source| super::error::VnanoError::File {
-            flag: "--control",
-            path: path.to_path_buf(),
-            source,
-        };
-        // A socket file left by an earlier run would make the bind fail; none is fine too.
-        let _ = std::fs::remove_file(path);
+    /// Listen at `path`: nothing there, or a socket no program listens on (left by an earlier
+    /// run, replaced). Any other file there is refused and left as it is.
+    pub fn bind(path: &Path) -> Result<Control, VnanoError> {
+        let failed = VnanoError::file("--control", path);
+        match std::fs::symlink_metadata(path) {
+            Ok(m) if m.file_type().is_socket() => {
+                if UnixStream::connect(path).is_ok() {
+                    return Err(VnanoError::ControlInUse(path.to_path_buf()));
+                }
+                std::fs::remove_file(path).map_err(VnanoError::file("--control", path))?;
+            }
+            Ok(_) => return Err(VnanoError::ControlNotSocket(path.to_path_buf())),
+            Err(e) if e.kind() == ErrorKind::NotFound => {}
+            Err(e) => return Err(failed(e)),
+        }
+        let failed = VnanoError::file("--control", path);
         let listener = UnixListener::bind(path).map_err(failed)?;
-        listener.set_nonblocking(true).map_err(failed)?;
+        listener
+            .set_nonblocking(true)
+            .map_err(VnanoError::file("--control", path))?;
         Ok(Control {
             listener,
             path: path.to_path_buf(),
@@ -86,6 +156,7 @@ impl Control {
                 self.clients.push(Client {
                     stream,
                     line: Vec::new(),
+                    discarding: false,
                 });
             }
         }
@@ -104,7 +175,18 @@ impl Control {
             while let Some(end) = c.line.iter().position(|&b| b == b'\n') {
                 let line: Vec<u8> = c.line.drain(..=end).collect();
                 handled = true;
-                let answer = request(&line, nanos);
+                let too_long = std::mem::take(&mut c.discarding) || end > MAX_LINE;
+                let answer = if too_long {
+                    json!({
+                        "error": format!(
+                            "a request line is at most {MAX_LINE} bytes: this one was \
+                             discarded whole, nothing changed"
+                        ),
+                        "nanos": nanos.count(),
+                    })
+                } else {
+                    request(&line, nanos)
+                };
                 let mut text = answer.to_string();
                 text.push('\n');
                 // The socket is non-blocking: a client that reads nothing loses answers.
@@ -113,7 +195,9 @@ impl Control {
                 }
             }
             if c.line.len() > MAX_LINE {
+                // Dropped to its newline, which is answered with the error.
                 c.line.clear();
+                c.discarding = true;
             }
             true
         });
@@ -135,6 +219,8 @@ fn request(line: &[u8], nanos: &mut dyn Nanos) -> Value {
         Ok(_) => Err("a request is one JSON object, e.g. {\"press\": 0}".to_string()),
         Err(e) => Err(format!("not JSON: {e}")),
     };
+    // Which Nano first (a Nano that is not there is answered without a state), then the
+    // request's fields as the typed struct.
     let count = nanos.count();
     let i = match fields.as_ref().map(|f| which(f.get("nano"), count)) {
         Ok(Ok(i)) => i,
@@ -142,8 +228,8 @@ fn request(line: &[u8], nanos: &mut dyn Nanos) -> Value {
         Err(_) => 0,
     };
     let (chip, analog_mv) = nanos.nano(i);
-    let error = match fields {
-        Ok(fields) => apply(&fields, chip, analog_mv).err(),
+    let error = match fields.and_then(|f| RigRequest::from_object(&f)) {
+        Ok(r) => apply(&r, chip, analog_mv).err(),
         Err(why) => Some(why),
     };
     let mut state = state(chip, analog_mv);
@@ -173,63 +259,48 @@ fn which(nano: Option<&Value>, count: usize) -> Result<usize, String> {
     }
 }
 
-/// One checked change of a request, made once every field has been checked.
-type Change = Box<dyn FnOnce(&mut Chip, &mut [u32; 2])>;
+/// A switch's number checked: 0..5.
+fn switch(key: &str, n: Option<u8>) -> Result<Option<u8>, String> {
+    match n {
+        Some(n) if n > 5 => Err(format!("{key}: switches are 0..5 (A0..A5), not {n}")),
+        n => Ok(n),
+    }
+}
 
-/// The request's fields on the rig, checked first: nothing changes when one is wrong.
-fn apply(
-    fields: &Map<String, Value>,
-    nano: &mut Chip,
-    analog_mv: &mut [u32; 2],
-) -> Result<(), String> {
-    let mut changes: Vec<Change> = Vec::new();
-    for (key, value) in fields {
-        match key.as_str() {
-            // Checked by `which`.
-            "nano" => {}
-            "press" | "release" => {
-                let n = value
-                    .as_u64()
-                    .filter(|&n| n <= 5)
-                    .ok_or_else(|| format!("{key}: switches are 0..5 (A0..A5), not {value}"))?
-                    as u8;
-                let low = key == "press";
-                changes.push(Box::new(move |c, _| c.hold_low(RigPin::Switch(n), low)));
-            }
-            "a6" | "a7" => {
-                let volts = value
-                    .as_f64()
-                    .filter(|v| (0.0..=f64::from(VCC_MV) / 1000.0).contains(v))
-                    .ok_or_else(|| format!("{key}: a level is 0..5 volts, not {value}"))?;
-                let (pin, i) = if key == "a6" { (6u8, 0) } else { (7u8, 1) };
-                let mv = (volts * 1000.0).round() as u32;
-                changes.push(Box::new(move |c, a| {
-                    a[i] = mv;
-                    c.set_analog_mv(pin, mv);
-                }));
-            }
-            "d8" | "d9" => {
-                let fitted = value
-                    .as_bool()
-                    .ok_or_else(|| format!("{key}: true (fitted) or false, not {value}"))?;
-                let pin = if key == "d8" { RigPin::D8 } else { RigPin::D9 };
-                changes.push(Box::new(move |c, _| c.hold_low(pin, fitted)));
-            }
-            "reset" => {
-                if value.as_bool() == Some(true) {
-                    // A warm reset, as the rig's `r` key.
-                    changes.push(Box::new(|c, _| c.reset(Reset::External)));
-                }
-            }
-            other => {
-                return Err(format!(
-                    "unknown field {other}: press, release, a6, a7, d8, d9, reset, nano"
-                ))
-            }
+/// A level checked, in mV: 0..5 V.
+fn level(key: &str, volts: Option<f64>) -> Result<Option<u32>, String> {
+    match volts {
+        Some(v) if !(0.0..=f64::from(VCC_MV) / 1000.0).contains(&v) => {
+            Err(format!("{key}: a level is 0..5 volts, not {v}"))
+        }
+        v => Ok(v.map(|v| (v * 1000.0).round() as u32)),
+    }
+}
+
+/// The request on the rig, every field checked first: nothing changes when one is wrong.
+fn apply(r: &RigRequest, nano: &mut Chip, analog_mv: &mut [u32; 2]) -> Result<(), String> {
+    let levels = [level("a6", r.a6)?, level("a7", r.a7)?];
+    let press = switch("press", r.press)?;
+    let release = switch("release", r.release)?;
+    for (i, mv) in levels.into_iter().enumerate() {
+        if let Some(mv) = mv {
+            analog_mv[i] = mv;
+            nano.set_analog_mv(6 + i as u8, mv);
         }
     }
-    for change in changes {
-        change(nano, analog_mv);
+    for (pin, fitted) in [(RigPin::D8, r.d8), (RigPin::D9, r.d9)] {
+        if let Some(fitted) = fitted {
+            nano.hold_low(pin, fitted);
+        }
+    }
+    if let Some(n) = press {
+        nano.hold_low(RigPin::Switch(n), true);
+    }
+    if let Some(n) = release {
+        nano.hold_low(RigPin::Switch(n), false);
+    }
+    if r.reset == Some(true) {
+        nano.reset(Reset::External);
     }
     Ok(())
 }
@@ -253,4 +324,35 @@ pub fn state(nano: &Chip, analog_mv: &[u32; 2]) -> Value {
         "outputs": leds,
         "seconds": nano.seconds(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn object(text: &str) -> serde_json::Map<String, Value> {
+        match serde_json::from_str(text).unwrap() {
+            Value::Object(m) => m,
+            other => panic!("{other}"),
+        }
+    }
+
+    #[test]
+    fn a_request_is_written_and_read_by_its_field_names() {
+        assert_eq!(serde_json::to_string(&RigRequest::default()).unwrap(), "{}");
+        let press = RigRequest {
+            nano: Some(2),
+            press: Some(0),
+            ..RigRequest::default()
+        };
+        let text = serde_json::to_string(&press).unwrap();
+        assert_eq!(text, r#"{"nano":2,"press":0}"#);
+        assert_eq!(RigRequest::from_object(&object(&text)).unwrap(), press);
+        let e = RigRequest::from_object(&object(r#"{"a6": 1.0, "press": 300}"#)).unwrap_err();
+        assert!(e.starts_with("press: "), "{e}");
+        let e = RigRequest::from_object(&object(r#"{"d8": 1}"#)).unwrap_err();
+        assert!(e.starts_with("d8: "), "{e}");
+        let e = RigRequest::from_object(&object(r#"{"prss": 1}"#)).unwrap_err();
+        assert!(e.starts_with("unknown field `prss`"), "{e}");
+    }
 }

@@ -22,6 +22,20 @@ pub enum VnanoError {
         #[source]
         source: std::io::Error,
     },
+    /// `--control PATH` names a file that is no socket: it is left as it is.
+    #[error(
+        "--control {}: a file that is not a socket is there; nothing was deleted: give a path \
+         of its own for the socket (e.g. /tmp/rig.sock)",
+        .0.display()
+    )]
+    ControlNotSocket(PathBuf),
+    /// `--control PATH` is a socket another program listens on.
+    #[error(
+        "--control {}: another program listens on this socket (a virtual Nano running \
+         already?): give another path",
+        .0.display()
+    )]
+    ControlInUse(PathBuf),
     /// The `--load` listing has mistakes (`file:line: ...`).
     #[error(transparent)]
     Listing(#[from] FileErrors),

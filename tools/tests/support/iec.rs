@@ -9,11 +9,15 @@
 //! everything evaluated after it; a P or N contact is R_TRIG or F_TRIG on its variable, whose
 //! memory starts at the variable's value at start for an input (uTile reads its inputs at
 //! RUN, so an input already on is no edge) and at FALSE for the rest; CTU's count input
-//! starts as on (uTile counts no edge in the first scan). A variable starts at its initial
-//! value (a BOOL's `initialValue`); an `externalVars` entry is the global of its name (its
-//! address). A wire back to a function block being evaluated (a loop, IEC's feedback) reads
-//! that block's output of its previous evaluation; each element is evaluated once a scan,
-//! so everything on the loop sees that one value.
+//! starts as on (uTile counts no edge in the first scan) — or, with
+//! [`Reference::standard_start`], every edge memory and CTU's at FALSE, as the standard and
+//! OpenPLC's runtime start them. A variable starts at its initial value (a BOOL's
+//! `initialValue`); an `externalVars` entry is the global of its name (its address). A wire
+//! back to a function block being evaluated (a loop, IEC's feedback) reads that block's
+//! output of its previous evaluation; each element is evaluated once a scan, so everything on
+//! the loop sees that one value. A block whose EN is wired runs only while EN is TRUE (a
+//! function block keeps its state, a function its last output) and gives EN as ENO; a wire's
+//! route (`<position>`s) changes nothing.
 
 use std::collections::HashMap;
 use std::rc::Rc;
@@ -66,6 +70,8 @@ enum El {
     Func {
         kind: String,
         inputs: Vec<Vec<Src>>,
+        /// EN's connections (none: always enabled).
+        en: Vec<Src>,
     },
     Fb {
         kind: String,
@@ -92,6 +98,10 @@ enum Pin {
 pub struct Reference {
     els: Rc<[El]>,
     sinks: Vec<usize>,
+    /// The BOOL variables' names (index: as `pins` and `values`).
+    names: Rc<[String]>,
+    /// Each function block's instance name and element.
+    instances: Rc<[(String, usize)]>,
     pins: Vec<Pin>,
     values: Vec<bool>,
     /// Per element: this scan's output (memo), the edge or block state.
@@ -100,6 +110,8 @@ pub struct Reference {
     /// Elements being evaluated this scan (a wire back to one is a loop).
     busy: Vec<bool>,
     edge_mem: Vec<Option<bool>>,
+    /// Edge memories and CTU's count input start at FALSE (the standard's start).
+    standard: bool,
     fb: Vec<FbState>,
     now: u32,
 }
@@ -309,6 +321,11 @@ impl Reference {
                         consts.get(&e).cloned().unwrap_or(e)
                     };
                     if matches!(kind.as_str(), "AND" | "OR" | "XOR" | "NOT") {
+                        let en = ins
+                            .iter()
+                            .find(|(f, _)| f == "EN")
+                            .map(|(_, s)| s.clone())
+                            .unwrap_or_default();
                         El::Func {
                             kind,
                             inputs: ins
@@ -316,6 +333,7 @@ impl Reference {
                                 .filter(|(f, _)| f != "EN")
                                 .map(|(_, s)| s)
                                 .collect(),
+                            en,
                         }
                     } else {
                         let pt = if kind.starts_with('T') {
@@ -353,16 +371,24 @@ impl Reference {
             .filter(|&i| matches!(els[i], El::Coil { .. } | El::OutVar { .. } | El::Fb { .. }))
             .collect();
         sinks.sort_by_key(|&i| pos(nodes[i]));
+        let instances: Vec<(String, usize)> = nodes
+            .iter()
+            .enumerate()
+            .filter_map(|(i, b)| b.attribute("instanceName").map(|n| (n.to_string(), i)))
+            .collect();
         let n = els.len();
         Reference {
             els: els.into(),
             sinks,
+            names: names.into(),
+            instances: instances.into(),
             values: start,
             busy: vec![false; n],
             pins,
             memo: vec![None; n],
             eno: vec![true; n],
             edge_mem: vec![None; n],
+            standard: false,
             fb: vec![FbState::default(); n],
             now: 0,
         }
@@ -376,8 +402,16 @@ impl Reference {
         p
     }
 
+    /// Whether block `i` runs this scan: its EN (TRUE when not wired), given as its ENO.
+    fn enabled(&mut self, i: usize, en: Option<&Vec<Src>>) -> bool {
+        let on = en.is_none_or(|s| s.is_empty() || self.power(s));
+        self.eno[i] = on;
+        on
+    }
+
     fn out(&mut self, i: usize, formal: &str) -> bool {
         if formal == "ENO" {
+            self.out(i, "");
             return self.eno[i];
         }
         if let Some(v) = self.memo[i] {
@@ -409,7 +443,8 @@ impl Reference {
                         let is_input = matches!(self.pins[var], Pin::In(_));
                         // R_TRIG: M holds CLK; F_TRIG: M holds NOT CLK.
                         let clk = if rising { v } else { !v };
-                        let m = self.edge_mem[i].unwrap_or(if is_input { clk } else { false });
+                        let start = is_input && !self.standard && clk;
+                        let m = self.edge_mem[i].unwrap_or(start);
                         self.edge_mem[i] = Some(clk);
                         clk && !m
                     }
@@ -433,14 +468,21 @@ impl Reference {
                 negated,
             } => var.map_or(constant, |v| self.values[v]) != negated,
             &El::Continuation { connector } => self.out(connector, ""),
-            El::Func { kind, inputs } => {
+            El::Func { kind, inputs, en } => {
+                if !self.enabled(i, Some(en)) {
+                    // Not called: its output keeps the last call's value.
+                    self.memo[i] = Some(self.fb[i].q);
+                    return self.fb[i].q;
+                }
                 let vals: Vec<bool> = inputs.iter().map(|s| self.power(s)).collect();
-                match kind.as_str() {
+                let v = match kind.as_str() {
                     "NOT" => !vals[0],
                     "AND" => vals.iter().all(|&v| v),
                     "OR" => vals.iter().any(|&v| v),
                     _ => vals.iter().fold(false, |a, &b| a ^ b),
-                }
+                };
+                self.fb[i].q = v;
+                v
             }
             &El::Fb {
                 ref kind,
@@ -449,6 +491,11 @@ impl Reference {
                 pv,
             } => {
                 let get = |me: &mut Self, f: &str| inputs.get(f).is_some_and(|s| me.power(s));
+                if !self.enabled(i, inputs.get("EN")) {
+                    // Not called: its state and Q stay as the last call left them.
+                    self.memo[i] = Some(self.fb[i].q);
+                    return self.fb[i].q;
+                }
                 let now = self.now;
                 match kind.as_str() {
                     "TON" => {
@@ -492,7 +539,7 @@ impl Reference {
                         let st = &mut self.fb[i];
                         if r {
                             st.count = 0;
-                        } else if cu && !st.prev.unwrap_or(true) {
+                        } else if cu && !st.prev.unwrap_or(!self.standard) {
                             st.count += 1;
                         }
                         st.prev = Some(cu);
@@ -526,7 +573,44 @@ impl Reference {
         v
     }
 
-    /// One scan at `now` with the inputs' levels; the outputs after it.
+    /// The same file started as the standard starts it (and OpenPLC's runtime does): a P or
+    /// N contact's memory and a CTU's count input at FALSE, so an input already on at the
+    /// first scan is an edge and a count input already on counts.
+    pub fn standard_start(mut self) -> Reference {
+        self.standard = true;
+        self
+    }
+
+    /// The element of the function block instance `name`, for [`Reference::q`].
+    pub fn block(&self, name: &str) -> Option<usize> {
+        self.instances
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|&(_, i)| i)
+    }
+
+    /// The Q (Q1) of function block `block` as its last call left it.
+    pub fn q(&self, block: usize) -> bool {
+        self.fb[block].q
+    }
+
+    /// The index of the BOOL variable `name`, if the file declares it, for
+    /// [`Reference::value`] and [`Reference::set`].
+    pub fn var(&self, name: &str) -> Option<usize> {
+        self.names.iter().position(|n| n == name)
+    }
+
+    /// The value of BOOL variable `var`.
+    pub fn value(&self, var: usize) -> bool {
+        self.values[var]
+    }
+
+    /// Give the unlocated BOOL `var` the value of a bit the runtime provides (uTile's
+    /// `CLKA`, `H6`, `AD0`, which the export declares as plain BOOLs).
+    pub fn set(&mut self, var: usize, v: bool) {
+        self.values[var] = v;
+    }
+
     /// One scan at `now` ms with the inputs A0..A5 (bit n = An), giving Y0..Y7.
     pub fn scan(&mut self, now: u32, inputs: u8) -> u8 {
         self.now = now;

@@ -31,12 +31,17 @@ pub fn tank() -> Program {
 
 /// The tank example with `U0. .Y2` before its END: a remote command through the program.
 pub fn tank_with_remote() -> Program {
+    tank_with(&["U0.", ".Y2"])
+}
+
+/// The tank example with `words` before its END.
+pub fn tank_with(words: &[&str]) -> Program {
     let mut p = tank();
     let end =
         p.uf.iter()
             .position(|&op| op == opcodes::END)
             .expect("the tank's END");
-    for (i, word) in ["U0.", ".Y2", "END"].iter().enumerate() {
+    for (i, word) in words.iter().chain(&["END"]).enumerate() {
         p.uf[end + i] = opcodes::lookup(word.as_bytes()).expect("a command");
     }
     p
@@ -212,6 +217,52 @@ impl Live {
         }
     }
 
+    /// Snapshots of uTile `addr` taken so far, and the scan count in the latest.
+    pub fn scans(&self, addr: u64) -> (u64, u64) {
+        let u = self.unit(addr);
+        (
+            u["snapshots"].as_u64().unwrap_or(0),
+            u["values"]["scans"].as_u64().unwrap_or(0),
+        )
+    }
+
+    /// The scan count of uTile `addr` once `pictures` newer snapshots have come, each
+    /// showing the same count (asserted: the scan is held).
+    pub fn settled_scans(&self, addr: u64, pictures: u64) -> u64 {
+        let (seen, scans) = self.scans(addr);
+        self.wait("newer snapshots", Duration::from_secs(30), |s| {
+            s["units"].as_array().is_some_and(|u| {
+                u.iter().any(|u| {
+                    u["addr"] == addr && u["snapshots"].as_u64().unwrap_or(0) >= seen + pictures
+                })
+            })
+        });
+        let (_, now) = self.scans(addr);
+        assert_eq!(now, scans, "the scan count moved while held");
+        now
+    }
+
+    /// A page following the events (`GET /api/events`, `?page=NAME` when named), open while
+    /// the stream lives.
+    pub fn open_page(&self, page: Option<&str>) -> TcpStream {
+        let mut s = TcpStream::connect(self.http).expect("connect to the page's server");
+        let query = page.map(|p| format!("?page={p}")).unwrap_or_default();
+        write!(
+            s,
+            "GET /api/events{query} HTTP/1.1\r\nHost: {}\r\nAccept: text/event-stream\r\n\r\n",
+            self.http
+        )
+        .expect("ask for the events");
+        let mut head = [0u8; 512];
+        let n = s.read(&mut head).expect("the events' head");
+        assert!(
+            head[..n].starts_with(b"HTTP/1.1 200"),
+            "{}",
+            String::from_utf8_lossy(&head[..n])
+        );
+        s
+    }
+
     /// Waits until uTile `addr` shows `signal` = `value`.
     pub fn wait_value(&self, addr: u64, signal: &str, value: u64) -> Value {
         self.wait(
@@ -234,30 +285,104 @@ impl Drop for Live {
     }
 }
 
+/// The rig's state from the virtual Nano's control socket: no Modbus frame (which would
+/// renew a hold's lease).
+pub fn rig_state(socket: &Path) -> Value {
+    let mut stream = std::os::unix::net::UnixStream::connect(socket).expect("the rig's socket");
+    stream.write_all(b"{}\n").expect("ask the rig");
+    let mut line = String::new();
+    BufReader::new(stream)
+        .read_line(&mut line)
+        .expect("the rig's answer");
+    serde_json::from_str(&line).unwrap_or_else(|e| panic!("{e}: {line}"))
+}
+
 /// One HTTP/1.1 request, `Connection: close`: the status and the body as JSON (`Null` if the
 /// body is not JSON).
 pub fn request(addr: SocketAddr, method: &str, path: &str, body: Option<&[u8]>) -> (u16, Value) {
+    let host = format!("Host: {addr}");
+    let a = exchange(
+        addr,
+        method,
+        path,
+        &[&host, "Content-Type: application/json"],
+        body.unwrap_or_default(),
+    );
+    (a.status, a.body)
+}
+
+/// Keys typed by a script: `POST /api/terminal` with the bytes as they are.
+pub fn post_keys(addr: SocketAddr, keys: &[u8]) -> (u16, Value) {
+    let host = format!("Host: {addr}");
+    let a = exchange(
+        addr,
+        "POST",
+        "/api/terminal",
+        &[&host, "Content-Type: application/octet-stream"],
+        keys,
+    );
+    (a.status, a.body)
+}
+
+/// An answer: status, head (lower case), body as JSON (`Null` if not).
+pub struct Answer {
+    /// The status code (0 when none came).
+    pub status: u16,
+    /// The status line and headers, lower case.
+    pub head: String,
+    /// The body as JSON.
+    pub body: Value,
+}
+
+/// One HTTP/1.1 request with exactly the header lines `headers` (Host included, or left out)
+/// besides `Connection` (`close`, unless a header asks for an upgrade) and `Content-Length`.
+/// An upgrade answered 101 is returned at the end of its head.
+pub fn exchange(
+    addr: SocketAddr,
+    method: &str,
+    path: &str,
+    headers: &[&str],
+    body: &[u8],
+) -> Answer {
     let mut s = TcpStream::connect(addr).expect("connect to utile live");
     s.set_read_timeout(Some(Duration::from_secs(15))).unwrap();
-    let body = body.unwrap_or_default();
-    let head = format!(
-        "{method} {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\
-         Content-Type: application/json\r\nContent-Length: {}\r\n\r\n",
-        body.len()
-    );
+    let upgrade = headers
+        .iter()
+        .any(|h| h.to_ascii_lowercase().starts_with("upgrade:"));
+    let mut head = format!("{method} {path} HTTP/1.1\r\n");
+    for h in headers {
+        head.push_str(h);
+        head.push_str("\r\n");
+    }
+    if !upgrade {
+        head.push_str("Connection: close\r\n");
+    }
+    head.push_str(&format!("Content-Length: {}\r\n\r\n", body.len()));
     s.write_all(head.as_bytes()).unwrap();
     s.write_all(body).unwrap();
     let mut got = Vec::new();
-    s.read_to_end(&mut got).expect("read the answer");
-    let text = String::from_utf8_lossy(&got);
-    let status = text
-        .split_whitespace()
-        .nth(1)
-        .and_then(|c| c.parse().ok())
-        .unwrap_or(0);
-    let body = text.split("\r\n\r\n").nth(1).unwrap_or("");
-    let json = serde_json::from_str(body).unwrap_or(Value::Null);
-    (status, json)
+    let mut buf = [0u8; 4096];
+    loop {
+        let upgraded = upgrade && got.windows(4).any(|w| w == b"\r\n\r\n");
+        if upgraded {
+            break;
+        }
+        match s.read(&mut buf) {
+            Ok(0) | Err(_) => break,
+            Ok(n) => got.extend_from_slice(&buf[..n]),
+        }
+    }
+    let text = String::from_utf8_lossy(&got).into_owned();
+    let (head, body) = text.split_once("\r\n\r\n").unwrap_or((&text, ""));
+    Answer {
+        status: head
+            .split_whitespace()
+            .nth(1)
+            .and_then(|c| c.parse().ok())
+            .unwrap_or(0),
+        head: head.to_ascii_lowercase(),
+        body: serde_json::from_str(body).unwrap_or(Value::Null),
+    }
 }
 
 /// One Modbus TCP request (unit `unit`, PDU `pdu`) on `s`: the reply's PDU.

@@ -1,5 +1,5 @@
-//! The memory bits the export adds where IEC needs them: a timer reset's `TOFm_R`, an edge
-//! read once into `ALn_E` for a rung of several outputs, and a wire held in `Wk` where it
+//! The memory bits the export adds where a wire would not keep its one value: an edge read
+//! once into `ALn_E` for a rung of several outputs, and a wire held in `Wk` where it
 //! branches and an output of the first branch changes what it read.
 
 use std::string::String;
@@ -9,12 +9,6 @@ use utile_core::opcodes::{POP_CU, POP_S, POP_TK, PUSH_AL, PUSH_AT, PUSH_CQ, PUSH
 
 use super::super::model::{op_word, Flow, Rung, Step};
 use super::{coil_push, flow_parts, net_contacts};
-
-/// The memory bit of a timer reset by `.TRm` (`TOF0_R`): set by `.TRm`, cleared by a
-/// trigger; Q is the TOF's Q while it is clear.
-pub(super) fn reset_name(m: u8) -> String {
-    format!("TOF{m}_R")
-}
 
 /// Whether the wire reaching a branch must be held in a memory bit (`Wk`) before it: IEC
 /// gives a wire one value, and the import reads each output's power again, so a wire whose

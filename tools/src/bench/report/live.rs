@@ -1,15 +1,16 @@
 //! The rows of `live`: `utile live`'s budgets (issue 25) for one uTile and a bus of three;
-//! with twenty pages open (issue 31), for the `utile` beside this binary and, when
-//! `UTILE_BEFORE` names another `utile`, for that one too.
+//! with twenty pages open (issue 31) and the door's refusals (issue 37), for the `utile`
+//! beside this binary and, when `UTILE_BEFORE` names another `utile`, for that one too.
 
 use std::path::PathBuf;
 
 use super::{ms, Report};
 use crate::bench::live::measure_live;
+use crate::bench::live_door::{measure_door, EACH};
 use crate::bench::live_pages::{measure_pages, PAGES};
 
-/// Twenty pages open: the `utile` binaries to measure (this build's, and `UTILE_BEFORE`).
-fn pages_rows(rows: &mut Report, secs: u32) {
+/// The `utile` binaries to measure as processes: `UTILE_BEFORE`'s, and this build's.
+fn tools() -> Vec<(&'static str, PathBuf)> {
     let mut tools = Vec::new();
     if let Some(before) = std::env::var_os("UTILE_BEFORE") {
         tools.push(("before", PathBuf::from(before)));
@@ -17,7 +18,68 @@ fn pages_rows(rows: &mut Report, secs: u32) {
     if let Ok(me) = std::env::current_exe() {
         tools.push(("this build", me.with_file_name("utile")));
     }
-    for (which, utile) in tools {
+    tools
+}
+
+/// The door: requests another web page could send, their answer times and what reached
+/// the line.
+fn door_rows(rows: &mut Report) {
+    for (which, utile) in tools() {
+        let what = format!("live view, one uTile, other pages' requests ({which})");
+        match measure_door(&utile) {
+            Ok(f) => {
+                let statuses: Vec<String> = f
+                    .statuses
+                    .iter()
+                    .map(|(s, n)| format!("{s} ×{n}"))
+                    .collect();
+                rows.row(
+                    format!("{what}: answered (min / median / max), {EACH} of each of 6 kinds"),
+                    format!(
+                        "{}; {} of {} refused ({})",
+                        ms(&f.answered_ms),
+                        f.refused,
+                        f.sent,
+                        statuses.join(", ")
+                    ),
+                    "—",
+                    "≤ 5 ms, all refused",
+                );
+                rows.row(
+                    format!("live view, one uTile, the page's Send of 256 lines ({which})"),
+                    format!(
+                        "{:.0} ms on the line (the request: {:.0} ms)",
+                        f.send_ms.0, f.send_ms.1
+                    ),
+                    "—",
+                    "≤ 3 s",
+                );
+                rows.row(
+                    format!("{what}: what reached the line"),
+                    format!(
+                        "{} writes, U0 = {}, the program {} (scans {} → {})",
+                        f.writes,
+                        f.u0,
+                        if f.running {
+                            "running"
+                        } else {
+                            "stopped or held"
+                        },
+                        f.scans.0,
+                        f.scans.1
+                    ),
+                    "—",
+                    "nothing: 0 writes, U0 = 0, running",
+                );
+            }
+            Err(e) => rows.row(what, format!("not measurable: {e}"), "—", "≤ 5 ms"),
+        }
+    }
+}
+
+/// Twenty pages open: the `utile` binaries to measure (this build's, and `UTILE_BEFORE`).
+fn pages_rows(rows: &mut Report, secs: u32) {
+    for (which, utile) in tools() {
         let what = format!("live view, one uTile, {PAGES} pages open ({which})");
         match measure_pages(&utile, secs) {
             Ok(f) => {
@@ -130,4 +192,5 @@ pub fn live_rows(rows: &mut Report, secs: u32) {
         }
     }
     pages_rows(rows, secs);
+    door_rows(rows);
 }

@@ -5,12 +5,13 @@ use std::time::{Duration, Instant};
 
 use utile_core::modbus::{MAX_ADDRESS, REPORT_SERVER_ID};
 
+use super::super::job::Failure;
 use super::super::port;
-use super::super::queue::Failure;
+use super::super::rtu;
 use super::super::screen::{Mode, Screen};
 use super::super::unit::Unit;
 use super::super::view::EDIT_ADVICE;
-use super::{Owner, Phase, ASK_WAIT, REDRAW, REOPEN, SCAN_SLACK, SLACK_MAX};
+use super::{Owner, Phase, ASK_WAIT, REDRAW, REOPEN, SCAN_SLACK};
 
 impl Owner {
     /// Tries to open the port.
@@ -47,6 +48,10 @@ impl Owner {
         self.port = None;
         self.phase = Phase::Closed(Instant::now() + REOPEN);
         self.queue.fail_all(&Failure::PortClosed);
+        self.keys.clear();
+        for reply in self.keys_for.drain(..) {
+            reply.send(Err(Failure::PortClosed));
+        }
         tracing::warn!(port = %self.opts.path, why, "the port closed; trying again");
         self.open = false;
         self.mode = Mode::Unknown;
@@ -128,7 +133,7 @@ impl Owner {
                 "no uTile answered on addresses 1..{MAX_ADDRESS} (is a program running? 19200 \
                  8N1?); looking again"
             ));
-            self.scan = Some((1, (slack * 2).min(SLACK_MAX)));
+            self.scan = Some((1, (slack * 2).min(rtu::SLACK_MAX)));
         }
     }
 

@@ -12,13 +12,17 @@
 //!
 //! Here the line's state and its loop; the port's life and who has the line in [`life`],
 //! the bytes on the wire (the gap, one transaction, what replies teach) in [`wire`], the
-//! polls and the queued requests in [`serve`], the published view in [`publish`].
+//! polls and the queued requests in [`serve`], the holds it keeps (each holder's lease, Run
+//! when the last one ran out) in [`holds`], the published view in [`publish`].
 
+mod holds;
 mod life;
 mod publish;
 mod send;
 mod serve;
 mod wire;
+
+pub use send::longest_send;
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -28,9 +32,12 @@ use std::time::{Duration, Instant};
 use serialport::TTYPort;
 use tokio::sync::{mpsc, watch};
 
-use super::hub::{Hub, Input, LineEnds, ProgramFile};
+use super::hub::{Hub, Input, LineEnds};
+use super::job::{Failure, Keys, Reply};
+use super::lease::Leases;
 use super::line_use::LineUse;
-use super::queue::{Failure, Next, Queue};
+use super::program::ProgramFile;
+use super::queue::{Next, Queue};
 use super::rtu;
 use super::screen::{Mode, Screen};
 use super::unit::Unit;
@@ -53,8 +60,6 @@ const SCAN_SLACK: Duration = Duration::from_millis(30);
 const BUSY_WINDOW: Duration = Duration::from_secs(2);
 /// The longest silence inside a reply that is on its way.
 const INTER_BYTE: Duration = Duration::from_millis(100);
-/// The most a reply may be late before it counts as missing.
-const SLACK_MAX: Duration = Duration::from_millis(1500);
 
 /// How the line starts.
 #[derive(Clone, Debug)]
@@ -97,17 +102,17 @@ enum Miss {
 struct Owner {
     opts: Options,
     hub: Arc<Hub>,
-    inputs: mpsc::UnboundedReceiver<Input>,
+    inputs: mpsc::Receiver<Input>,
     /// Where each new view goes.
     publish: watch::Sender<Arc<View>>,
     /// Views published so far.
     published: u64,
-    /// The gateway's counters' changes as last published.
-    gateway_seen: u64,
-    /// The rig's changes as last published.
-    rig_seen: u64,
     queue: Queue,
+    /// Keys to send between two transactions, and whoever waits to hear they went.
     keys: Vec<u8>,
+    keys_for: Vec<Reply<Result<(), Failure>>>,
+    /// Who holds each uTile through `utile live`, until when.
+    leases: Leases,
     port: Option<TTYPort>,
     /// The port is open (what the view says; `port` may be gone a moment earlier).
     open: bool,
@@ -160,10 +165,10 @@ pub fn spawn(opts: Options, hub: Arc<Hub>, ends: LineEnds) -> std::io::Result<Jo
                 inputs: ends.inputs,
                 publish: ends.publish,
                 published: 0,
-                gateway_seen: 0,
-                rig_seen: 0,
                 queue: Queue::default(),
                 keys: Vec::new(),
+                keys_for: Vec::new(),
+                leases: Leases::default(),
                 port: None,
                 open: false,
                 phase: Phase::Closed(now),
@@ -194,14 +199,6 @@ impl Owner {
         self.publish();
         while !self.hub.stopping() {
             self.take_inputs();
-            let rig_moved = self
-                .hub
-                .rig
-                .as_ref()
-                .is_some_and(|r| r.changes() != self.rig_seen);
-            if self.hub.tcp.changes() != self.gateway_seen || rig_moved {
-                self.publish();
-            }
             let now = Instant::now();
             match self.phase {
                 Phase::Closed(at) => {
@@ -230,6 +227,9 @@ impl Owner {
                 // The editor has the line: a frame would be typed into it.
                 self.queue.fail_all(&Failure::Editing);
                 self.listen(IDLE);
+                continue;
+            }
+            if self.release_due(now) {
                 continue;
             }
             if let Some((addr, slack)) = self.scan {
@@ -263,10 +263,22 @@ impl Owner {
     fn take_inputs(&mut self) {
         while let Ok(input) = self.inputs.try_recv() {
             match input {
-                Input::Job(job) => self.queue.push(job),
-                Input::Keys(k) => self.keys.extend_from_slice(&k),
+                Input::Job(ticket) => self.queue.push(ticket),
+                Input::Keys(k) => self.take_keys(k),
                 Input::Send(job) => self.send_program(*job),
             }
+        }
+    }
+
+    /// Keys for the terminal: sent between two transactions while the port is open; refused
+    /// while it is closed (never kept for the next uTile on the port, which a reset may
+    /// have put in another screen); dropped when their asker gave up.
+    fn take_keys(&mut self, k: Keys) {
+        if self.port.is_none() {
+            k.reply.send(Err(Failure::PortClosed));
+        } else if k.reply.take() {
+            self.keys.extend_from_slice(&k.bytes);
+            self.keys_for.push(k.reply);
         }
     }
 }

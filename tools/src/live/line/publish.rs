@@ -1,8 +1,7 @@
 //! The view the owner publishes after each change: the line's figures, every uTile's part
-//! (values by name from the signal table, the program's values, the trend), the gateway's
-//! counters. Built on the line's thread in microseconds; read by everyone else.
+//! (values by name from the signal table, the program's values, the trend). Built on the
+//! line's thread in microseconds; read by everyone else.
 
-use std::sync::atomic::Ordering;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -15,12 +14,6 @@ impl Owner {
     /// Publishes the line's state as a new immutable view.
     pub(super) fn publish(&mut self) {
         let now = Instant::now();
-        let tcp = &self.hub.tcp;
-        self.gateway_seen = tcp.changes();
-        let rig = self.hub.rig.as_ref().map(|r| {
-            self.rig_seen = r.changes();
-            r.view()
-        });
         self.published += 1;
         let view = View {
             port: self.opts.path.clone(),
@@ -37,18 +30,12 @@ impl Owner {
                 requests: self.requests,
                 writes: self.writes,
                 reply_slack_ms: self.slack.as_millis() as u64,
-                tcp_clients: tcp.clients.load(Ordering::Relaxed),
-                tcp_requests: tcp.requests.load(Ordering::Relaxed),
-                tcp_refused: tcp.refused.load(Ordering::Relaxed),
-                tcp_refused_clients: tcp.refused_clients.load(Ordering::Relaxed),
-                tcp_overhead_ms: tcp.overhead_ms(),
             },
             units: self
                 .units
                 .iter()
                 .map(|u| u.view(self.open, self.mode, self.opts.file.as_ref(), now))
                 .collect(),
-            rig,
             seq: self.published,
         };
         self.publish.send_replace(Arc::new(view));

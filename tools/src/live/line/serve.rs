@@ -2,10 +2,10 @@
 
 use std::time::{Duration, Instant};
 
-use super::super::queue::{Done, Failure, Job, Origin};
+use super::super::job::{Done, Failure, Origin, Ticket};
 use super::super::rtu;
 use super::super::signals::HOLDINGS;
-use super::{Miss, Owner, BUSY_WINDOW, DEAD_FOR, SLACK_MAX};
+use super::{Miss, Owner, BUSY_WINDOW, DEAD_FOR};
 
 /// Whether a write reaches the presets and set-points the card shows (holding registers
 /// 0..HOLDINGS): they are read again before the next picture. Hold, run and step (registers
@@ -60,6 +60,7 @@ impl Owner {
         match result {
             Ok((reply, rtt)) => {
                 u.answered(read, &reply, rtt, now);
+                self.hold_seen(addr);
             }
             Err(Miss::Timeout { crc, not_reply }) => {
                 let was_online = u.online;
@@ -72,7 +73,7 @@ impl Owner {
                 }
                 if nothing_answers {
                     // Nothing answers at all: perhaps everything is slower than thought.
-                    self.slack = (self.slack * 2).min(SLACK_MAX);
+                    self.slack = (self.slack * 2).min(rtu::SLACK_MAX);
                 }
             }
             Err(Miss::Port) => {}
@@ -80,35 +81,50 @@ impl Owner {
         self.publish();
     }
 
-    /// Whether a request that got no answer is sent once more: the page's writes (they set
-    /// a coil or a register to a value: sending one again is harmless, and the user sees the
-    /// outcome instead of a lost click), and the gateway's reads and writes of values to a
-    /// uTile that answers its polls (it missed this once; a dead address is not waited for
-    /// twice).
-    fn worth_repeating(&self, job: &Job) -> bool {
-        if job.origin == Origin::Page {
-            return true;
-        }
-        job.pdu.first().copied().is_some_and(rtu::repeatable) && self.answers_polls(job.addr)
+    /// Whether a request that got no answer is sent once more: only one harmless twice (it
+    /// sets a value or reads: never a step), whose asker still waits; the page's (the user
+    /// sees the outcome instead of a lost click), and the gateway's to a uTile that answers
+    /// its polls (it missed this once; a dead address is not waited for twice).
+    fn worth_repeating(&self, ticket: &Ticket) -> bool {
+        let job = &ticket.job;
+        job.harmless_again
+            && ticket.reply.wanted()
+            && (job.origin == Origin::Page || self.answers_polls(job.addr))
     }
 
-    /// A queued request (the page's write, the gateway's request).
-    pub(super) fn serve(&mut self, job: Job) {
+    /// A queued request (the page's write, the gateway's request), carried out only while
+    /// its asker waits.
+    pub(super) fn serve(&mut self, ticket: Ticket) {
         let start = Instant::now();
-        if job.origin == Origin::Gateway
+        if ticket.job.origin == Origin::Gateway
             && self
                 .dead
-                .get(&job.addr)
+                .get(&ticket.job.addr)
                 .is_some_and(|t| start.duration_since(*t) < DEAD_FOR)
         {
-            job.finish(Err(Failure::NoAnswer));
+            ticket.finish(Err(Failure::NoAnswer));
             return;
         }
+        if !ticket.reply.take() {
+            tracing::debug!(
+                addr = ticket.job.addr,
+                "a request whose asker has gone: not sent"
+            );
+            return;
+        }
+        let job = &ticket.job;
+        self.hold_goes(job, start);
         let mut result = self.transact(job.addr, &job.pdu, self.slack);
-        if matches!(result, Err(Miss::Timeout { .. })) && self.worth_repeating(&job) {
+        if matches!(result, Err(Miss::Timeout { .. })) && self.worth_repeating(&ticket) {
             result = self.transact(job.addr, &job.pdu, self.slack);
         }
         let now = Instant::now();
+        let job = &ticket.job;
+        self.hold_answered(
+            job,
+            result.as_ref().ok().map(|(pdu, _)| pdu.as_slice()),
+            now,
+        );
         let function = job.pdu.first().copied().unwrap_or_default();
         let outcome = match result {
             Ok((pdu, _)) => {
@@ -118,8 +134,9 @@ impl Owner {
                 // so the page shows the write one poll later.
                 let first = self.next_due().unwrap_or(now);
                 let first = first.checked_sub(Duration::from_micros(1)).unwrap_or(first);
+                let queued = ticket.queued;
                 if let Some(u) = self.unit_mut(job.addr) {
-                    u.due = if wrote { first } else { job.queued.min(u.due) };
+                    u.due = if wrote { first } else { queued.min(u.due) };
                     if wrote && writes_holdings(&job.pdu) {
                         u.holdings_stale();
                     }
@@ -128,7 +145,7 @@ impl Owner {
                 // uTile's turnaround and the reply.
                 Ok(Done {
                     pdu,
-                    waited: start.duration_since(job.queued),
+                    waited: start.duration_since(ticket.queued),
                     on_line: now.duration_since(start),
                 })
             }
@@ -143,7 +160,7 @@ impl Owner {
             }
             Err(Miss::Port) => Err(Failure::PortClosed),
         };
-        job.finish(outcome);
+        ticket.finish(outcome);
         self.publish();
     }
 }

@@ -7,8 +7,9 @@ use std::time::{Duration, Instant};
 use serialport::SerialPort;
 use utile_kit::modbus;
 
+use super::super::job::Failure;
 use super::super::rtu::{self, Scan};
-use super::{Miss, Owner, INTER_BYTE, SLACK_MAX};
+use super::{Miss, Owner, INTER_BYTE};
 
 impl Owner {
     /// Reads whatever comes within `wait`: the editor's screen.
@@ -66,13 +67,21 @@ impl Owner {
         }
     }
 
-    /// Keys from a page's terminal, as their own frame (between two transactions).
+    /// Keys from a page's terminal, as their own frame (between two transactions); whoever
+    /// typed them hears whether they went.
     pub(super) fn send_keys(&mut self) {
         if self.keys.is_empty() {
             return;
         }
         let keys = std::mem::take(&mut self.keys);
-        self.write(&keys);
+        let outcome = if self.write(&keys) {
+            Ok(())
+        } else {
+            Err(Failure::PortClosed)
+        };
+        for reply in self.keys_for.drain(..) {
+            reply.send(outcome.clone());
+        }
     }
 
     /// Counts `bytes` of a transaction on the line (the busy figure); their line time.
@@ -111,7 +120,7 @@ impl Owner {
         let mut deadline = t0 + rtu::reply_timeout(&frame, slack);
         // A reply on its way is waited for while its bytes keep coming (a slow adapter or
         // simulation), never longer than this: a request sent into it would collide.
-        let last_chance = t0 + rtu::reply_timeout(&frame, SLACK_MAX * 2);
+        let last_chance = t0 + rtu::reply_timeout(&frame, rtu::SLACK_MAX * 2);
         let mut got = Vec::new();
         let mut buf = [0u8; 512];
         loop {
@@ -176,7 +185,7 @@ impl Owner {
         let late = rtt.saturating_sub(on_line);
         self.late = late.max(self.late.mul_f64(0.98));
         self.slack =
-            (self.late * 3 + Duration::from_millis(30)).clamp(rtu::ANSWER_SLACK, SLACK_MAX);
+            (self.late * 3 + Duration::from_millis(30)).clamp(rtu::ANSWER_SLACK, rtu::SLACK_MAX);
     }
 
     /// Bytes that were not a reply: the editor's screen when they carry its text, else

@@ -13,14 +13,14 @@ use utile_core::modbus::REPORT_SERVER_ID;
 
 use super::{Reading, Report, WriteRequest};
 use crate::live::http::write_signal;
-use crate::live::hub::{Hub, Input};
-use crate::live::queue::{Job, Origin};
+use crate::live::hub::Hub;
+use crate::live::job::Job;
 use crate::live::rtu;
 use crate::live::view::{CardState, UnitView, View};
 
 /// Reports are made at most this often (a uTile's picture comes about every 53 ms).
 pub const GAP: Duration = Duration::from_millis(20);
-/// The longest the firmware id's question waits for the line.
+/// The longest the firmware id's question waits for the line to take it.
 const ASK_WAIT: Duration = Duration::from_secs(5);
 /// Where the id's text starts in a Report Server ID reply: function, byte count, server id,
 /// run indicator.
@@ -108,23 +108,21 @@ fn report(u: &UnitView) -> Report {
 /// Asks uTile `addr` for its firmware id (Report Server ID); on no answer it is asked again
 /// at the next report, after an exception (firmware without it) never.
 async fn ask_id(hub: Arc<Hub>, addr: u8, ids: Ids) {
-    let (job, rx) = Job::new(addr, vec![REPORT_SERVER_ID], Origin::Page);
-    let text = if hub.inputs.send(Input::Job(job)).is_ok() {
-        match tokio::time::timeout(ASK_WAIT, rx).await {
-            Ok(Ok(Ok(done))) if rtu::exception(&done.pdu).is_some() => Some(String::new()),
-            Ok(Ok(Ok(done))) if done.pdu.first() == Some(&REPORT_SERVER_ID) => {
-                Some(done.pdu.get(ID_TEXT_AT..).map_or_else(String::new, |t| {
-                    String::from_utf8_lossy(t)
-                        .trim_end_matches('\0')
-                        .trim()
-                        .to_string()
-                }))
-            }
-            Ok(Ok(Ok(_))) => Some(String::new()),
-            _ => None,
+    let text = match hub
+        .ask(Job::page(addr, vec![REPORT_SERVER_ID]), ASK_WAIT)
+        .await
+    {
+        Ok(done) if rtu::exception(&done.pdu).is_some() => Some(String::new()),
+        Ok(done) if done.pdu.first() == Some(&REPORT_SERVER_ID) => {
+            Some(done.pdu.get(ID_TEXT_AT..).map_or_else(String::new, |t| {
+                String::from_utf8_lossy(t)
+                    .trim_end_matches('\0')
+                    .trim()
+                    .to_string()
+            }))
         }
-    } else {
-        None
+        Ok(_) => Some(String::new()),
+        Err(_) => None,
     };
     let mut ids = ids.lock().unwrap_or_else(|e| e.into_inner());
     match text {

@@ -30,8 +30,12 @@ pub fn value_text(v: &Reading) -> String {
 }
 
 /// The retained (topic, payload) pairs of `r` on the line's session (its availability is not
-/// among them).
+/// among them); none before the uTile's first read (no values): a retained `{}` would stand
+/// on the broker as the uTile's state.
 pub fn retained(t: &Topics, r: &Report) -> Vec<(String, String)> {
+    if r.values.is_empty() {
+        return Vec::new();
+    }
     let mut out = Vec::with_capacity(r.values.len() + 1);
     let state = serde_json::to_string(&r.values).unwrap_or_else(|_| "{}".into());
     out.push((t.unit(r.addr, "state"), state));
@@ -75,5 +79,17 @@ mod tests {
         assert_eq!(get("utile/l/2/A6"), Some("409"));
         assert_eq!(get("utile/l/2/scans_per_s"), Some("18"));
         assert_eq!(value_text(&Reading::Rate(18.5)), "18.5");
+    }
+
+    #[test]
+    fn nothing_before_the_first_read() {
+        let t = Topics::new("utile", "l");
+        let unread = Report {
+            addr: 1,
+            online: false,
+            values: Default::default(),
+            firmware: None,
+        };
+        assert_eq!(retained(&t, &unread), Vec::new());
     }
 }

@@ -6,6 +6,7 @@ import { Card } from "/card.js";
 import { LadderView } from "/ladder.js";
 import { ProgramView } from "/program.js";
 import { RigPanel } from "/rig.js";
+import { PAGE } from "/scan.js";
 import { openTerminal } from "/terminal.js";
 import { askToken } from "/token.js";
 
@@ -109,7 +110,8 @@ async function connect() {
   } catch (e) {
     // The cards then show no ranges; the events still come.
   }
-  const events = new EventSource("/api/events");
+  // Named, so that the holds this page makes live while it follows the events (scan.js).
+  const events = new EventSource(`/api/events?page=${PAGE}`);
   events.addEventListener("state", (e) => update(JSON.parse(e.data)));
   events.onerror = () => {
     // The browser reconnects by itself; meanwhile nothing on the page is current.

@@ -3,7 +3,8 @@
 // jumpers and reset. Each posts the control socket's own JSON to /api/units/N/rig. The panel
 // shows only while /api/state's `rig` says a rig answers and has a Nano for the card: a single
 // Nano's rig is on every card; on a bus (`cargo nano --bus N`) card N works Nano N, the one at
-// its slave address. Read-only, its controls are disabled.
+// its slave address. Read-only, its controls are disabled. A panel's requests go one at a
+// time, in the order they were made: a release never overtakes its press.
 
 import { el, errorText } from "/dom.js";
 
@@ -36,6 +37,8 @@ export class RigPanel {
     this.readOnly = readOnly;
     this.refusal = refusal;
     this.latched = false;
+    // The last request under way: the next waits for its answer.
+    this.queue = Promise.resolve();
     this.controls = [];
     const control = (e, name) => {
       e.dataset.rig = name;
@@ -137,12 +140,18 @@ export class RigPanel {
     input.addEventListener("pointerup", () => { delete input.dataset.moving; });
   }
 
-  // Sends `request`; the rig's answer shows at once (the state's events follow).
-  async send(request) {
-    this.refusal.textContent = "";
-    const { state, why } = await rigRequest(this.addr, request);
-    if (why) this.refusal.textContent = `rig refused: ${why}`;
-    else this.show(state);
+  // Sends `request` once the panel's requests before it are answered (two fetches at once
+  // may reach the server in either order); the rig's answer shows at once (the state's
+  // events follow).
+  send(request) {
+    const turn = this.queue.then(async () => {
+      this.refusal.textContent = "";
+      const { state, why } = await rigRequest(this.addr, request);
+      if (why) this.refusal.textContent = `rig refused: ${why}`;
+      else this.show(state);
+    });
+    this.queue = turn.catch(() => {});
+    return turn;
   }
 
   // `rig`: /api/state's `rig` (null without --rig).

@@ -1,16 +1,24 @@
 // Run, Hold and Step (SPEC §18) for one card: each button posts to /api/units/N/scan. They
 // are disabled, with the reason beside them, when the page is read-only or the uTile's
 // firmware cannot hold its scan (the server's words); the card's state says "held".
+// The page names itself (PAGE) in its requests and in its events (app.js): a hold it makes
+// lives while it follows the events, and ends 10 s after it closed.
 
 import { el, errorText } from "/dom.js";
 
-// POSTs `{action, n}` for uTile `addr`; the server's words when it refuses, else "".
+// This page's name for itself: random, made once per load (getRandomValues works on plain
+// http beyond loopback too).
+export const PAGE = Array.from(crypto.getRandomValues(new Uint8Array(12)),
+  (b) => b.toString(16).padStart(2, "0")).join("");
+
+// POSTs `{action, n, page}` for uTile `addr`; the server's words when it refuses, else "".
 export async function scanAction(addr, action, n) {
   try {
+    const body = n ? { action, n, page: PAGE } : { action, page: PAGE };
     const res = await fetch(`/api/units/${addr}/scan`, {
       method: "POST",
       headers: { "content-type": "application/json" },
-      body: JSON.stringify(n ? { action, n } : { action }),
+      body: JSON.stringify(body),
     });
     return res.ok ? "" : await errorText(res);
   } catch (e) {

@@ -1,4 +1,4 @@
-// Beyond loopback utile live wants its token (docs/LIVE.md, "Security beyond loopback"): the
+// Beyond loopback utile live wants its token (docs/LIVE.md, "Security", "Beyond loopback"): the
 // URL printed at its start brings it once (the server keeps it in a cookie); without it the
 // page says what to do and takes the token (or that whole URL) pasted in. The token is checked
 // by GET /api/token?token=…, which sets the same cookie as the printed URL when it is right;

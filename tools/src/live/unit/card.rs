@@ -6,7 +6,7 @@ use std::time::Instant;
 use utile_core::modbus::hold::{STATUS_HELD, STATUS_LAPSED};
 use utile_core::modbus::plc::STATUS_RUNNING;
 
-use super::super::hub::ProgramFile;
+use super::super::program::ProgramFile;
 use super::super::screen::Mode;
 use super::super::signals;
 use super::super::view::{CardState, FileMatch, ProgramView, UnitView, EDIT_ADVICE};
@@ -33,6 +33,15 @@ impl Unit {
             Some((s, _)) if s.status & STATUS_RUNNING == 0 => CardState::Stopped,
             Some((s, _)) if s.status & STATUS_HELD != 0 => CardState::Held,
             _ => CardState::Online,
+        }
+    }
+
+    /// When the latest snapshot came, if it shows the scan not held (running freely, or not
+    /// running at all).
+    pub fn not_held_since(&self) -> Option<Instant> {
+        match &self.snap {
+            Some((s, at)) if s.status & STATUS_HELD == 0 => Some(*at),
+            _ => None,
         }
     }
 

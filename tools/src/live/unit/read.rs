@@ -5,7 +5,7 @@ use utile_core::modbus::{
     READ_COILS, READ_DISCRETE_INPUTS, READ_HOLDING_REGISTERS, READ_INPUT_REGISTERS,
 };
 
-use super::super::scan_control;
+use super::super::hold;
 use super::super::signals::HOLDINGS;
 
 /// A read the live view makes of one uTile.
@@ -41,7 +41,7 @@ impl Read {
             Read::Legacy(_) => read(READ_DISCRETE_INPUTS, 8, 42),
             Read::Holdings => read(READ_HOLDING_REGISTERS, 0, HOLDINGS as u16),
             Read::Program(h) => read(READ_INPUT_REGISTERS, PROGRAM + u16::from(h) * half, half),
-            Read::ScanControl => scan_control::PROBE.to_vec(),
+            Read::ScanControl => hold::PROBE.to_vec(),
         }
     }
 }
