@@ -157,7 +157,7 @@ impl Chip {
     #[inline(always)]
     fn entered_interrupt(&self) -> bool {
         let pc = self.pc();
-        pc != 0 && pc < VECTOR_TABLE_END && pc % 4 == 0 && !self.interrupts_on()
+        pc != 0 && pc < VECTOR_TABLE_END && pc.is_multiple_of(4) && !self.interrupts_on()
     }
 
     /// Resets the chip as a real one would: registers cleared, SRAM and EEPROM kept, MCUSR

@@ -180,7 +180,7 @@ fn datasheet_mv(volts: f64) -> Result<u32, String> {
 /// Hex digits (spaces allowed) as bytes.
 fn hex_bytes(text: &str) -> Result<Vec<u8>, String> {
     let digits: String = text.chars().filter(|c| !c.is_whitespace()).collect();
-    if digits.len() % 2 != 0 || !digits.chars().all(|c| c.is_ascii_hexdigit()) {
+    if !digits.len().is_multiple_of(2) || !digits.chars().all(|c| c.is_ascii_hexdigit()) {
         return Err(format!("not hex bytes: {text:?}"));
     }
     Ok((0..digits.len())
